@@ -1,0 +1,36 @@
+#pragma once
+/// The one place that names every backend. Callers pick a backend by name at run time.
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/backend.h"
+#include "engine/scene.h"
+
+namespace rp {
+
+/// A backend the registry knows, and whether this machine can run it.
+struct BackendEntry {
+  std::string name;
+  std::string description;
+  std::vector<std::string> variants;  ///< accepted BackendOptions::variant values
+  bool available = true;
+  std::string unavailable_reason;  ///< why not, when !available
+};
+
+/// Every backend raypack has, available or not.
+std::vector<BackendEntry> list_backends();
+
+/// Names of the backends available on this machine.
+std::vector<std::string> available_backends();
+
+/// The backend used when none is asked for.
+inline constexpr std::string_view kDefaultBackend = "embree";
+
+/// Builds `name` over `scene`. Throws rp::Error for an unknown or unavailable backend (the
+/// message lists the valid names or says why) or an unknown variant.
+std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options = {});
+
+}  // namespace rp

@@ -1,0 +1,56 @@
+#pragma once
+/// The backend seam: one abstract class, queried per batch of rays, never per ray.
+///
+/// A backend is built from a Scene by its constructor (see backends/registry.h) and is then
+/// immutable and safe to query from many threads at once. Rays are const input, hits are
+/// separate output; directions are never normalized. Backends return t/u/v/prim_id only;
+/// Scene::surface() derives positions and normals.
+///
+/// Valid rays: finite origin and direction, direction not zero, 0 <= tnear <= tfar (tfar
+/// may be +inf). Any other ray is reported as a miss (and as not occluded) by every backend.
+
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "engine/ray.h"
+
+namespace rp {
+
+/// What a built backend reports about itself.
+struct BackendInfo {
+  std::string name;      ///< registry name, e.g. "embree"
+  std::string variant;   ///< e.g. "default", "robust"
+  double build_seconds = 0;
+  size_t bytes = 0;      ///< bytes of the acceleration structure (scene arrays excluded)
+};
+
+/// Construction options; each backend documents the variants it accepts.
+struct BackendOptions {
+  std::string variant = "default";
+  std::string device_config;  ///< backend-specific configuration string (embree: rtcNewDevice config)
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+
+  /// Closest hit of each ray: hits[i] for rays[i] (hits.size() == rays.size()); a miss is
+  /// Hit{} (prim_id == kInvalidId). A hit counts only for tnear <= t <= tfar.
+  /// `coherence` picks packet (groups of 8 consecutive rays) or single-ray traversal.
+  virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept = 0;
+
+  /// Any hit: occluded[i] = 1 when rays[i] hits anything within [tnear, tfar], else 0.
+  virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                        Coherence coherence) const noexcept = 0;
+
+  virtual const BackendInfo& info() const noexcept = 0;
+};
+
+/// True when every backend traces `r` (see the validity rule above).
+inline bool valid_ray(const Ray& r) {
+  return is_finite(r.org) && is_finite(r.dir) && (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) &&
+         r.tnear >= 0.0f && r.tnear <= r.tfar;  // also false for NaN tnear/tfar
+}
+
+}  // namespace rp

@@ -1,0 +1,21 @@
+#pragma once
+/// Image files through OpenImageIO. image_io.cpp is the only engine file that includes OIIO
+/// (OIIO 2.4 bundles its own fmt headers).
+
+#include <string>
+
+#include "engine/render.h"
+
+namespace rp {
+
+/// Writes linear RGB `image` to `path`; the format follows the extension. 8-bit formats
+/// (PNG, JPEG, ...) get the sRGB transfer curve and are clamped to [0, 1]; float formats
+/// (EXR, HDR) are written linear. The file is written to a temporary name beside `path` and
+/// renamed, so `path` is never left half-written. Throws rp::Error naming the path.
+void write_image(const std::string& path, const Image& image);
+
+/// Reads an image as linear-as-stored float RGB (the first three channels; grey is
+/// replicated). Throws rp::Error naming the path.
+Image read_image(const std::string& path);
+
+}  // namespace rp

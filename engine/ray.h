@@ -1,0 +1,75 @@
+#pragma once
+/// Rays, hits and 8-ray packets: the data that crosses the backend seam.
+///
+/// Hit convention (every backend, every routine): a surface point at parameter t counts
+/// only when tnear <= t <= tfar (both ends closed). Directions are never normalized by
+/// raypack: t is in units of the direction's length.
+
+#include <cstdint>
+#include <limits>
+
+#include "engine/math.h"
+
+namespace rp {
+
+/// A ray P(t) = org + t * dir restricted to [tnear, tfar]. 32 bytes for float.
+template <typename T>
+struct RayT {
+  Vec3<T> org;
+  T tnear = 0;
+  Vec3<T> dir;
+  T tfar = std::numeric_limits<T>::infinity();
+
+  constexpr Vec3<T> at(T t) const { return org + dir * t; }
+};
+using Ray = RayT<float>;
+using Rayd = RayT<double>;
+
+/// prim_id of a miss.
+inline constexpr uint32_t kInvalidId = 0xffffffffu;
+
+/// Closest (or any) hit of one ray. 16 bytes.
+/// On a miss: prim_id == kInvalidId, t == +inf, u == v == 0.
+/// For triangles (u, v) are Embree's barycentrics: p = (1-u-v)*v0 + u*v1 + v*v2. For analytic
+/// primitives they are the primitive's surface parameters in [0, 1] (see engine/geometry).
+struct Hit {
+  float t = std::numeric_limits<float>::infinity();
+  uint32_t prim_id = kInvalidId;
+  float u = 0, v = 0;
+
+  constexpr bool hit() const { return prim_id != kInvalidId; }
+};
+
+/// The caller's promise about a batch, used by backends to pick packet (coherent) or
+/// single-ray (incoherent) traversal. Primary rays from 4x2 pixel blocks are coherent;
+/// diffuse bounces are not.
+enum class Coherence : uint8_t { coherent, incoherent };
+
+/// Eight rays in SoA, lane i valid when bit i of `active` is set. 264 bytes.
+struct RayPacket8 {
+  alignas(32) float org_x[8], org_y[8], org_z[8];
+  alignas(32) float dir_x[8], dir_y[8], dir_z[8];
+  alignas(32) float tnear[8], tfar[8];
+  uint32_t active = 0;  ///< bit mask of valid lanes
+
+  /// Lane i from / to AoS.
+  void set(int i, const Ray& r) {
+    org_x[i] = r.org.x; org_y[i] = r.org.y; org_z[i] = r.org.z;
+    dir_x[i] = r.dir.x; dir_y[i] = r.dir.y; dir_z[i] = r.dir.z;
+    tnear[i] = r.tnear; tfar[i] = r.tfar;
+    active |= 1u << i;
+  }
+  Ray get(int i) const {
+    return {{org_x[i], org_y[i], org_z[i]}, tnear[i], {dir_x[i], dir_y[i], dir_z[i]}, tfar[i]};
+  }
+};
+
+/// Eight hits in SoA, matching a RayPacket8 lane for lane.
+struct HitPacket8 {
+  alignas(32) float t[8], u[8], v[8];
+  alignas(32) uint32_t prim_id[8];
+
+  Hit get(int i) const { return {t[i], prim_id[i], u[i], v[i]}; }
+};
+
+}  // namespace rp

@@ -1,0 +1,198 @@
+#include "engine/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/error.h"
+
+namespace rp {
+
+const char* to_string(PrimKind k) {
+  switch (k) {
+    case PrimKind::triangle: return "triangle";
+    case PrimKind::sphere: return "sphere";
+    case PrimKind::quadric: return "quadric";
+    case PrimKind::polygon: return "polygon";
+    case PrimKind::plane: return "plane";
+  }
+  return "?";
+}
+
+uint32_t Scene::add_material(Material m) {
+  RP_CHECK(m.ior >= 1.0f && std::isfinite(m.ior), "material '", m.name, "': ior ", m.ior, " must be >= 1");
+  RP_CHECK(m.shininess >= 0.0f && std::isfinite(m.shininess), "material '", m.name, "': shininess ",
+           m.shininess, " must be >= 0");
+  materials_.push_back(std::move(m));
+  return uint32_t(materials_.size() - 1);
+}
+
+/// Closest point of plane n.P + d = 0 to p (removes the error of org + t*dir along n).
+static Vec3f project_to_plane(const Vec3f& p, const Vec3f& n, float d) {
+  return p - n * ((dot(n, p) + d) / dot(n, n));
+}
+
+static void check_material(const std::vector<Material>& materials, uint32_t id, const std::string& what) {
+  RP_CHECK(id < materials.size(), what, ": material index ", id, " out of range (", materials.size(),
+           " materials)");
+}
+
+void Scene::add_mesh(TriangleMesh mesh) {
+  const std::string what = "mesh '" + mesh.name + "'";
+  RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
+  const size_t nv = mesh.positions.size();
+  for (size_t i = 0; i < nv; ++i)
+    RP_CHECK(is_finite(mesh.positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    RP_CHECK(mesh.indices[i] < nv, what, ": triangle ", i / 3, " uses vertex ", mesh.indices[i], " of ", nv);
+  RP_CHECK(mesh.normals.empty() || mesh.normals.size() == nv, what, ": ", mesh.normals.size(),
+           " normals for ", nv, " vertices");
+  RP_CHECK(mesh.uvs.empty() || mesh.uvs.size() == nv, what, ": ", mesh.uvs.size(), " uvs for ", nv, " vertices");
+  RP_CHECK(mesh.face_materials.empty() || mesh.face_materials.size() == mesh.triangle_count(), what, ": ",
+           mesh.face_materials.size(), " face materials for ", mesh.triangle_count(), " triangles");
+  check_material(materials_, mesh.material, what);
+  for (uint32_t m : mesh.face_materials) check_material(materials_, m, what);
+  RP_CHECK(uint64_t(triangle_count_) + mesh.triangle_count() < uint64_t(kInvalidId) / 2, what,
+           ": scene exceeds ", kInvalidId / 2, " triangles");
+  mesh_base_.push_back(triangle_count_);
+  triangle_count_ += mesh.triangle_count();
+  meshes_.push_back(std::move(mesh));
+}
+
+void Scene::add_sphere(const Sphere& s) {
+  RP_CHECK(is_finite(s.center) && std::isfinite(s.radius) && s.radius > 0.0f, "sphere at (", s.center.x, ", ",
+           s.center.y, ", ", s.center.z, ") radius ", s.radius, ": needs a finite centre and radius > 0");
+  check_material(materials_, s.material, "sphere");
+  spheres_.push_back(s);
+}
+
+void Scene::add_quadric(const QuadricShape& q) {
+  const Box3f b = q.quadric.clip;
+  RP_CHECK(!b.empty() && is_finite(b.lo) && is_finite(b.hi), "quadric: clipping box must be finite and non-empty");
+  check_material(materials_, q.material, "quadric");
+  quadrics_.push_back(q);
+}
+
+void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
+  RP_CHECK(vertices.size() >= 3, "polygon: needs at least 3 vertices, got ", vertices.size());
+  for (const Vec3f& v : vertices) RP_CHECK(is_finite(v), "polygon: non-finite vertex");
+  check_material(materials_, material, "polygon");
+  PolygonShape p;
+  p.first = uint32_t(polygon_vertices_.size());
+  p.count = uint32_t(vertices.size());
+  p.plane = polygon_plane<float>(vertices);
+  RP_CHECK(length(p.plane.n) > 0.0f, "polygon: vertices are collinear (zero area)");
+  p.convex = polygon_is_convex<float>(vertices);
+  p.material = material;
+  polygon_vertices_.insert(polygon_vertices_.end(), vertices.begin(), vertices.end());
+  polygons_.push_back(p);
+}
+
+void Scene::add_plane(const Plane& p) {
+  RP_CHECK(is_finite(p.normal) && length(p.normal) > 0.0f && std::isfinite(p.d),
+           "plane: needs a finite non-zero normal and finite offset");
+  check_material(materials_, p.material, "plane");
+  planes_.push_back(p);
+}
+
+PrimRef Scene::locate(uint32_t id) const {
+  if (id < triangle_count_) {
+    // Last mesh whose base is <= id.
+    auto it = std::upper_bound(mesh_base_.begin(), mesh_base_.end(), id) - 1;
+    uint32_t mesh = uint32_t(it - mesh_base_.begin());
+    return {PrimKind::triangle, mesh, id - *it};
+  }
+  if (id < quadric_base()) return {PrimKind::sphere, id - sphere_base(), 0};
+  if (id < polygon_base()) return {PrimKind::quadric, id - quadric_base(), 0};
+  if (id < plane_base()) return {PrimKind::polygon, id - polygon_base(), 0};
+  return {PrimKind::plane, id - plane_base(), 0};
+}
+
+Box3f Scene::bounds() const {
+  Box3f b;
+  for (const TriangleMesh& m : meshes_)
+    for (uint32_t i : m.indices) b.extend(m.positions[i]);
+  for (const Sphere& s : spheres_) b.extend(Box3f(s.center - Vec3f(s.radius), s.center + Vec3f(s.radius)));
+  for (const QuadricShape& q : quadrics_) b.extend(q.quadric.clip);
+  for (const Vec3f& v : polygon_vertices_) b.extend(v);
+  return b;
+}
+
+SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
+  SurfacePoint sp;
+  const PrimRef ref = locate(hit.prim_id);
+  switch (ref.kind) {
+    case PrimKind::triangle: {
+      const TriangleMesh& m = meshes_[ref.shape];
+      const uint32_t* idx = &m.indices[3 * ref.local];
+      const Vec3f v0 = m.positions[idx[0]], v1 = m.positions[idx[1]], v2 = m.positions[idx[2]];
+      const float w = 1.0f - hit.u - hit.v;
+      sp.position = v0 * w + v1 * hit.u + v2 * hit.v;
+      sp.geometric_normal = normalize(cross(v1 - v0, v2 - v0));
+      sp.shading_normal = sp.geometric_normal;
+      if (!m.normals.empty()) {
+        Vec3f n = m.normals[idx[0]] * w + m.normals[idx[1]] * hit.u + m.normals[idx[2]] * hit.v;
+        if (dot(n, n) > 0.0f) sp.shading_normal = normalize(n);
+      }
+      sp.material = m.face_materials.empty() ? m.material : m.face_materials[ref.local];
+      break;
+    }
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      Vec3f n = normalize(ray.at(hit.t) - s.center);
+      sp.position = s.center + n * s.radius;
+      sp.geometric_normal = sp.shading_normal = n;
+      sp.material = s.material;
+      break;
+    }
+    case PrimKind::quadric: {
+      // One Newton step along the gradient pulls org + t*dir (whose error grows with t)
+      // back onto the surface, so that secondary-ray offsets of a few ulps suffice.
+      const Quadric<float>& q = quadrics_[ref.shape].quadric;
+      const Vec3f p = ray.at(hit.t), g = q.gradient(p);
+      const float gg = dot(g, g);
+      sp.position = gg > 0.0f ? p - g * (q.eval(p) / gg) : p;
+      sp.geometric_normal = sp.shading_normal = normalize(q.gradient(sp.position));
+      sp.material = quadrics_[ref.shape].material;
+      break;
+    }
+    case PrimKind::polygon: {
+      const PolygonShape& p = polygons_[ref.shape];
+      sp.position = project_to_plane(ray.at(hit.t), p.plane.n, p.plane.d);
+      sp.geometric_normal = sp.shading_normal = normalize(p.plane.n);
+      sp.material = p.material;
+      break;
+    }
+    case PrimKind::plane: {
+      const Plane& p = planes_[ref.shape];
+      sp.position = project_to_plane(ray.at(hit.t), p.normal, p.d);
+      sp.geometric_normal = sp.shading_normal = normalize(p.normal);
+      sp.material = p.material;
+      break;
+    }
+  }
+  return sp;
+}
+
+size_t Scene::degenerate_triangle_count() const {
+  size_t n = 0;
+  for (const TriangleMesh& m : meshes_)
+    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+      Vec3f c = cross(m.vertex(t, 1) - m.vertex(t, 0), m.vertex(t, 2) - m.vertex(t, 0));
+      n += (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f);
+    }
+  return n;
+}
+
+size_t Scene::bytes() const {
+  size_t b = 0;
+  for (const TriangleMesh& m : meshes_)
+    b += m.positions.size() * sizeof(Vec3f) + m.indices.size() * sizeof(uint32_t) +
+         m.normals.size() * sizeof(Vec3f) + m.uvs.size() * sizeof(Vec2f) +
+         m.face_materials.size() * sizeof(uint32_t);
+  b += spheres_.size() * sizeof(Sphere) + quadrics_.size() * sizeof(QuadricShape) +
+       polygons_.size() * sizeof(PolygonShape) + polygon_vertices_.size() * sizeof(Vec3f) +
+       planes_.size() * sizeof(Plane) + mesh_base_.size() * sizeof(uint32_t);
+  return b;
+}
+
+}  // namespace rp

@@ -1,0 +1,185 @@
+#pragma once
+/// The scene model: flat arrays per primitive kind, one primitive numbering, materials,
+/// lights and an optional camera. Backend-free: backends build their structures from it.
+///
+/// Primitive numbering (prim_id): the triangles of every mesh in mesh order, then spheres,
+/// quadrics, polygons and planes, each kind in insertion order. Scene::locate() maps an id
+/// back to its kind and index.
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "engine/bbox.h"
+#include "engine/geometry/polygon.h"
+#include "engine/geometry/quadric.h"
+#include "engine/math.h"
+#include "engine/ray.h"
+
+namespace rp {
+
+/// Blinn-Phong material with Whitted-style mirror and glass terms (the OBJ/MTL subset).
+struct Material {
+  std::string name;
+  Vec3f diffuse{0.8f};      ///< Kd, albedo in [0, 1]
+  Vec3f specular{0.0f};     ///< Ks
+  float shininess = 32.0f;  ///< Ns, Blinn-Phong exponent (>= 0)
+  Vec3f emission{0.0f};     ///< Ke, added unlit
+  float mirror = 0.0f;      ///< fraction reflected as a perfect mirror, [0, 1]
+  float ior = 1.0f;         ///< Ni, index of refraction (>= 1)
+  float opacity = 1.0f;     ///< d, 1 = opaque
+};
+
+/// Isotropic point light; irradiance at distance r is intensity / r^2.
+struct PointLight {
+  Vec3f position;
+  Vec3f intensity{1.0f};
+};
+
+/// Light from infinitely far away along `direction` (pointing from the light into the scene).
+struct DirectionalLight {
+  Vec3f direction{0.0f, -1.0f, 0.0f};
+  Vec3f irradiance{1.0f};
+};
+
+/// Indexed triangle mesh. Normals and uvs are stored only when the source has them (empty
+/// otherwise, else one per vertex); face_materials likewise (empty = `material` for all).
+/// Bytes: 12 per vertex + 12 per triangle, plus 12/8/4 for normals/uvs/face materials.
+struct TriangleMesh {
+  std::string name;
+  std::vector<Vec3f> positions;
+  std::vector<uint32_t> indices;  ///< 3 per triangle, each < positions.size()
+  std::vector<Vec3f> normals;
+  std::vector<Vec2f> uvs;
+  std::vector<uint32_t> face_materials;
+  uint32_t material = 0;
+
+  uint32_t triangle_count() const { return uint32_t(indices.size() / 3); }
+  Vec3f vertex(uint32_t tri, int corner) const { return positions[indices[3 * tri + corner]]; }
+};
+
+struct Sphere {
+  Vec3f center;
+  float radius = 1.0f;  ///< > 0
+  uint32_t material = 0;
+};
+
+/// A general quadric clipped to its box (see engine/geometry/quadric.h).
+struct QuadricShape {
+  Quadric<float> quadric;
+  uint32_t material = 0;
+};
+
+/// Unbounded plane n.P + d = 0, visible from both sides.
+struct Plane {
+  Vec3f normal{0.0f, 1.0f, 0.0f};
+  float d = 0.0f;
+  uint32_t material = 0;
+};
+
+/// Planar polygon: vertices [first, first + count) of Scene::polygon_vertices().
+struct PolygonShape {
+  uint32_t first = 0, count = 0;
+  PolygonPlane<float> plane;
+  bool convex = false;
+  uint32_t material = 0;
+};
+
+/// A pinhole camera placement: eye, look-at point, up vector, vertical field of view.
+struct CameraDesc {
+  Vec3f eye{0.0f, 0.0f, 5.0f};
+  Vec3f look_at{0.0f};
+  Vec3f up{0.0f, 1.0f, 0.0f};
+  float vfov_degrees = 45.0f;  ///< in (0, 180)
+};
+
+enum class PrimKind : uint8_t { triangle, sphere, quadric, polygon, plane };
+const char* to_string(PrimKind k);
+
+/// Where a prim_id lives: its kind, the index of the shape of that kind (mesh index for
+/// triangles) and, for triangles, the triangle index within the mesh.
+struct PrimRef {
+  PrimKind kind;
+  uint32_t shape;
+  uint32_t local;
+};
+
+/// Geometric data of a hit that the renderer and diff need beyond t/u/v/prim_id.
+struct SurfacePoint {
+  Vec3f position;
+  Vec3f geometric_normal;  ///< unit length, as the primitive orients it (not face-forwarded)
+  Vec3f shading_normal;    ///< unit; interpolated vertex normals when the mesh has them
+  uint32_t material = 0;
+};
+
+class Scene {
+ public:
+  /// A scene starts with material 0, the default grey Material.
+  Scene() { materials_.push_back(Material{.name = "default"}); }
+  /// Adds a material and returns its index.
+  uint32_t add_material(Material m);
+  /// Validates (indices in range, finite positions, matching attribute sizes, material ids)
+  /// and appends; throws rp::Error naming the mesh on bad data.
+  void add_mesh(TriangleMesh mesh);
+  void add_sphere(const Sphere& s);
+  void add_quadric(const QuadricShape& q);
+  /// Polygon from >= 3 coplanar vertices; convexity is detected.
+  void add_polygon(std::span<const Vec3f> vertices, uint32_t material);
+  void add_plane(const Plane& p);
+  void add_light(const PointLight& l) { point_lights_.push_back(l); }
+  void add_light(const DirectionalLight& l) { directional_lights_.push_back(l); }
+  void set_camera(const CameraDesc& c) { camera_ = c; }
+
+  const std::vector<Material>& materials() const { return materials_; }
+  const std::vector<TriangleMesh>& meshes() const { return meshes_; }
+  const std::vector<Sphere>& spheres() const { return spheres_; }
+  const std::vector<QuadricShape>& quadrics() const { return quadrics_; }
+  const std::vector<PolygonShape>& polygons() const { return polygons_; }
+  const std::vector<Vec3f>& polygon_vertices() const { return polygon_vertices_; }
+  const std::vector<Plane>& planes() const { return planes_; }
+  const std::vector<PointLight>& point_lights() const { return point_lights_; }
+  const std::vector<DirectionalLight>& directional_lights() const { return directional_lights_; }
+  const std::optional<CameraDesc>& camera() const { return camera_; }
+
+  uint32_t triangle_count() const { return triangle_count_; }
+  /// First prim_id of mesh i's triangles.
+  uint32_t mesh_base(size_t i) const { return mesh_base_[i]; }
+  uint32_t sphere_base() const { return triangle_count_; }
+  uint32_t quadric_base() const { return sphere_base() + uint32_t(spheres_.size()); }
+  uint32_t polygon_base() const { return quadric_base() + uint32_t(quadrics_.size()); }
+  uint32_t plane_base() const { return polygon_base() + uint32_t(polygons_.size()); }
+  uint32_t prim_count() const { return plane_base() + uint32_t(planes_.size()); }
+
+  /// Kind and index of prim_id (< prim_count()).
+  PrimRef locate(uint32_t prim_id) const;
+  /// Bounds of every bounded primitive (planes excluded); empty box for an empty scene.
+  Box3f bounds() const;
+  /// Position, normals and material of a hit of `ray` (hit.hit() must be true).
+  SurfacePoint surface(const Ray& ray, const Hit& hit) const;
+  /// Number of triangles with zero area (kept: they never produce hits).
+  size_t degenerate_triangle_count() const;
+  /// Bytes held by the scene's arrays (capacity excluded; what the model needs).
+  size_t bytes() const;
+
+ private:
+  std::vector<Material> materials_;
+  std::vector<TriangleMesh> meshes_;
+  std::vector<uint32_t> mesh_base_;
+  std::vector<Sphere> spheres_;
+  std::vector<QuadricShape> quadrics_;
+  std::vector<PolygonShape> polygons_;
+  std::vector<Vec3f> polygon_vertices_;
+  std::vector<Plane> planes_;
+  std::vector<PointLight> point_lights_;
+  std::vector<DirectionalLight> directional_lights_;
+  std::optional<CameraDesc> camera_;
+  uint32_t triangle_count_ = 0;
+};
+
+/// The embedded default scene: a procedural torus-knot mesh (>= 50k triangles), spheres,
+/// several quadrics, a non-convex polygon, a ground plane, a point and a directional light.
+Scene make_default_scene();
+
+}  // namespace rp

@@ -1,0 +1,109 @@
+// The raypack command as a user runs it: exit statuses, one-line errors, real images.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "engine/image_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(RAYPACK_EXE) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return {-1, "popen failed"};
+  std::string out;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int st = pclose(p);
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("raypack-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(Cli, RenderWritesAnImageOfTheRequestedSizeThatIsNotBlank) {
+  const fs::path out = dir_ / "small.png";
+  const Result r = run("render --resolution 96x64 --spp 1 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_TRUE(fs::exists(out));
+  const rp::Image img = rp::read_image(out.string());
+  EXPECT_EQ(img.width, 96);
+  EXPECT_EQ(img.height, 64);
+  float lo = 1e9f, hi = -1e9f;
+  for (float c : img.rgb) lo = std::min(lo, c), hi = std::max(hi, c);
+  EXPECT_GT(hi - lo, 0.3f) << "the image is blank or nearly so";
+  // Nothing but the image is left behind (no temporary files).
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+TEST_F(Cli, RenderWritesFloatExr) {
+  const fs::path out = dir_ / "small.exr";
+  const Result r = run("render --resolution 32x24 -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(r.output.empty()) << r.output;
+  const rp::Image img = rp::read_image(out.string());
+  EXPECT_EQ(img.width, 32);
+  EXPECT_EQ(img.height, 24);
+}
+
+TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
+  const Result r = run("render --backend nope -o " + (dir_ / "x.png").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.output, "raypack: --backend: unknown backend 'nope' (available: embree)\n");
+  EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
+  for (const std::string args : {"render --resolution 10by10", "render --resolution 0x10",
+                                 "render --resolution 100000x100000", "render --spp 0", "render --spp abc",
+                                 "render --threads -1", "render --no-such-flag", "frobnicate"}) {
+    const Result r = run(args + " -o " + (dir_ / "x.png").string());
+    EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("raypack: ", 0), 0u) << args << ": " << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, UnwritableOutputIsAnErrorWithStatusOneAndNoFile) {
+  const fs::path out = dir_ / "missing-dir" / "x.png";
+  const Result r = run("render --resolution 16x16 -o " + out.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find(out.string()), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(Cli, HelpAndVersion) {
+  Result r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("render"), std::string::npos);
+  r = run("--version");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.output.rfind("raypack ", 0), 0u) << r.output;
+  r = run("backends");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("embree"), std::string::npos);
+}
+
+}  // namespace

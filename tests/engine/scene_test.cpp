@@ -1,0 +1,111 @@
+// Scene model: one flat primitive numbering, validation messages, surface data, default scene.
+
+#include <gtest/gtest.h>
+
+#include "engine/error.h"
+#include "engine/scene.h"
+
+namespace rp {
+namespace {
+
+TriangleMesh two_triangles(const std::string& name) {
+  TriangleMesh m;
+  m.name = name;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  m.indices = {0, 1, 2, 1, 3, 2};
+  return m;
+}
+
+TEST(SceneNumbering, MeshesThenSpheresQuadricsPolygonsPlanes) {
+  Scene s;
+  s.add_plane({{0, 1, 0}, 0, 0});
+  s.add_mesh(two_triangles("a"));
+  s.add_sphere({{0, 0, 0}, 1, 0});
+  s.add_mesh(two_triangles("b"));
+  s.add_quadric({Quadric<float>::ellipsoid({0, 0, 0}, {1, 2, 3}), 0});
+  const std::vector<Vec3f> tri{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  s.add_polygon(tri, 0);
+  ASSERT_EQ(s.prim_count(), 4u + 1 + 1 + 1 + 1);
+  const PrimKind kinds[] = {PrimKind::triangle, PrimKind::triangle, PrimKind::triangle, PrimKind::triangle,
+                            PrimKind::sphere,   PrimKind::quadric,  PrimKind::polygon,  PrimKind::plane};
+  const uint32_t shapes[] = {0, 0, 1, 1, 0, 0, 0, 0};
+  const uint32_t locals[] = {0, 1, 0, 1, 0, 0, 0, 0};
+  for (uint32_t id = 0; id < s.prim_count(); ++id) {
+    const PrimRef r = s.locate(id);
+    EXPECT_EQ(r.kind, kinds[id]) << id;
+    EXPECT_EQ(r.shape, shapes[id]) << id;
+    EXPECT_EQ(r.local, locals[id]) << id;
+  }
+  EXPECT_EQ(s.mesh_base(1), 2u);
+  EXPECT_EQ(s.sphere_base(), 4u);
+  EXPECT_EQ(s.plane_base(), 7u);
+}
+
+void expect_error(const std::function<void()>& f, const std::string& message) {
+  try {
+    f();
+    ADD_FAILURE() << "expected error: " << message;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.what(), message);
+  }
+}
+
+TEST(SceneValidation, BadMeshesAreRejectedWithTheReason) {
+  Scene s;
+  TriangleMesh m = two_triangles("bad");
+  m.indices[4] = 9;
+  expect_error([&] { s.add_mesh(m); }, "mesh 'bad': triangle 1 uses vertex 9 of 4");
+  m = two_triangles("nan");
+  m.positions[2].y = std::numeric_limits<float>::quiet_NaN();
+  expect_error([&] { s.add_mesh(m); }, "mesh 'nan': vertex 2 has a non-finite coordinate");
+  m = two_triangles("short");
+  m.indices.pop_back();
+  expect_error([&] { s.add_mesh(m); }, "mesh 'short': index count 5 is not a multiple of 3");
+  m = two_triangles("mat");
+  m.material = 3;
+  expect_error([&] { s.add_mesh(m); }, "mesh 'mat': material index 3 out of range (1 materials)");
+  expect_error([&] { s.add_sphere({{0, 0, 0}, -1, 0}); },
+               "sphere at (0, 0, 0) radius -1: needs a finite centre and radius > 0");
+  const std::vector<Vec3f> line{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  expect_error([&] { s.add_polygon(line, 0); }, "polygon: vertices are collinear (zero area)");
+  EXPECT_EQ(s.prim_count(), 0u);
+}
+
+TEST(SceneSurface, TrianglePointAndNormalFromBarycentrics) {
+  Scene s;
+  TriangleMesh m = two_triangles("t");
+  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  s.add_mesh(m);
+  const Ray r{{0.25f, 0.5f, 1.0f}, 0.0f, {0, 0, -1}, 10.0f};
+  const SurfacePoint sp = s.surface(r, Hit{1.0f, 0, 0.25f, 0.5f});
+  EXPECT_EQ(sp.position, (Vec3f{0.25f, 0.5f, 0.0f}));
+  EXPECT_EQ(sp.geometric_normal, (Vec3f{0, 0, 1}));
+  EXPECT_EQ(sp.shading_normal, (Vec3f{0, 0, 1}));
+}
+
+TEST(SceneSurface, SpherePointLiesOnTheSphere) {
+  Scene s;
+  s.add_sphere({{1, 2, 3}, 2, 0});
+  const Ray r{{1, 2, 10}, 0, {0, 0, -1}, 100};
+  const SurfacePoint sp = s.surface(r, Hit{5.0f, 0, 0, 0});
+  EXPECT_FLOAT_EQ(length(sp.position - Vec3f{1, 2, 3}), 2.0f);
+  EXPECT_EQ(sp.geometric_normal, (Vec3f{0, 0, 1}));
+}
+
+TEST(DefaultScene, HasEveryPrimitiveKindAndAFiftyThousandTriangleMesh) {
+  const Scene s = make_default_scene();
+  EXPECT_GE(s.triangle_count(), 50000u);
+  EXPECT_GE(s.spheres().size(), 1u);
+  EXPECT_GE(s.quadrics().size(), 1u);
+  EXPECT_GE(s.polygons().size(), 1u);
+  EXPECT_GE(s.planes().size(), 1u);
+  EXPECT_FALSE(s.point_lights().empty() && s.directional_lights().empty());
+  EXPECT_TRUE(s.camera().has_value());
+  EXPECT_EQ(s.degenerate_triangle_count(), 0u);
+  const Box3f b = s.bounds();
+  EXPECT_FALSE(b.empty());
+  EXPECT_TRUE(is_finite(b.lo) && is_finite(b.hi));
+}
+
+}  // namespace
+}  // namespace rp
