@@ -36,6 +36,8 @@ void write_image(const std::string& path, const Image& image) {
   RP_CHECK(out, "cannot write '", path, "': no image writer for extension '", ext, "'");
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff";
   OIIO::ImageSpec spec(image.width, image.height, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+  // Same pixels, same bytes: no write time in the header (OIIO stamps EXR files otherwise).
+  spec.attribute("DateTime", "");
   std::vector<float> pixels = image.rgb;
   if (!is_float) {
     spec.attribute("oiio:ColorSpace", "sRGB");

@@ -5,6 +5,8 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "engine/image_io.h"
@@ -57,14 +59,24 @@ TEST_F(Cli, RenderWritesAnImageOfTheRequestedSizeThatIsNotBlank) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
-TEST_F(Cli, RenderWritesFloatExr) {
-  const fs::path out = dir_ / "small.exr";
-  const Result r = run("render --resolution 32x24 -q -o " + out.string());
+std::string file_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST_F(Cli, RenderWritesTheSameExrBytesForOneAndTwoThreads) {
+  const fs::path one = dir_ / "one.exr", two = dir_ / "two.exr";
+  Result r = run("render --resolution 40x24 --spp 4 --seed 3 -q -t 1 -o " + one.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(r.output.empty()) << r.output;
-  const rp::Image img = rp::read_image(out.string());
-  EXPECT_EQ(img.width, 32);
+  r = run("render --resolution 40x24 --spp 4 --seed 3 -q -t 2 -o " + two.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const rp::Image img = rp::read_image(one.string());
+  EXPECT_EQ(img.width, 40);
   EXPECT_EQ(img.height, 24);
+  const std::string a = file_bytes(one), b = file_bytes(two);
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_TRUE(a == b) << "EXR files differ between 1 and 2 threads";
 }
 
 TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
