@@ -1,13 +1,28 @@
 #include "backends/registry.h"
 
 #include "backends/embree/embree_backend.h"
+#include "backends/simd/simd_backend.h"
 #include "engine/error.h"
 
 namespace rp {
 
+namespace {
+
+/// The simd backend's kernels are compiled for AVX2+FMA; this file is not, so the check
+/// itself runs on any x86-64 CPU.
+bool cpu_has_avx2_fma() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+}
+
+}  // namespace
+
 std::vector<BackendEntry> list_backends() {
+  const bool simd_ok = cpu_has_avx2_fma();
   return {{"embree", "Intel Embree 3 (production backend; user geometry for analytic primitives)",
-           embree::variants(), true, ""}};
+           embree::variants(), true, ""},
+          {"simd", "hand-written 8-wide BVH: packet and single-ray traversal, slab test, Moller-Trumbore (AVX2+FMA)",
+           bvh8::variants(), simd_ok, simd_ok ? "" : "this CPU lacks AVX2 or FMA, which the simd kernels are built for"}};
 }
 
 std::vector<std::string> available_backends() {
@@ -24,6 +39,7 @@ std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene,
     if (e.name != name) continue;
     RP_CHECK(e.available, "backend '", name, "' is not available on this machine: ", e.unavailable_reason);
     if (name == "embree") return embree::make_backend(scene, options);
+    if (name == "simd") return bvh8::make_backend(scene, options);
   }
   throw Error(cat("unknown backend '", name, "' (available: ", known, ")"));
 }

@@ -12,6 +12,8 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/ray.h"
 
@@ -23,6 +25,7 @@ struct BackendInfo {
   std::string variant;   ///< e.g. "default", "robust"
   double build_seconds = 0;
   size_t bytes = 0;      ///< bytes of the acceleration structure (scene arrays excluded)
+  std::vector<std::pair<std::string, double>> stats;  ///< backend-specific figures (nodes, depth, ...)
 };
 
 /// Construction options; each backend documents the variants it accepts.

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "engine/error.h"
+#include "engine/geometry/plane.h"
+#include "engine/geometry/sphere.h"
 
 namespace rp {
 
@@ -115,6 +117,56 @@ Box3f Scene::bounds() const {
   for (const QuadricShape& q : quadrics_) b.extend(q.quadric.clip);
   for (const Vec3f& v : polygon_vertices_) b.extend(v);
   return b;
+}
+
+Box3f Scene::prim_bounds(uint32_t id) const {
+  const PrimRef ref = locate(id);
+  switch (ref.kind) {
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      return {s.center - Vec3f(s.radius), s.center + Vec3f(s.radius)};
+    }
+    case PrimKind::quadric: return quadrics_[ref.shape].quadric.clip;
+    case PrimKind::polygon: {
+      Box3f b;
+      const PolygonShape& p = polygons_[ref.shape];
+      for (uint32_t k = 0; k < p.count; ++k) b.extend(polygon_vertices_[p.first + k]);
+      return b;
+    }
+    default: throw Error(cat("prim_bounds: prim ", id, " is a ", to_string(ref.kind), ", not an analytic primitive"));
+  }
+}
+
+Intersection<float> Scene::intersect_analytic(uint32_t id, const Ray& ray) const {
+  const PrimRef ref = locate(id);
+  switch (ref.kind) {
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      return intersect_sphere_algebraic(ray, s.center, s.radius);
+    }
+    case PrimKind::quadric: return intersect_quadric(ray, quadrics_[ref.shape].quadric);
+    case PrimKind::polygon: {
+      const PolygonShape& p = polygons_[ref.shape];
+      return intersect_polygon(ray, std::span<const Vec3f>(polygon_vertices_).subspan(p.first, p.count), p.plane,
+                               p.convex);
+    }
+    default: return {};
+  }
+}
+
+void Scene::intersect_planes(const Ray& ray, Hit& hit) const {
+  for (uint32_t k = 0; k < planes_.size(); ++k) {
+    Ray r = ray;
+    r.tfar = std::min(ray.tfar, hit.t);
+    const Intersection<float> h = intersect_plane(r, planes_[k].normal, planes_[k].d);
+    if (h.hit) hit = {h.t, plane_base() + k, h.u, h.v};
+  }
+}
+
+bool Scene::occluded_by_planes(const Ray& ray) const {
+  for (const Plane& p : planes_)
+    if (intersect_plane(ray, p.normal, p.d).hit) return true;
+  return false;
 }
 
 SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {

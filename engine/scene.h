@@ -156,6 +156,16 @@ class Scene {
   PrimRef locate(uint32_t prim_id) const;
   /// Bounds of every bounded primitive (planes excluded); empty box for an empty scene.
   Box3f bounds() const;
+  /// Bounds of a sphere, quadric (its clip box) or polygon; prim_id in [sphere_base(), plane_base()).
+  Box3f prim_bounds(uint32_t prim_id) const;
+  /// Closest hit of `ray` with one sphere, quadric or polygon, by the engine/geometry routine
+  /// both backends share (the stable sphere quadratic, the centred quadric, the polygon test).
+  Intersection<float> intersect_analytic(uint32_t prim_id, const Ray& ray) const;
+  /// Lets the unbounded planes, which live beside every backend's structure, take `hit`
+  /// when one is at least as close (t in [tnear, min(tfar, hit.t)]); planes in index order.
+  void intersect_planes(const Ray& ray, Hit& hit) const;
+  /// True when any plane is hit within [tnear, tfar].
+  bool occluded_by_planes(const Ray& ray) const;
   /// Position, normals and material of a hit of `ray` (hit.hit() must be true).
   SurfacePoint surface(const Ray& ray, const Hit& hit) const;
   /// Number of triangles with zero area (kept: they never produce hits).

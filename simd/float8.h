@@ -1,8 +1,19 @@
 #pragma once
 /// The 8-wide SIMD vocabulary, pinned to AVX2+FMA. xsimd's default batch is 16 lanes under
-/// AVX-512, so every 8-wide type names its architecture explicitly.
+/// AVX-512, so every 8-wide type names its architecture explicitly. Include this only from
+/// translation units compiled for AVX2+FMA (link rp::simd, which sets the flags).
+///
+/// xsimd 8.1 has no batch_bool::mask() and no reduce_min/max; they are added here, once.
+/// Functions over lanes take a `mask8 active` last where they have one.
 
+#include <immintrin.h>
+
+#include <bit>
+#include <cstdint>
+#include <limits>
 #include <xsimd/xsimd.hpp>
+
+#include "engine/math.h"
 
 namespace rp::simd {
 
@@ -13,5 +24,106 @@ using mask8 = xsimd::batch_bool<float, Arch>;
 
 static_assert(float8::size == 8, "raypack's packets are 8 rays wide");
 static_assert(int8::size == 8, "raypack's packets are 8 rays wide");
+
+/// Bit i set when lane i of m is true (bits 8..31 clear).
+inline uint32_t movemask(const mask8& m) { return uint32_t(_mm256_movemask_ps(__m256(m))); }
+
+/// The mask whose lane i is bit i of `bits`.
+inline mask8 mask_from_bits(uint32_t bits) {
+  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256i b = _mm256_and_si256(_mm256_set1_epi32(int(bits)), lane_bit);
+  return mask8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(b, lane_bit)));
+}
+
+/// Lanes whose sign bit is set: negative numbers, -0, -inf (and NaNs with the sign bit).
+/// Unlike v < 0 it tells -0 from +0, which the slab test needs (1 / -0 = -inf).
+inline mask8 sign_mask(const float8& v) {
+  return mask8(_mm256_castsi256_ps(_mm256_srai_epi32(_mm256_castps_si256(v), 31)));
+}
+
+/// Lane-wise minimum with the operand order of x86 MINPS: when either lane is NaN the result
+/// is the lane of b. The slab test relies on it: min(NaN, x) == x lets a 0 * inf slab
+/// (origin on a face of a flat direction) impose no constraint.
+inline float8 min_b_on_nan(const float8& a, const float8& b) { return _mm256_min_ps(a, b); }
+/// Lane-wise maximum, NaN handled as min_b_on_nan: max(NaN, x) == x.
+inline float8 max_b_on_nan(const float8& a, const float8& b) { return _mm256_max_ps(a, b); }
+
+/// Smallest lane; NaN lanes are ignored unless every lane is NaN (then NaN). MINPS returns
+/// its second operand when either is NaN, so NaN lanes are replaced by +inf before the tree.
+inline float reduce_min(const float8& v) {
+  const __m256 nan = _mm256_cmp_ps(v, v, _CMP_UNORD_Q);
+  if (_mm256_movemask_ps(nan) == 0xff) return std::numeric_limits<float>::quiet_NaN();
+  __m256 m = _mm256_blendv_ps(v, _mm256_set1_ps(std::numeric_limits<float>::infinity()), nan);
+  m = _mm256_min_ps(_mm256_permute2f128_ps(m, m, 0x01), m);
+  m = _mm256_min_ps(_mm256_shuffle_ps(m, m, 0x4e), m);
+  m = _mm256_min_ps(_mm256_shuffle_ps(m, m, 0xb1), m);
+  return _mm256_cvtss_f32(m);
+}
+
+/// Largest lane; NaN lanes are ignored unless every lane is NaN (then NaN).
+inline float reduce_max(const float8& v) {
+  const __m256 nan = _mm256_cmp_ps(v, v, _CMP_UNORD_Q);
+  if (_mm256_movemask_ps(nan) == 0xff) return std::numeric_limits<float>::quiet_NaN();
+  __m256 m = _mm256_blendv_ps(v, _mm256_set1_ps(-std::numeric_limits<float>::infinity()), nan);
+  m = _mm256_max_ps(_mm256_permute2f128_ps(m, m, 0x01), m);
+  m = _mm256_max_ps(_mm256_shuffle_ps(m, m, 0x4e), m);
+  m = _mm256_max_ps(_mm256_shuffle_ps(m, m, 0xb1), m);
+  return _mm256_cvtss_f32(m);
+}
+
+/// Index of the lowest set bit (bits != 0).
+inline int first_lane(uint32_t bits) { return std::countr_zero(bits); }
+/// Number of set bits.
+inline int lane_count(uint32_t bits) { return std::popcount(bits); }
+
+/// Lanes of v whose bit is set in `bits`, packed to the front in lane order (the rest are
+/// unspecified); returns how many. The compress step xsimd 8.1 lacks.
+inline int compress(uint32_t bits, const float8& v, float* out) {
+  alignas(32) float lanes[8];
+  v.store_aligned(lanes);
+  int n = 0;
+  for (; bits; bits &= bits - 1) out[n++] = lanes[std::countr_zero(bits)];
+  return n;
+}
+
+/// Three 8-wide components: eight 3-vectors in SoA.
+struct Vec3x8 {
+  float8 x, y, z;
+
+  Vec3x8() = default;
+  Vec3x8(const float8& x_, const float8& y_, const float8& z_) : x(x_), y(y_), z(z_) {}
+  /// All lanes = v.
+  explicit Vec3x8(const Vec3f& v) : x(v.x), y(v.y), z(v.z) {}
+  /// Lanes from three aligned SoA arrays of 8 floats.
+  static Vec3x8 load(const float* xs, const float* ys, const float* zs) {
+    return {float8::load_aligned(xs), float8::load_aligned(ys), float8::load_aligned(zs)};
+  }
+  /// Lane i as a scalar vector.
+  Vec3f lane(int i) const {
+    alignas(32) float a[8], b[8], c[8];
+    x.store_aligned(a);
+    y.store_aligned(b);
+    z.store_aligned(c);
+    return {a[i], b[i], c[i]};
+  }
+};
+
+inline Vec3x8 operator+(const Vec3x8& a, const Vec3x8& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline Vec3x8 operator-(const Vec3x8& a, const Vec3x8& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3x8 operator*(const Vec3x8& a, const float8& s) { return {a.x * s, a.y * s, a.z * s}; }
+
+/// Dot product evaluated exactly as the scalar rp::dot ((ax*bx + ay*by) + az*bz, no FMA), so
+/// that 8-wide kernels give the bits of the scalar routines.
+inline float8 dot(const Vec3x8& a, const Vec3x8& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+/// Cross product evaluated exactly as the scalar rp::cross (no FMA).
+inline Vec3x8 cross(const Vec3x8& a, const Vec3x8& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+/// Lane-wise choice: m ? a : b.
+inline Vec3x8 select(const mask8& m, const Vec3x8& a, const Vec3x8& b) {
+  return {xsimd::select(m, a.x, b.x), xsimd::select(m, a.y, b.y), xsimd::select(m, a.z, b.z)};
+}
 
 }  // namespace rp::simd

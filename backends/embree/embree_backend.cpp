@@ -10,10 +10,6 @@
 #include <mutex>
 
 #include "engine/error.h"
-#include "engine/geometry/plane.h"
-#include "engine/geometry/polygon.h"
-#include "engine/geometry/quadric.h"
-#include "engine/geometry/sphere.h"
 
 namespace rp::embree {
 
@@ -84,47 +80,24 @@ struct UserData {
   const Scene* scene;
 };
 
+/// The analytic kinds Embree sees as user geometry: the kind's prim_id range in the scene.
 struct SphereKind {
+  static uint32_t base(const Scene& s) { return s.sphere_base(); }
   static uint32_t count(const Scene& s) { return uint32_t(s.spheres().size()); }
-  static Box3f bounds(const Scene& s, uint32_t i) {
-    const Sphere& sp = s.spheres()[i];
-    return {sp.center - Vec3f(sp.radius), sp.center + Vec3f(sp.radius)};
-  }
-  static Intersection<float> intersect(const Scene& s, uint32_t i, const Ray& r) {
-    const Sphere& sp = s.spheres()[i];
-    return intersect_sphere_algebraic(r, sp.center, sp.radius);
-  }
 };
-
 struct QuadricKind {
+  static uint32_t base(const Scene& s) { return s.quadric_base(); }
   static uint32_t count(const Scene& s) { return uint32_t(s.quadrics().size()); }
-  static Box3f bounds(const Scene& s, uint32_t i) { return s.quadrics()[i].quadric.clip; }
-  static Intersection<float> intersect(const Scene& s, uint32_t i, const Ray& r) {
-    return intersect_quadric(r, s.quadrics()[i].quadric);
-  }
 };
-
 struct PolygonKind {
+  static uint32_t base(const Scene& s) { return s.polygon_base(); }
   static uint32_t count(const Scene& s) { return uint32_t(s.polygons().size()); }
-  static std::span<const Vec3f> vertices(const Scene& s, uint32_t i) {
-    const PolygonShape& p = s.polygons()[i];
-    return std::span<const Vec3f>(s.polygon_vertices()).subspan(p.first, p.count);
-  }
-  static Box3f bounds(const Scene& s, uint32_t i) {
-    Box3f b;
-    for (const Vec3f& v : vertices(s, i)) b.extend(v);
-    return b;
-  }
-  static Intersection<float> intersect(const Scene& s, uint32_t i, const Ray& r) {
-    const PolygonShape& p = s.polygons()[i];
-    return intersect_polygon(r, vertices(s, i), p.plane, p.convex);
-  }
 };
 
 template <typename Kind>
 void user_bounds(const RTCBoundsFunctionArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
-  const Box3f b = Kind::bounds(s, a->primID);
+  const Box3f b = s.prim_bounds(Kind::base(s) + a->primID);
   *a->bounds_o = {b.lo.x, b.lo.y, b.lo.z, 0.0f, b.hi.x, b.hi.y, b.hi.z, 0.0f};
 }
 
@@ -142,7 +115,7 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   RTCHitN* hits = RTCRayHitN_HitN(a->rayhit, a->N);
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    const Intersection<float> h = Kind::intersect(s, a->primID, ray_from(rays, a->N, i));
+    const Intersection<float> h = s.intersect_analytic(Kind::base(s) + a->primID, ray_from(rays, a->N, i));
     if (!h.hit) continue;
     RTCRayN_tfar(rays, a->N, i) = h.t;
     RTCHitN_u(hits, a->N, i) = h.u;
@@ -161,7 +134,7 @@ void user_occluded(const RTCOccludedFunctionNArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    if (Kind::intersect(s, a->primID, ray_from(a->ray, a->N, i)).hit)
+    if (s.intersect_analytic(Kind::base(s) + a->primID, ray_from(a->ray, a->N, i)).hit)
       RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
   }
 }
@@ -208,9 +181,9 @@ class EmbreeBackend final : public Backend {
       buffer_bytes += mesh.positions.size() * 12 + mesh.indices.size() * 4;
       attach(g, scene.mesh_base(m));
     }
-    add_user<SphereKind>(dev, scene.sphere_base());
-    add_user<QuadricKind>(dev, scene.quadric_base());
-    add_user<PolygonKind>(dev, scene.polygon_base());
+    add_user<SphereKind>(dev);
+    add_user<QuadricKind>(dev);
+    add_user<PolygonKind>(dev);
 
     rtcCommitScene(scene_handle_);
     check(dev, "embree: rtcCommitScene");
@@ -345,7 +318,7 @@ class EmbreeBackend final : public Backend {
   }
 
   template <typename Kind>
-  void add_user(RTCDevice dev, uint32_t prim_base) {
+  void add_user(RTCDevice dev) {
     const uint32_t n = Kind::count(scene_);
     if (n == 0) return;
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
@@ -355,7 +328,7 @@ class EmbreeBackend final : public Backend {
     rtcSetGeometryIntersectFunction(g, user_intersect<Kind>);
     rtcSetGeometryOccludedFunction(g, user_occluded<Kind>);
     check(dev, "embree: user geometry");
-    attach(g, prim_base);
+    attach(g, Kind::base(scene_));
   }
 
   /// Maps Embree's (geomID, primID) to the scene numbering, then lets the unbounded planes,
@@ -363,21 +336,11 @@ class EmbreeBackend final : public Backend {
   Hit finish(const Ray& r, unsigned geom, unsigned prim, float t, float u, float v) const noexcept {
     Hit h;
     if (geom != RTC_INVALID_GEOMETRY_ID) h = {t, geom_base_[geom] + prim, u, v};
-    const auto& planes = scene_.planes();
-    for (uint32_t k = 0; k < planes.size(); ++k) {
-      Ray pr = r;
-      pr.tfar = std::min(r.tfar, h.t);
-      const Intersection<float> ph = intersect_plane(pr, planes[k].normal, planes[k].d);
-      if (ph.hit) h = {ph.t, scene_.plane_base() + k, ph.u, ph.v};
-    }
+    scene_.intersect_planes(r, h);
     return h;
   }
 
-  bool hits_plane(const Ray& r) const noexcept {
-    for (const Plane& p : scene_.planes())
-      if (intersect_plane(r, p.normal, p.d).hit) return true;
-    return false;
-  }
+  bool hits_plane(const Ray& r) const noexcept { return scene_.occluded_by_planes(r); }
 
   const Scene& scene_;
   UserData user_;

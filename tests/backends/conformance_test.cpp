@@ -326,13 +326,14 @@ TEST(Registry, UnknownBackendIsAnErrorListingTheNames) {
     make_backend("nope", scene);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_STREQ(e.what(), "unknown backend 'nope' (available: embree)");
+    EXPECT_STREQ(e.what(), "unknown backend 'nope' (available: embree, simd)");
   }
 }
 
-TEST(Registry, EmbreeUnknownVariantIsAnError) {
+TEST(Registry, UnknownVariantIsAnError) {
   const Scene scene;
   EXPECT_THROW(make_backend("embree", scene, {.variant = "fastest", .device_config = {}}), Error);
+  EXPECT_THROW(make_backend("simd", scene, {.variant = "fastest", .device_config = {}}), Error);
 }
 
 }  // namespace

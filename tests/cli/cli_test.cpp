@@ -82,7 +82,7 @@ TEST_F(Cli, RenderWritesTheSameExrBytesForOneAndTwoThreads) {
 TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
   const Result r = run("render --backend nope -o " + (dir_ / "x.png").string());
   EXPECT_EQ(r.status, 2);
-  EXPECT_EQ(r.output, "raypack: --backend: unknown backend 'nope' (available: embree)\n");
+  EXPECT_EQ(r.output, "raypack: --backend: unknown backend 'nope' (available: embree, simd)\n");
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
 }
 

@@ -1,0 +1,122 @@
+#pragma once
+/// The 8-wide kernels of the simd backend: the slab test (one ray against a node's 8 child
+/// boxes, and 8 rays against one box) and Möller–Trumbore (one ray against 8 triangles, and
+/// 8 rays against one triangle, by the same function). AVX2+FMA translation units only.
+
+#include <limits>
+
+#include "backends/simd/bvh8.h"
+#include "simd/float8.h"
+
+namespace rp::bvh8 {
+
+using simd::float8;
+using simd::mask8;
+using simd::Vec3x8;
+
+/// Widening of a box's exit distance that makes float slab tests conservative: Ize, "Robust
+/// BVH Ray Traversal", JCGT 2(2), 2013, multiplies t_far by 1 + 2 gamma(3) (gamma(n) =
+/// n eps / (1 - n eps), eps = 2^-24).
+inline constexpr float kSlabPad = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
+
+/// One ray prepared for the single-ray traversal: broadcast origin and inverse direction
+/// (1/±0 = ±inf), and for each axis the offset (in floats, from Bvh8Node::lo_x) of the node
+/// array holding the near and the far planes, chosen once from the ray's octant
+/// (madmann91/bvh, tinybvh). The octant follows the sign bit, so -0 counts as negative and
+/// its inverse -inf pairs with the right plane.
+struct SingleRay {
+  float8 org_x, org_y, org_z, inv_x, inv_y, inv_z;
+  int near_x, near_y, near_z, far_x, far_y, far_z;
+
+  explicit SingleRay(const Ray& r)
+      : org_x(r.org.x), org_y(r.org.y), org_z(r.org.z),
+        inv_x(1.0f / r.dir.x), inv_y(1.0f / r.dir.y), inv_z(1.0f / r.dir.z) {
+    const bool nx = std::signbit(r.dir.x), ny = std::signbit(r.dir.y), nz = std::signbit(r.dir.z);
+    near_x = nx ? 24 : 0;  far_x = nx ? 0 : 24;
+    near_y = ny ? 32 : 8;  far_y = ny ? 8 : 32;
+    near_z = nz ? 40 : 16; far_z = nz ? 16 : 40;
+  }
+};
+
+/// Slab test ×8: one ray against the 8 child boxes of `n` (seeds' slab method; the swap is
+/// the octant's near/far choice). Returns the bit mask of children hit within [tnear, tfar]
+/// and their entry distances. A 0 * inf slab (origin on a face plane, direction parallel to
+/// it) is NaN and drops out of the max/min chains, so it imposes no constraint, as a closed
+/// box should; empty children (lo = +inf, hi = -inf) never hit.
+inline uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar, float8& t_enter) {
+  const float* base = n.lo_x;
+  const float8 tn_x = (float8::load_aligned(base + r.near_x) - r.org_x) * r.inv_x;
+  const float8 tn_y = (float8::load_aligned(base + r.near_y) - r.org_y) * r.inv_y;
+  const float8 tn_z = (float8::load_aligned(base + r.near_z) - r.org_z) * r.inv_z;
+  const float8 tf_x = (float8::load_aligned(base + r.far_x) - r.org_x) * r.inv_x;
+  const float8 tf_y = (float8::load_aligned(base + r.far_y) - r.org_y) * r.inv_y;
+  const float8 tf_z = (float8::load_aligned(base + r.far_z) - r.org_z) * r.inv_z;
+  using simd::max_b_on_nan;
+  using simd::min_b_on_nan;
+  t_enter = max_b_on_nan(tn_z, max_b_on_nan(tn_y, max_b_on_nan(tn_x, float8(tnear))));
+  const float8 t_exit = min_b_on_nan(tf_z, min_b_on_nan(tf_y, min_b_on_nan(tf_x, float8(tfar))));
+  return simd::movemask(t_enter <= t_exit * kSlabPad);
+}
+
+/// Eight rays in SoA prepared for the packet traversal.
+struct RayPacket {
+  Vec3x8 org, dir, inv;
+  mask8 neg_x, neg_y, neg_z;  ///< sign bit of each direction component
+  float8 tnear;
+};
+
+/// Slab test ×8 across rays: the 8 rays of `p` against box [lo, hi], each ray with its own
+/// tfar. Near and far planes per lane from the direction's sign bit; NaN handling as
+/// intersect_node. Returns the lanes that hit.
+inline uint32_t intersect_box(const RayPacket& p, const Vec3f& lo, const Vec3f& hi, const float8& tfar) {
+  using simd::max_b_on_nan;
+  using simd::min_b_on_nan;
+  const float8 lx(lo.x), ly(lo.y), lz(lo.z), hx(hi.x), hy(hi.y), hz(hi.z);
+  const float8 tn_x = (xsimd::select(p.neg_x, hx, lx) - p.org.x) * p.inv.x;
+  const float8 tn_y = (xsimd::select(p.neg_y, hy, ly) - p.org.y) * p.inv.y;
+  const float8 tn_z = (xsimd::select(p.neg_z, hz, lz) - p.org.z) * p.inv.z;
+  const float8 tf_x = (xsimd::select(p.neg_x, lx, hx) - p.org.x) * p.inv.x;
+  const float8 tf_y = (xsimd::select(p.neg_y, ly, hy) - p.org.y) * p.inv.y;
+  const float8 tf_z = (xsimd::select(p.neg_z, lz, hz) - p.org.z) * p.inv.z;
+  const float8 t_enter = max_b_on_nan(tn_z, max_b_on_nan(tn_y, max_b_on_nan(tn_x, p.tnear)));
+  const float8 t_exit = min_b_on_nan(tf_z, min_b_on_nan(tf_y, min_b_on_nan(tf_x, tfar)));
+  return simd::movemask(t_enter <= t_exit * kSlabPad);
+}
+
+/// Result of moller_trumbore8: lanes that hit, with t and the barycentrics (u, v).
+struct Mt8 {
+  mask8 hit;
+  float8 t, u, v;
+};
+
+/// Möller–Trumbore ×8 (Möller and Trumbore 1997, "Fast, Minimum Storage Ray/Triangle
+/// Intersection", JGT 2(1)), lane by lane exactly as rp::intersect_triangle_mt: the same
+/// operations in the same order, no FMA (the TU is built with -ffp-contract=off), divisions
+/// by det, so each lane has the bits of the scalar routine. Serves one ray against 8
+/// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane
+/// hits when det != 0, b1 in [0, 1], b2 >= 0, b1 + b2 <= 1 and tnear <= t <= tfar, t finite.
+inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                            const Vec3x8& e2, const float8& tnear, const float8& tfar) {
+  const Vec3x8 s1 = simd::cross(dir, e2);
+  const float8 det = simd::dot(s1, e1);
+  const Vec3x8 s = org - v0;
+  const float8 b1 = simd::dot(s1, s) / det;
+  const Vec3x8 s2 = simd::cross(s, e1);
+  const float8 b2 = simd::dot(s2, dir) / det;
+  const float8 t = simd::dot(s2, e2) / det;
+  const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
+  const mask8 hit = (det != zero) & (b1 >= zero) & (b1 <= one) & (b2 >= zero) & (b1 + b2 <= one) & (t >= tnear) &
+                    (t <= tfar) & (t < inf);
+  return {hit, t, b1, b2};
+}
+
+/// The triangles of block b as Vec3x8 (v0, e1, e2).
+struct Tri8View {
+  Vec3x8 v0, e1, e2;
+  explicit Tri8View(const Tri8& b)
+      : v0(Vec3x8::load(b.v0_x, b.v0_y, b.v0_z)),
+        e1(Vec3x8::load(b.e1_x, b.e1_y, b.e1_z)),
+        e2(Vec3x8::load(b.e2_x, b.e2_y, b.e2_z)) {}
+};
+
+}  // namespace rp::bvh8

@@ -1,0 +1,386 @@
+#include "backends/simd/simd_backend.h"
+
+#include <algorithm>
+#include <bit>
+
+#include "backends/simd/bvh8.h"
+#include "backends/simd/kernels.h"
+#include "engine/error.h"
+
+namespace rp::bvh8 {
+
+namespace {
+
+using simd::float8;
+using simd::mask8;
+using simd::movemask;
+using simd::Vec3x8;
+
+/// Traversal stack bound: the build keeps binary depth <= 64 + log2(n) < 100, so an 8-wide
+/// tree holds at most 7 pending children per level.
+constexpr int kStackSize = 1024;
+
+/// Lane bits [lo, hi) of a block.
+inline uint32_t lane_range(uint32_t lo, uint32_t hi) { return ((1u << hi) - 1u) & ~((1u << lo) - 1u); }
+
+class SimdBackend final : public Backend {
+ public:
+  SimdBackend(const Scene& scene, const BackendOptions& options) : scene_(scene) {
+    BuildOptions bo;
+    if (options.variant == "median") bo.rule = SplitRule::median;
+    else if (options.variant != "default")
+      throw Error(cat("simd: unknown variant '", options.variant, "' (default, median)"));
+    bvh_ = build(scene, bo);
+    info_.name = "simd";
+    info_.variant = options.variant;
+    info_.build_seconds = bvh_.stats.seconds;
+    info_.bytes = bvh_.stats.bytes;
+    info_.stats = {{"nodes", double(bvh_.stats.nodes)},  {"leaves", double(bvh_.stats.leaves)},
+                   {"depth", double(bvh_.stats.depth)},  {"sah_cost", bvh_.stats.sah_cost},
+                   {"prims", double(bvh_.stats.prims)}};
+  }
+
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
+    if (coherence == Coherence::coherent) {
+      for (size_t base = 0; base < rays.size(); base += 8)
+        intersect_packet(rays.subspan(base, std::min<size_t>(8, rays.size() - base)), hits.subspan(base));
+    } else {
+      for (size_t i = 0; i < rays.size(); ++i) hits[i] = intersect_single(rays[i]);
+    }
+  }
+
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
+    if (coherence == Coherence::coherent) {
+      for (size_t base = 0; base < rays.size(); base += 8)
+        occluded_packet(rays.subspan(base, std::min<size_t>(8, rays.size() - base)), out.subspan(base));
+    } else {
+      for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && occluded_single(rays[i]);
+    }
+  }
+
+  const BackendInfo& info() const noexcept override { return info_; }
+
+ private:
+  // ---- single ray: one ray against the 8 children of a node ----
+
+  /// Closest hit of one ray; children visited near-first by their entry distance, the far
+  /// ones pushed first; popped entries farther than the current hit are skipped.
+  Hit intersect_single(const Ray& r) const noexcept {
+    Hit best;
+    if (!valid_ray(r)) return best;
+    float tfar = r.tfar;
+    if (!bvh_.empty()) {
+      const SingleRay sr(r);
+      const Vec3x8 org(r.org), dir(r.dir);
+      const float8 tnear8(r.tnear);
+      struct Entry { int32_t ref; float t; };
+      Entry stack[kStackSize];
+      int sp = 0;
+      int32_t ref = 0;
+      for (;;) {
+        if (!is_leaf(ref)) {
+          const Bvh8Node& n = bvh_.nodes[size_t(ref)];
+          float8 t_enter;
+          uint32_t bits = intersect_node(n, sr, r.tnear, tfar, t_enter);
+          if (bits) {
+            if ((bits & (bits - 1)) == 0) {
+              ref = n.child[std::countr_zero(bits)];
+              continue;
+            }
+            alignas(32) float dist[8];
+            t_enter.store_aligned(dist);
+            Entry hit[8];
+            int k = 0;
+            for (; bits; bits &= bits - 1) {
+              const int c = std::countr_zero(bits);
+              Entry e{n.child[c], dist[c]};
+              int j = k++;
+              for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];  // descending by distance
+              hit[j] = e;
+            }
+            for (int j = 0; j < k - 1; ++j) stack[sp++] = hit[j];
+            ref = hit[k - 1].ref;
+            continue;
+          }
+        } else {
+          const Bvh8Leaf& leaf = bvh_.leaves[size_t(~ref)];
+          for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count;) {
+            const uint32_t block = s / 8, lo = s % 8;
+            const uint32_t hi = std::min<uint32_t>(8, lo + (leaf.tri_first + leaf.tri_count - s));
+            const Tri8& tb = bvh_.tris[block];
+            const Tri8View tv(tb);
+            const Mt8 h = moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, float8(tfar));
+            const uint32_t bits = movemask(h.hit) & lane_range(lo, hi);
+            if (bits) {
+              const float tmin = simd::reduce_min(xsimd::select(h.hit, h.t, float8(std::numeric_limits<float>::infinity())));
+              const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
+              const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
+              alignas(32) float u[8], v[8];
+              h.u.store_aligned(u);
+              h.v.store_aligned(v);
+              tfar = tmin;
+              best = {tmin, tb.prim_id[lane], u[lane], v[lane]};
+            }
+            s += hi - lo;
+          }
+          for (uint32_t k = 0; k < leaf.other_count; ++k) {
+            const uint32_t id = bvh_.others[leaf.other_first + k];
+            Ray rr = r;
+            rr.tfar = tfar;
+            const Intersection<float> h = scene_.intersect_analytic(id, rr);
+            if (h.hit) {
+              tfar = h.t;
+              best = {h.t, id, h.u, h.v};
+            }
+          }
+        }
+        for (;;) {  // pop, skipping subtrees entered beyond the current hit
+          if (sp == 0) goto done;
+          const Entry e = stack[--sp];
+          if (e.t <= tfar) {
+            ref = e.ref;
+            break;
+          }
+        }
+      }
+    }
+  done:
+    scene_.intersect_planes(r, best);
+    return best;
+  }
+
+  /// Any hit of one (valid) ray; stops at the first.
+  bool occluded_single(const Ray& r) const noexcept {
+    if (scene_.occluded_by_planes(r)) return true;
+    if (bvh_.empty()) return false;
+    const SingleRay sr(r);
+    const Vec3x8 org(r.org), dir(r.dir);
+    const float8 tnear8(r.tnear), tfar8(r.tfar);
+    int32_t stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const int32_t ref = stack[--sp];
+      if (!is_leaf(ref)) {
+        const Bvh8Node& n = bvh_.nodes[size_t(ref)];
+        float8 t_enter;
+        for (uint32_t bits = intersect_node(n, sr, r.tnear, r.tfar, t_enter); bits; bits &= bits - 1)
+          stack[sp++] = n.child[std::countr_zero(bits)];
+        continue;
+      }
+      const Bvh8Leaf& leaf = bvh_.leaves[size_t(~ref)];
+      for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count;) {
+        const uint32_t lo = s % 8, hi = std::min<uint32_t>(8, lo + (leaf.tri_first + leaf.tri_count - s));
+        const Tri8View tv(bvh_.tris[s / 8]);
+        if (movemask(moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, tfar8).hit) & lane_range(lo, hi))
+          return true;
+        s += hi - lo;
+      }
+      for (uint32_t k = 0; k < leaf.other_count; ++k)
+        if (scene_.intersect_analytic(bvh_.others[leaf.other_first + k], r).hit) return true;
+    }
+    return false;
+  }
+
+  // ---- packets: 8 rays against one node's boxes ----
+
+  /// Loads up to 8 rays; invalid rays and missing lanes are inactive (and get harmless values).
+  static uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfar) {
+    alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], tn[8], tf[8];
+    uint32_t active = 0;
+    for (size_t i = 0; i < 8; ++i) {
+      const bool ok = i < rays.size() && valid_ray(rays[i]);
+      const Ray r = ok ? rays[i] : Ray{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 1.0f, 1.0f}, -1.0f};
+      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
+      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
+      tn[i] = r.tnear; tf[i] = r.tfar;
+      active |= uint32_t(ok) << i;
+    }
+    p.org = Vec3x8::load(ox, oy, oz);
+    p.dir = Vec3x8::load(dx, dy, dz);
+    const float8 one(1.0f);
+    p.inv = {one / p.dir.x, one / p.dir.y, one / p.dir.z};
+    // Sign bit, so that -0 (inverse -inf) takes the far plane first like a negative direction.
+    p.neg_x = simd::sign_mask(p.dir.x);
+    p.neg_y = simd::sign_mask(p.dir.y);
+    p.neg_z = simd::sign_mask(p.dir.z);
+    p.tnear = float8::load_aligned(tn);
+    tfar = float8::load_aligned(tf);
+    return active;
+  }
+
+  /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
+  /// direction signs (the key sum_a sign_a (lo_a + hi_a) of each child, one 8-wide op).
+  struct Child { int32_t ref; uint32_t mask; float key; };
+  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const float8& tfar, uint32_t mask,
+                              const float8& sign_x, const float8& sign_y, const float8& sign_z, Child* out) {
+    const float8 key8 = sign_x * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
+                        sign_y * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
+                        sign_z * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
+    alignas(32) float key[8];
+    key8.store_aligned(key);
+    int k = 0;
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      const uint32_t m = intersect_box(p, {n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]}, tfar) & mask;
+      if (!m) continue;
+      Child e{n.child[c], m, key[c]};
+      int j = k++;
+      for (; j > 0 && out[j - 1].key < e.key; --j) out[j] = out[j - 1];  // descending: nearest last
+      out[j] = e;
+    }
+    return k;
+  }
+
+  /// The packet's direction signs from its first active ray, as +-1 per axis.
+  static void packet_signs(const RayPacket& p, uint32_t active, float8& sx, float8& sy, float8& sz) {
+    const int lane = std::countr_zero(active);
+    const Vec3f d = p.dir.lane(lane);
+    sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);
+    sy = float8(std::signbit(d.y) ? -1.0f : 1.0f);
+    sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
+  }
+
+  void intersect_packet(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    RayPacket p;
+    float8 tfar;
+    const uint32_t active = load_packet(rays, p, tfar);
+    alignas(32) uint32_t prim[8];
+    std::fill_n(prim, 8, kInvalidId);
+    float8 u(0.0f), v(0.0f);
+    if (active && !bvh_.empty()) {
+      float8 sx, sy, sz;
+      packet_signs(p, active, sx, sy, sz);
+      struct Entry { int32_t ref; uint32_t mask; };
+      Entry stack[kStackSize];
+      int sp = 0;
+      stack[sp++] = {0, active};
+      while (sp > 0) {
+        const Entry e = stack[--sp];
+        if (!is_leaf(e.ref)) {
+          Child kids[8];
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, tfar, e.mask, sx, sy, sz, kids);
+          for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
+          continue;
+        }
+        const Bvh8Leaf& leaf = bvh_.leaves[size_t(~e.ref)];
+        const mask8 lanes = simd::mask_from_bits(e.mask);
+        for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count; ++s) {
+          const Tri8& tb = bvh_.tris[s / 8];
+          const uint32_t l = s % 8;
+          const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                                         Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
+                                         Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+          const mask8 upd = h.hit & lanes;
+          const uint32_t bits = movemask(upd);
+          if (!bits) continue;
+          tfar = xsimd::select(upd, h.t, tfar);
+          u = xsimd::select(upd, h.u, u);
+          v = xsimd::select(upd, h.v, v);
+          for (uint32_t b = bits; b; b &= b - 1) prim[std::countr_zero(b)] = tb.prim_id[l];
+        }
+        if (leaf.other_count) {
+          alignas(32) float tf[8], uu[8], vv[8];
+          tfar.store_aligned(tf);
+          u.store_aligned(uu);
+          v.store_aligned(vv);
+          for (uint32_t k = 0; k < leaf.other_count; ++k) {
+            const uint32_t id = bvh_.others[leaf.other_first + k];
+            for (uint32_t b = e.mask; b; b &= b - 1) {
+              const int lane = std::countr_zero(b);
+              Ray r = rays[size_t(lane)];
+              r.tfar = tf[lane];
+              const Intersection<float> h = scene_.intersect_analytic(id, r);
+              if (h.hit) {
+                tf[lane] = h.t;
+                uu[lane] = h.u;
+                vv[lane] = h.v;
+                prim[lane] = id;
+              }
+            }
+          }
+          tfar = float8::load_aligned(tf);
+          u = float8::load_aligned(uu);
+          v = float8::load_aligned(vv);
+        }
+      }
+    }
+    alignas(32) float tf[8], uu[8], vv[8];
+    tfar.store_aligned(tf);
+    u.store_aligned(uu);
+    v.store_aligned(vv);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      Hit h;
+      if (active >> i & 1u) {
+        if (prim[i] != kInvalidId) h = {tf[i], prim[i], uu[i], vv[i]};
+        scene_.intersect_planes(rays[i], h);
+      }
+      hits[i] = h;
+    }
+  }
+
+  void occluded_packet(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    RayPacket p;
+    float8 tfar;
+    uint32_t active = load_packet(rays, p, tfar);
+    uint32_t done = 0;
+    for (uint32_t b = active; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      if (scene_.occluded_by_planes(rays[size_t(lane)])) done |= 1u << lane;
+    }
+    uint32_t live = active & ~done;
+    if (live && !bvh_.empty()) {
+      float8 sx, sy, sz;
+      packet_signs(p, live, sx, sy, sz);
+      struct Entry { int32_t ref; uint32_t mask; };
+      Entry stack[kStackSize];
+      int sp = 0;
+      stack[sp++] = {0, live};
+      while (sp > 0 && live) {  // early exit once every lane is occluded
+        Entry e = stack[--sp];
+        e.mask &= live;
+        if (!e.mask) continue;
+        if (!is_leaf(e.ref)) {
+          Child kids[8];
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, tfar, e.mask, sx, sy, sz, kids);
+          for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
+          continue;
+        }
+        const Bvh8Leaf& leaf = bvh_.leaves[size_t(~e.ref)];
+        for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count && e.mask; ++s) {
+          const Tri8& tb = bvh_.tris[s / 8];
+          const uint32_t l = s % 8;
+          const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                                         Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
+                                         Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+          const uint32_t hit = movemask(h.hit) & e.mask;
+          done |= hit;
+          e.mask &= ~hit;
+        }
+        for (uint32_t k = 0; k < leaf.other_count && e.mask; ++k)
+          for (uint32_t b = e.mask; b; b &= b - 1) {
+            const int lane = std::countr_zero(b);
+            if (scene_.intersect_analytic(bvh_.others[leaf.other_first + k], rays[size_t(lane)]).hit) {
+              done |= 1u << lane;
+              e.mask &= ~(1u << lane);
+            }
+          }
+        live = active & ~done;
+      }
+    }
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done >> i & 1u);
+  }
+
+  const Scene& scene_;
+  Bvh8 bvh_;
+  BackendInfo info_;
+};
+
+}  // namespace
+
+std::vector<std::string> variants() { return {"default", "median"}; }
+
+std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
+  return std::make_unique<SimdBackend>(scene, options);
+}
+
+}  // namespace rp::bvh8

@@ -1,0 +1,23 @@
+#pragma once
+/// The hand-written 8-wide backend ("simd"): an 8-wide BVH (bvh8.h) traversed by packets of 8
+/// coherent rays or by single rays against 8 child boxes at once. No SIMD types here: the
+/// registry includes this header from a translation unit built without AVX2.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/backend.h"
+#include "engine/scene.h"
+
+namespace rp::bvh8 {
+
+/// Variants: "default" (binned SAH build), "median" (the seeds' rule: longest axis, centroid
+/// median, balanced).
+std::vector<std::string> variants();
+
+/// Builds the backend; the caller (the registry) has checked that the CPU has AVX2 and FMA.
+/// Throws rp::Error for an unknown variant.
+std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options);
+
+}  // namespace rp::bvh8

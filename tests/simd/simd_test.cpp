@@ -1,0 +1,523 @@
+// Tests for simd/float8.h: every helper against a plain scalar loop over its lanes, on seeded
+// random packets and on hand-picked special values (NaN, +-inf, +-0, denormals, FLT_MAX) in
+// every lane position.
+//
+// Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::simd) and
+// with -ffp-contract=off (from rp::warnings); CMake gives both. Without -ffp-contract=off the
+// compiler may fuse a*b + c into one FMA, in the scalar oracle or in the 8-wide code, and the
+// bit-exact Vec3x8 tests fail; Float8Build.NoFmaContraction names that cause directly.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <bit>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/math.h"
+#include "simd/float8.h"
+
+#if !defined(__AVX2__) || !defined(__FMA__)
+#error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::simd)"
+#endif
+
+namespace rp::simd {
+namespace {
+
+using Lanes = std::array<float, 8>;
+
+constexpr uint32_t kSeed = 0x5eed8;
+
+constexpr float from_bits(uint32_t u) { return std::bit_cast<float>(u); }
+constexpr uint32_t bits_of(float f) { return std::bit_cast<uint32_t>(f); }
+
+float8 pack(const Lanes& l) { return float8::load_unaligned(l.data()); }
+Lanes unpack(const float8& v) {
+  Lanes l;
+  v.store_unaligned(l.data());
+  return l;
+}
+
+/// Hand-picked values: four NaNs (quiet, negative, with payload, signalling), infinities,
+/// signed zeros, denormals, the normal extremes and a few ordinary numbers for ties.
+constexpr std::array<float, 19> kSpecials = {
+    from_bits(0x7fc00000), from_bits(0xffc00000), from_bits(0x7fc12345), from_bits(0x7f800001),
+    std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+    0.0f, -0.0f,
+    from_bits(0x00000001), from_bits(0x80000001), from_bits(0x007fffff),
+    FLT_MIN, -FLT_MIN, FLT_MAX, -FLT_MAX,
+    1.0f, -1.0f, 0.5f, 3.0f};
+constexpr float kNan = from_bits(0x7fc00000);
+
+float random_special(std::mt19937& rng) { return kSpecials[rng() % kSpecials.size()]; }
+
+/// Mostly ordinary values in [-4, 4) (where rounding matters), with small integers (ties, exact
+/// zeros), specials, and arbitrary bit patterns (any NaN, denormal or huge value) mixed in.
+float random_float(std::mt19937& rng) {
+  switch (rng() % 8) {
+    case 0: return random_special(rng);
+    case 1: return from_bits(rng());
+    case 2: return float(int(rng() % 9) - 4);
+    default: return std::uniform_real_distribution<float>(-4.0f, 4.0f)(rng);
+  }
+}
+
+Lanes random_lanes(std::mt19937& rng) {
+  Lanes l;
+  for (float& f : l) f = random_float(rng);
+  return l;
+}
+
+Lanes random_special_lanes(std::mt19937& rng) {
+  Lanes l;
+  for (float& f : l) f = random_special(rng);
+  return l;
+}
+
+/// Calls f(a, b) with every ordered pair of kSpecials in every lane position: the pairs go in
+/// chunks of eight, each chunk rotated through the eight lanes.
+void for_each_special_pair(const std::function<void(const Lanes&, const Lanes&)>& f) {
+  std::vector<std::pair<float, float>> pairs;
+  for (float a : kSpecials)
+    for (float b : kSpecials) pairs.emplace_back(a, b);
+  for (size_t base = 0; base < pairs.size(); base += 8) {
+    for (size_t r = 0; r < 8; ++r) {
+      Lanes a, b;
+      for (size_t k = 0; k < 8; ++k) {
+        const auto& p = pairs[(base + (k + r) % 8) % pairs.size()];
+        a[k] = p.first;
+        b[k] = p.second;
+      }
+      f(a, b);
+    }
+  }
+}
+
+/// Random packets, special-only packets and every special pair in every lane.
+std::vector<std::pair<Lanes, Lanes>> binary_cases(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::pair<Lanes, Lanes>> cases;
+  for (int i = 0; i < 4000; ++i) cases.emplace_back(random_lanes(rng), random_lanes(rng));
+  for (int i = 0; i < 2000; ++i) cases.emplace_back(random_special_lanes(rng), random_special_lanes(rng));
+  for_each_special_pair([&](const Lanes& a, const Lanes& b) { cases.emplace_back(a, b); });
+  return cases;
+}
+
+std::string show(float f) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%g[0x%08x]", double(f), unsigned(bits_of(f)));
+  return buf;
+}
+std::string show(const Lanes& l) {
+  std::string s = "{";
+  for (size_t i = 0; i < l.size(); ++i) s += (i ? ", " : "") + show(l[i]);
+  return s + "}";
+}
+std::string show(const Vec3f& v) {
+  std::string s("(");
+  s += show(v.x);
+  s += ", ";
+  s += show(v.y);
+  s += ", ";
+  s += show(v.z);
+  s += ")";
+  return s;
+}
+
+/// Same bits, except that any two NaNs match: arithmetic may carry either operand's payload.
+bool same_value(float a, float b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return bits_of(a) == bits_of(b);
+}
+bool same_value(const Vec3f& a, const Vec3f& b) {
+  return same_value(a.x, b.x) && same_value(a.y, b.y) && same_value(a.z, b.z);
+}
+/// Same bits, NaN payloads included (for data movement, which must not touch them).
+bool same_bits(const Vec3f& a, const Vec3f& b) {
+  return bits_of(a.x) == bits_of(b.x) && bits_of(a.y) == bits_of(b.y) && bits_of(a.z) == bits_of(b.z);
+}
+
+/// Collects mismatches and reports only the first few, so a broken helper can't print
+/// thousands of failures; the test then checks count() == 0.
+class Mismatches {
+ public:
+  void add(const std::string& what) {
+    if (count_++ < kShown) ADD_FAILURE() << what;
+  }
+  int count() const { return count_; }
+
+ private:
+  static constexpr int kShown = 6;
+  int count_ = 0;
+};
+
+TEST(Float8Build, NoFmaContraction) {
+  // x*x = 1 + 2^-11 + 2^-24 rounds (tie to even) to 1 + 2^-11 = -c, so (x*x + 1*c) + 0*0 is 0
+  // with every product rounded and 2^-24 when x*x + c is fused. volatile stops constant folding.
+  volatile float vx = 1.0f + 0x1p-12f, vc = -(1.0f + 0x1p-11f);
+  const Vec3f a{vx, 1.0f, 0.0f}, b{vx, vc, 0.0f};
+  EXPECT_EQ(rp::dot(a, b), 0.0f) << "scalar code was FMA-contracted: compile with -ffp-contract=off";
+  EXPECT_EQ(unpack(dot(Vec3x8(a), Vec3x8(b)))[0], 0.0f)
+      << "8-wide code was FMA-contracted: compile with -ffp-contract=off";
+}
+
+TEST(Movemask, MatchesScalarComparisonOfEachLane) {
+  // Ordered comparisons: false on NaN lanes, in xsimd as in scalar C++. (xsimd's != is
+  // NEQ_OQ, false on NaN unlike C++, so it is left out.)
+  struct Op {
+    const char* name;
+    mask8 (*simd)(const float8&, const float8&);
+    bool (*scalar)(float, float);
+  };
+  const Op ops[] = {
+      {"<", [](const float8& a, const float8& b) { return a < b; }, [](float a, float b) { return a < b; }},
+      {"<=", [](const float8& a, const float8& b) { return a <= b; }, [](float a, float b) { return a <= b; }},
+      {">", [](const float8& a, const float8& b) { return a > b; }, [](float a, float b) { return a > b; }},
+      {">=", [](const float8& a, const float8& b) { return a >= b; }, [](float a, float b) { return a >= b; }},
+      {"==", [](const float8& a, const float8& b) { return a == b; }, [](float a, float b) { return a == b; }},
+  };
+  Mismatches bad;
+  for (const auto& [a, b] : binary_cases(kSeed)) {
+    for (const Op& op : ops) {
+      uint32_t want = 0;
+      for (int i = 0; i < 8; ++i) want |= uint32_t(op.scalar(a[i], b[i])) << i;
+      const uint32_t got = movemask(op.simd(pack(a), pack(b)));
+      if (got != want)
+        bad.add("a " + show(a) + " " + op.name + " b " + show(b) + ": want " + std::to_string(want) +
+                " got " + std::to_string(got));
+    }
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(MaskFromBits, RoundTripsThroughMovemaskForAll256Patterns) {
+  for (uint32_t bits = 0; bits < 256; ++bits) {
+    const mask8 m = mask_from_bits(bits);
+    EXPECT_EQ(movemask(m), bits);
+    // Each lane is all ones or all zeros, as a comparison would give; xsimd's select needs that.
+    alignas(32) float lanes[8];
+    _mm256_store_ps(lanes, __m256(m));
+    for (int i = 0; i < 8; ++i)
+      EXPECT_EQ(bits_of(lanes[i]), (bits >> i) & 1 ? 0xffffffffu : 0u) << "bits " << bits << " lane " << i;
+    // Only bits 0..7 name lanes.
+    EXPECT_EQ(movemask(mask_from_bits(bits | 0xabcdef00u)), bits);
+  }
+}
+
+/// x86 MINPS/MAXPS per lane: a if a < b (a > b) else b, so NaN in either operand and equal
+/// operands (-0 vs +0) give b.
+float minps(float a, float b) { return a < b ? a : b; }
+float maxps(float a, float b) { return a > b ? a : b; }
+
+void expect_lanewise_bits(const char* name, float8 (*simd)(const float8&, const float8&),
+                          float (*scalar)(float, float)) {
+  Mismatches bad;
+  for (const auto& [a, b] : binary_cases(kSeed + 1)) {
+    const Lanes got = unpack(simd(pack(a), pack(b)));
+    for (int i = 0; i < 8; ++i) {
+      const float want = scalar(a[i], b[i]);
+      if (bits_of(got[i]) != bits_of(want))
+        bad.add(std::string(name) + " lane " + std::to_string(i) + ": a " + show(a[i]) + " b " + show(b[i]) +
+                ": want " + show(want) + " got " + show(got[i]));
+    }
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(MinBOnNan, MatchesMinpsRuleBitExactly) { expect_lanewise_bits("min_b_on_nan", min_b_on_nan, minps); }
+TEST(MaxBOnNan, MatchesMaxpsRuleBitExactly) { expect_lanewise_bits("max_b_on_nan", max_b_on_nan, maxps); }
+
+TEST(MinBOnNan, NanOrEqualLanesGiveB) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const Lanes a = {kNan, 2.0f, kNan, -0.0f, 0.0f, from_bits(0x7fc12345), inf, -inf};
+  const Lanes b = {1.0f, kNan, from_bits(0xffc00000), 0.0f, -0.0f, -inf, kNan, 5.0f};
+  const Lanes mn = unpack(min_b_on_nan(pack(a), pack(b)));
+  const Lanes mx = unpack(max_b_on_nan(pack(a), pack(b)));
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(bits_of(mn[i]), bits_of(b[i])) << "min lane " << i;
+    EXPECT_EQ(bits_of(mx[i]), bits_of(b[i])) << "max lane " << i;
+  }
+  EXPECT_TRUE(std::isnan(mn[6]));
+  EXPECT_TRUE(std::isnan(mx[6]));
+  EXPECT_EQ(mn[7], -inf);
+  EXPECT_EQ(mx[7], 5.0f);
+}
+
+/// The scalar oracle: min (max) over the non-NaN lanes; NaN when every lane is NaN.
+float scalar_reduce(const Lanes& l, bool want_min) {
+  float r = kNan;
+  for (float x : l)
+    if (!std::isnan(x) && (std::isnan(r) || (want_min ? x < r : x > r))) r = x;
+  return r;
+}
+
+/// Where -0 and +0 tie for the extreme either sign is accepted: only the value is checked, and
+/// that the bits are some non-NaN input lane's.
+bool reduce_matches(const Lanes& l, float got, bool want_min) {
+  const float want = scalar_reduce(l, want_min);
+  if (std::isnan(want)) return std::isnan(got);
+  if (!(got == want)) return false;
+  for (float x : l)
+    if (!std::isnan(x) && bits_of(x) == bits_of(got)) return true;
+  return false;
+}
+
+void expect_reduce_matches(bool want_min, const std::vector<Lanes>& packets) {
+  Mismatches bad;
+  for (const Lanes& l : packets) {
+    const float got = want_min ? reduce_min(pack(l)) : reduce_max(pack(l));
+    if (!reduce_matches(l, got, want_min))
+      bad.add(std::string(want_min ? "reduce_min " : "reduce_max ") + show(l) + ": want " +
+              show(scalar_reduce(l, want_min)) + " got " + show(got));
+  }
+  EXPECT_EQ(bad.count(), 0) << "of " << packets.size() << " packets";
+}
+
+/// Random lanes; half the packets also get a random set of lanes replaced by NaN.
+std::vector<Lanes> random_reduce_packets() {
+  std::mt19937 rng(kSeed + 2);
+  std::vector<Lanes> packets;
+  for (int i = 0; i < 20000; ++i) {
+    Lanes l = random_lanes(rng);
+    if (i % 2) {
+      const uint32_t nan_lanes = rng() & 0xff;
+      for (int k = 0; k < 8; ++k)
+        if ((nan_lanes >> k) & 1) l[k] = kNan;
+    }
+    packets.push_back(l);
+  }
+  return packets;
+}
+
+/// Each special alone in each lane over a background of each special (one NaN, all NaN but one,
+/// lone -inf, ...), then random mixtures of specials.
+std::vector<Lanes> special_reduce_packets() {
+  std::vector<Lanes> packets;
+  for (float s : kSpecials)
+    for (float background : kSpecials)
+      for (int k = 0; k < 8; ++k) {
+        Lanes l;
+        l.fill(background);
+        l[k] = s;
+        packets.push_back(l);
+      }
+  std::mt19937 rng(kSeed + 3);
+  for (int i = 0; i < 5000; ++i) packets.push_back(random_special_lanes(rng));
+  return packets;
+}
+
+/// Every set of NaN lanes with the extreme in every remaining lane; the other lanes distinct
+/// finite values. The 255 pattern (all NaN) must give NaN.
+std::vector<Lanes> nan_pattern_packets(bool want_min) {
+  std::vector<Lanes> packets;
+  for (uint32_t nan_lanes = 0; nan_lanes < 256; ++nan_lanes) {
+    for (int extreme = 0; extreme < 8; ++extreme) {
+      if ((nan_lanes >> extreme) & 1 && nan_lanes != 255) continue;
+      Lanes l;
+      for (int k = 0; k < 8; ++k) l[k] = (nan_lanes >> k) & 1 ? kNan : 10.0f + float(k);
+      if (nan_lanes != 255) l[extreme] = want_min ? -5.0f : 50.0f;
+      packets.push_back(l);
+    }
+  }
+  return packets;
+}
+
+TEST(ReduceMin, MatchesScalarMinOverRandomLanes) { expect_reduce_matches(true, random_reduce_packets()); }
+TEST(ReduceMax, MatchesScalarMaxOverRandomLanes) { expect_reduce_matches(false, random_reduce_packets()); }
+TEST(ReduceMin, MatchesScalarMinOverSpecialValues) { expect_reduce_matches(true, special_reduce_packets()); }
+TEST(ReduceMax, MatchesScalarMaxOverSpecialValues) { expect_reduce_matches(false, special_reduce_packets()); }
+TEST(ReduceMin, IgnoresNanLanesInEveryPattern) { expect_reduce_matches(true, nan_pattern_packets(true)); }
+TEST(ReduceMax, IgnoresNanLanesInEveryPattern) { expect_reduce_matches(false, nan_pattern_packets(false)); }
+
+TEST(FirstLane, MatchesScalarScanForAllNonZeroPatterns) {
+  for (uint32_t bits = 1; bits < 256; ++bits) {
+    int want = 0;
+    while (!((bits >> want) & 1)) ++want;
+    EXPECT_EQ(first_lane(bits), want) << "bits " << bits;
+  }
+}
+
+TEST(LaneCount, MatchesScalarCountForAllPatterns) {
+  for (uint32_t bits = 0; bits < 256; ++bits) {
+    int want = 0;
+    for (int i = 0; i < 8; ++i) want += (bits >> i) & 1;
+    EXPECT_EQ(lane_count(bits), want) << "bits " << bits;
+  }
+}
+
+TEST(Compress, PacksSelectedLanesInLaneOrderForAll256Patterns) {
+  constexpr uint32_t kGuard = 0xdeadbeef;
+  std::mt19937 rng(kSeed + 4);
+  Mismatches bad;
+  for (uint32_t bits = 0; bits < 256; ++bits) {
+    for (int rep = 0; rep < 64; ++rep) {
+      const Lanes v = rep % 4 ? random_lanes(rng) : random_special_lanes(rng);
+      std::vector<uint32_t> want;
+      for (int i = 0; i < 8; ++i)
+        if ((bits >> i) & 1) want.push_back(bits_of(v[i]));
+      // out holds 8 floats; the 8 after it must stay untouched.
+      float out[16];
+      for (float& f : out) f = from_bits(kGuard);
+      const int n = compress(bits, pack(v), out);
+      bool ok = n == int(want.size());
+      for (size_t i = 0; ok && i < want.size(); ++i) ok = bits_of(out[i]) == want[i];
+      for (int i = 8; i < 16; ++i) ok = ok && bits_of(out[i]) == kGuard;
+      if (!ok) bad.add("compress bits " + std::to_string(bits) + " of " + show(v) + ": n " + std::to_string(n));
+    }
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+/// Eight 3-vectors in SoA, aligned for Vec3x8::load.
+struct SoA {
+  alignas(32) Lanes x, y, z;
+
+  Vec3x8 load() const { return Vec3x8::load(x.data(), y.data(), z.data()); }
+  Vec3f lane(int i) const { return {x[i], y[i], z[i]}; }
+  Lanes& component(int c) { return c == 0 ? x : c == 1 ? y : z; }
+};
+
+struct Vec3Case {
+  SoA a, b;
+  Lanes s;
+};
+
+/// Random cases, special-only cases, and every ordered pair of specials in every lane of each
+/// component of a and b (s takes b's specials; the other components random).
+std::vector<Vec3Case> vec3_cases() {
+  std::mt19937 rng(kSeed + 5);
+  std::vector<Vec3Case> cases;
+  for (int i = 0; i < 6000; ++i) {
+    const bool special = i % 3 == 2;
+    auto gen = [&] { return special ? random_special_lanes(rng) : random_lanes(rng); };
+    Vec3Case c;
+    c.a.x = gen(), c.a.y = gen(), c.a.z = gen();
+    c.b.x = gen(), c.b.y = gen(), c.b.z = gen();
+    c.s = gen();
+    cases.push_back(c);
+  }
+  for (int comp = 0; comp < 3; ++comp) {
+    for_each_special_pair([&](const Lanes& pa, const Lanes& pb) {
+      Vec3Case c;
+      c.a.x = random_lanes(rng), c.a.y = random_lanes(rng), c.a.z = random_lanes(rng);
+      c.b.x = random_lanes(rng), c.b.y = random_lanes(rng), c.b.z = random_lanes(rng);
+      c.a.component(comp) = pa;
+      c.b.component(comp) = pb;
+      c.s = pb;
+      cases.push_back(c);
+    });
+  }
+  return cases;
+}
+
+/// Checks got.lane(i) against want(i) for every lane of every case, NaNs matching any NaN.
+void expect_vec3_op(const char* name, const std::function<Vec3x8(const Vec3Case&)>& simd,
+                    const std::function<Vec3f(const Vec3Case&, int)>& scalar) {
+  Mismatches bad;
+  for (const Vec3Case& c : vec3_cases()) {
+    const Vec3x8 got = simd(c);
+    for (int i = 0; i < 8; ++i) {
+      const Vec3f want = scalar(c, i);
+      if (!same_value(got.lane(i), want))
+        bad.add(std::string(name) + " lane " + std::to_string(i) + ": a " + show(c.a.lane(i)) + " b " +
+                show(c.b.lane(i)) + " s " + show(c.s[i]) + ": want " + show(want) + " got " + show(got.lane(i)));
+    }
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(Vec3x8, LoadAndLaneKeepEveryBit) {
+  Mismatches bad;
+  for (const Vec3Case& c : vec3_cases()) {
+    const Vec3x8 v = c.a.load();
+    const Vec3x8 w(pack(c.a.x), pack(c.a.y), pack(c.a.z));
+    for (int i = 0; i < 8; ++i) {
+      if (!same_bits(v.lane(i), c.a.lane(i)) || !same_bits(w.lane(i), c.a.lane(i)))
+        bad.add("lane " + std::to_string(i) + ": want " + show(c.a.lane(i)) + " got " + show(v.lane(i)) +
+                " / " + show(w.lane(i)));
+    }
+    const Lanes xs = unpack(v.x), ys = unpack(v.y), zs = unpack(v.z);
+    for (int i = 0; i < 8; ++i)
+      if (bits_of(xs[i]) != bits_of(c.a.x[i]) || bits_of(ys[i]) != bits_of(c.a.y[i]) ||
+          bits_of(zs[i]) != bits_of(c.a.z[i]))
+        bad.add("component lane " + std::to_string(i) + " of " + show(c.a.lane(i)));
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(Vec3x8, BroadcastFromVec3fFillsEveryLane) {
+  std::mt19937 rng(kSeed + 6);
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f v = i % 2 ? Vec3f{random_float(rng), random_float(rng), random_float(rng)}
+                          : Vec3f{random_special(rng), random_special(rng), random_special(rng)};
+    const Vec3x8 b(v);
+    for (int k = 0; k < 8; ++k) EXPECT_TRUE(same_bits(b.lane(k), v)) << show(v) << " lane " << k;
+  }
+}
+
+TEST(Vec3x8, AddMatchesScalarBits) {
+  expect_vec3_op(
+      "+", [](const Vec3Case& c) { return c.a.load() + c.b.load(); },
+      [](const Vec3Case& c, int i) { return c.a.lane(i) + c.b.lane(i); });
+}
+
+TEST(Vec3x8, SubtractMatchesScalarBits) {
+  expect_vec3_op(
+      "-", [](const Vec3Case& c) { return c.a.load() - c.b.load(); },
+      [](const Vec3Case& c, int i) { return c.a.lane(i) - c.b.lane(i); });
+}
+
+TEST(Vec3x8, ScaleMatchesScalarBits) {
+  expect_vec3_op(
+      "* float8", [](const Vec3Case& c) { return c.a.load() * pack(c.s); },
+      [](const Vec3Case& c, int i) { return c.a.lane(i) * c.s[i]; });
+}
+
+TEST(Vec3x8, DotMatchesScalarBits) {
+  // dot is a float8; it goes in x of the Vec3x8 the checker wants (y, z zero on both sides).
+  const float8 zero(0.0f);
+  expect_vec3_op(
+      "dot", [&](const Vec3Case& c) { return Vec3x8(dot(c.a.load(), c.b.load()), zero, zero); },
+      [](const Vec3Case& c, int i) { return Vec3f{rp::dot(c.a.lane(i), c.b.lane(i)), 0.0f, 0.0f}; });
+}
+
+TEST(Vec3x8, CrossMatchesScalarBits) {
+  expect_vec3_op(
+      "cross", [](const Vec3Case& c) { return cross(c.a.load(), c.b.load()); },
+      [](const Vec3Case& c, int i) { return rp::cross(c.a.lane(i), c.b.lane(i)); });
+}
+
+TEST(Vec3x8, SelectMatchesScalarChoiceBitExactly) {
+  Mismatches bad;
+  const std::vector<Vec3Case> cases = vec3_cases();
+  for (size_t n = 0; n < cases.size(); ++n) {
+    const Vec3Case& c = cases[n];
+    // Masks from bit patterns (all 256 in turn) and from comparisons with NaN lanes.
+    const uint32_t pattern = uint32_t(n % 256);
+    uint32_t less = 0;
+    for (int i = 0; i < 8; ++i) less |= uint32_t(c.a.x[i] < c.b.x[i]) << i;
+    const std::pair<mask8, uint32_t> masks[] = {{mask_from_bits(pattern), pattern},
+                                                {pack(c.a.x) < pack(c.b.x), less}};
+    for (const auto& [m, bits] : masks) {
+      const Vec3x8 got = select(m, c.a.load(), c.b.load());
+      for (int i = 0; i < 8; ++i) {
+        const Vec3f want = (bits >> i) & 1 ? c.a.lane(i) : c.b.lane(i);
+        if (!same_bits(got.lane(i), want))
+          bad.add("select bits " + std::to_string(bits) + " lane " + std::to_string(i) + ": want " + show(want) +
+                  " got " + show(got.lane(i)));
+      }
+    }
+  }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+}  // namespace
+}  // namespace rp::simd
