@@ -11,10 +11,16 @@
 
 namespace rp::bvh8 {
 
-/// Child reference in a node: >= 0 an inner node index, < 0 the leaf ~child, kEmpty a
-/// missing child (its box is empty: lo = +inf, hi = -inf, so no slab test ever hits it).
+/// Child reference in a node: >= 0 an inner node index; < 0 a leaf, ~(first_slot << 3 |
+/// (count - 1)): `count` (1..8) primitives in slots [first_slot, first_slot + count), all in
+/// one Tri8 block; kEmpty a missing child (its box is empty: lo = +inf, hi = -inf, so no slab
+/// test ever hits it). Slots stay below 2^28 - 1, so a leaf never encodes as kEmpty.
 inline constexpr int32_t kEmpty = std::numeric_limits<int32_t>::min();
+inline constexpr uint32_t kMaxSlots = (1u << 28) - 1;
 inline bool is_leaf(int32_t c) { return c < 0 && c != kEmpty; }
+inline int32_t leaf_ref(uint32_t first_slot, uint32_t count) { return ~int32_t(first_slot << 3 | (count - 1)); }
+inline uint32_t leaf_first(int32_t c) { return uint32_t(~c) >> 3; }
+inline uint32_t leaf_count(int32_t c) { return (uint32_t(~c) & 7u) + 1; }
 
 /// Eight child boxes in SoA and the child references. 224 bytes, 32-byte aligned.
 struct alignas(32) Bvh8Node {
@@ -24,17 +30,12 @@ struct alignas(32) Bvh8Node {
 };
 static_assert(sizeof(Bvh8Node) == 224);
 
-/// A leaf: triangles in slots [tri_first, tri_first + tri_count) of the triangle blocks and
-/// other (analytic) primitives others[other_first, other_first + other_count). 16 bytes.
-struct Bvh8Leaf {
-  uint32_t tri_first = 0, tri_count = 0;
-  uint32_t other_first = 0, other_count = 0;
-};
-
-/// Eight triangles in SoA, stored for the 8-wide Möller–Trumbore test: v0 and the edges
-/// e1 = v1 - v0, e2 = v2 - v0 (computed once, in float, exactly as the scalar routine does),
-/// and the scene prim_id of each lane (kInvalidId for padding). 320 bytes: 40 per triangle.
-/// Triangle slot s lives in block s / 8, lane s % 8; a leaf's range may straddle two blocks.
+/// Eight primitive slots in SoA, stored for the 8-wide Möller–Trumbore test: v0 and the
+/// edges e1 = v1 - v0, e2 = v2 - v0 (computed once, in float, exactly as the scalar routine
+/// does), and the scene prim_id of each lane (kInvalidId for padding). An analytic primitive
+/// (sphere, quadric, polygon) takes a slot with zero edges, so Möller–Trumbore never hits it
+/// (det = 0), and is tested by its scalar routine. 320 bytes: 40 per slot. Slot s lives in
+/// block s / 8, lane s % 8.
 struct alignas(32) Tri8 {
   float v0_x[8], v0_y[8], v0_z[8];
   float e1_x[8], e1_y[8], e1_z[8];
@@ -56,19 +57,20 @@ struct BuildOptions {
 /// Figures of a built tree.
 struct BuildStats {
   uint32_t nodes = 0, leaves = 0, depth = 0;  ///< depth: 8-wide levels, root = 1
+  uint32_t slots = 0;                         ///< primitive slots, padding included (8 per block)
   uint32_t prims = 0;                         ///< primitives in the tree (degenerate triangles excluded)
   double sah_cost = 0;   ///< SAH cost of the 8-wide tree: sum of node areas / root area (traversal
                          ///< cost 1) + leaf areas / root area * primitives (intersection cost 1)
-  size_t bytes = 0;      ///< nodes + leaves + triangle blocks + other refs
+  size_t bytes = 0;      ///< nodes + primitive blocks
   double seconds = 0;    ///< wall time of build()
 };
 
 /// The built tree. Immutable after build().
 struct Bvh8 {
   std::vector<Bvh8Node> nodes;  ///< nodes[0] is the root when !empty()
-  std::vector<Bvh8Leaf> leaves;
   std::vector<Tri8> tris;
-  std::vector<uint32_t> others;  ///< prim_ids of spheres, quadrics, polygons in leaf order
+  uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a slot are analytic
+  bool has_analytic = false;             ///< any analytic primitive in the tree
   Box3f bounds;
   BuildStats stats;
 

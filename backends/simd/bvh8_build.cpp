@@ -1,4 +1,7 @@
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -27,9 +30,13 @@ struct BuildNode {
   bool leaf() const { return !left; }
 };
 
-constexpr int kBins = 16;
+constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use fewer (bins_for)
+
+/// Bins for a node of n primitives: 32 near the root, where the split matters most, down to
+/// 8 near the leaves, where a sweep over 32 mostly empty bins would cost more than it finds.
+constexpr int bins_for(uint32_t n) { return n >= 1024 ? 32 : (n >= 64 ? 16 : 8); }
 constexpr float kTraversalCost = 1.0f;     ///< SAH cost of visiting a node
-constexpr float kIntersectionCost = 1.0f;  ///< SAH cost of one primitive test
+constexpr float kIntersectionCost = 0.15f;  ///< SAH cost of one primitive test (8-wide leaf tests: cheap)
 constexpr uint32_t kParallelThreshold = 4096;
 constexpr uint32_t kMaxSahDepth = 64;  ///< deeper than this, median splits bound the depth
 
@@ -41,11 +48,9 @@ class Builder {
     auto node = std::make_unique<BuildNode>();
     node->begin = begin;
     node->end = end;
-    Box3f centroids;
-    for (uint32_t i = begin; i < end; ++i) {
-      node->box.extend(refs_[i].box);
-      centroids.extend(refs_[i].centroid);
-    }
+    const Bounds b = bounds(begin, end);
+    node->box = b.box;
+    const Box3f& centroids = b.centroids;
     const uint32_t n = end - begin;
     if (n <= 1) return node;
     uint32_t mid = 0;
@@ -67,29 +72,76 @@ class Builder {
   }
 
  private:
+  /// Bounds of refs[begin, end) and of their centroids; in parallel for large ranges (box
+  /// unions are exact, so the result does not depend on how the range is cut).
+  struct Bounds {
+    Box3f box, centroids;
+    void join(const Bounds& o) { box.extend(o.box); centroids.extend(o.centroids); }
+  };
+  Bounds bounds(uint32_t begin, uint32_t end) const {
+    auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bounds b) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i) {
+        b.box.extend(refs_[i].box);
+        b.centroids.extend(refs_[i].centroid);
+      }
+      return b;
+    };
+    if (end - begin < kParallelThreshold) return scan({begin, end}, Bounds{});
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bounds{}, scan,
+                                [](Bounds a, const Bounds& b) { a.join(b); return a; });
+  }
+
+  /// Bin boxes and counts for all three axes in one pass (in parallel for large ranges;
+  /// unions and integer sums are exact, so the bins do not depend on the cut either).
+  struct Bins {
+    Box3f box[3][kBins];
+    uint32_t count[3][kBins] = {};
+    void join(const Bins& o) {
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < kBins; ++b) {
+          box[a][b].extend(o.box[a][b]);
+          count[a][b] += o.count[a][b];
+        }
+    }
+  };
+  Bins bin(uint32_t begin, uint32_t end, const Box3f& centroids, int nbins) const {
+    const Vec3f extent = centroids.extent();
+    const float nb = float(nbins);
+    const Vec3f scale{extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
+                      extent.z > 0.0f ? nb / extent.z : 0.0f};
+    auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bins b) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i)
+        for (int a = 0; a < 3; ++a) {
+          const int k = bin_of(refs_[i].centroid[a], centroids.lo[a], scale[a], nbins);
+          b.box[a][k].extend(refs_[i].box);
+          ++b.count[a][k];
+        }
+      return b;
+    };
+    if (end - begin < kParallelThreshold) return scan({begin, end}, Bins{});
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins{}, scan,
+                                [](Bins a, const Bins& b) { a.join(b); return a; });
+  }
+
   /// Binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007):
   /// 16 bins per axis over the centroid bounds. Returns the split index, or `begin` when a
   /// leaf is cheaper (only allowed for at most max_leaf primitives).
   uint32_t sah_split(uint32_t begin, uint32_t end, const Box3f& box, const Box3f& centroids) {
     const uint32_t n = end - begin;
     const Vec3f extent = centroids.extent();
+    const int nbins = bins_for(n);
+    const Bins bins = bin(begin, end, centroids, nbins);
     float best_cost = std::numeric_limits<float>::infinity();
     int best_axis = -1, best_bin = 0;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(extent[axis] > 0.0f)) continue;
-      const float scale = float(kBins) / extent[axis];
-      Box3f bin_box[kBins];
-      uint32_t bin_count[kBins] = {};
-      for (uint32_t i = begin; i < end; ++i) {
-        const int b = bin_of(refs_[i].centroid[axis], centroids.lo[axis], scale);
-        bin_box[b].extend(refs_[i].box);
-        ++bin_count[b];
-      }
+      const Box3f* bin_box = bins.box[axis];
+      const uint32_t* bin_count = bins.count[axis];
       float right_area[kBins];
       uint32_t right_count[kBins];
       Box3f acc;
       uint32_t count = 0;
-      for (int b = kBins - 1; b > 0; --b) {
+      for (int b = nbins - 1; b > 0; --b) {
         acc.extend(bin_box[b]);
         count += bin_count[b];
         right_area[b] = acc.area();
@@ -97,7 +149,7 @@ class Builder {
       }
       acc = Box3f();
       count = 0;
-      for (int b = 1; b < kBins; ++b) {
+      for (int b = 1; b < nbins; ++b) {
         acc.extend(bin_box[b - 1]);
         count += bin_count[b - 1];
         if (count == 0 || right_count[b] == 0) continue;
@@ -114,10 +166,10 @@ class Builder {
                                          : std::numeric_limits<float>::infinity();
     if (n <= opt_.max_leaf && kIntersectionCost * float(n) <= split_cost) return begin;
     if (best_axis < 0) return object_median(begin, end);  // every centroid coincides
-    const float lo = centroids.lo[best_axis], scale = float(kBins) / extent[best_axis];
+    const float lo = centroids.lo[best_axis], scale = float(nbins) / extent[best_axis];
     PrimRef* first = refs_.data() + begin;
     PrimRef* mid = std::partition(first, refs_.data() + end, [&](const PrimRef& r) {
-      return bin_of(r.centroid[best_axis], lo, scale) < best_bin;
+      return bin_of(r.centroid[best_axis], lo, scale, nbins) < best_bin;
     });
     const uint32_t m = uint32_t(mid - refs_.data());
     return (m == begin || m == end) ? object_median(begin, end) : m;
@@ -138,8 +190,8 @@ class Builder {
 
   uint32_t object_median(uint32_t begin, uint32_t end) { return begin + (end - begin) / 2; }
 
-  static int bin_of(float c, float lo, float scale) {
-    return std::clamp(int((c - lo) * scale), 0, kBins - 1);
+  static int bin_of(float c, float lo, float scale, int nbins) {
+    return std::clamp(int((c - lo) * scale), 0, nbins - 1);
   }
 
   std::vector<PrimRef>& refs_;
@@ -207,48 +259,57 @@ class Collapser {
     return int32_t(index);
   }
 
+  /// A leaf's primitives go to one block (first fit among the last few blocks that still
+  /// have room, else a new block), so the single-ray test of a leaf is one 8-wide
+  /// Möller–Trumbore.
   int32_t emit_leaf(const BuildNode& bn) {
-    Bvh8Leaf leaf;
-    leaf.tri_first = tri_slots_;
-    leaf.other_first = uint32_t(out_.others.size());
-    for (uint32_t i = bn.begin; i < bn.end; ++i) {
-      const uint32_t id = refs_[i].prim_id;
-      if (id < scene_.triangle_count()) {
-        store_triangle(tri_slots_++, id);
-        ++leaf.tri_count;
-      } else {
-        out_.others.push_back(id);
-        ++leaf.other_count;
-      }
-    }
-    out_.leaves.push_back(leaf);
-    return ~int32_t(out_.leaves.size() - 1);
-  }
-
-  void store_triangle(uint32_t slot, uint32_t prim_id) {
-    if (slot / 8 >= out_.tris.size()) {
+    const uint32_t count = bn.end - bn.begin;
+    size_t k = open_.size();
+    while (k > 0 && used_[open_[k - 1]] + count > 8) --k;
+    uint32_t block;
+    if (k > 0) {
+      block = open_[k - 1];
+    } else {
+      block = uint32_t(out_.tris.size());
+      RP_CHECK(uint64_t(block) * 8 + 8 <= kMaxSlots, "bvh8: more than ", kMaxSlots, " primitive slots");
       out_.tris.emplace_back();
       Tri8& b = out_.tris.back();
       std::fill_n(&b.v0_x[0], 9 * 8, 0.0f);
       std::fill_n(b.prim_id, 8, kInvalidId);
+      used_.push_back(0);
+      open_.push_back(block);
+      if (open_.size() > kOpenBlocks) open_.erase(open_.begin());
     }
+    const uint32_t first = block * 8 + used_[block];
+    used_[block] += count;
+    for (uint32_t i = 0; i < count; ++i) store(first + i, refs_[bn.begin + i].prim_id);
+    ++out_.stats.leaves;
+    return leaf_ref(first, count);
+  }
+
+  /// Slot `slot` holds `prim_id`: a triangle's v0 and edges, or an analytic primitive's id
+  /// with zero edges.
+  void store(uint32_t slot, uint32_t prim_id) {
+    Tri8& b = out_.tris[slot / 8];
+    b.prim_id[slot % 8] = prim_id;
+    if (prim_id >= scene_.triangle_count()) return;
     const auto ref = scene_.locate(prim_id);
     const TriangleMesh& m = scene_.meshes()[ref.shape];
     const Vec3f v0 = m.vertex(ref.local, 0);
     const Vec3f e1 = m.vertex(ref.local, 1) - v0;  // as intersect_triangle_mt computes them
     const Vec3f e2 = m.vertex(ref.local, 2) - v0;
-    Tri8& b = out_.tris[slot / 8];
     const uint32_t l = slot % 8;
     b.v0_x[l] = v0.x; b.v0_y[l] = v0.y; b.v0_z[l] = v0.z;
     b.e1_x[l] = e1.x; b.e1_y[l] = e1.y; b.e1_z[l] = e1.z;
     b.e2_x[l] = e2.x; b.e2_y[l] = e2.y; b.e2_z[l] = e2.z;
-    b.prim_id[l] = prim_id;
   }
 
   const Scene& scene_;
   const std::vector<PrimRef>& refs_;
   Bvh8& out_;
-  uint32_t tri_slots_ = 0;
+  static constexpr size_t kOpenBlocks = 16; ///< blocks with room that later leaves may share
+  std::vector<uint32_t> open_;              ///< the last kOpenBlocks blocks opened
+  std::vector<uint32_t> used_;              ///< slots taken per block
 };
 
 /// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
@@ -260,8 +321,7 @@ double sah_cost(const Bvh8& t) {
     for (int k = 0; k < 8 && n.child[k] != kEmpty; ++k) {
       const Box3f b({n.lo_x[k], n.lo_y[k], n.lo_z[k]}, {n.hi_x[k], n.hi_y[k], n.hi_z[k]});
       if (is_leaf(n.child[k])) {
-        const Bvh8Leaf& l = t.leaves[size_t(~n.child[k])];
-        cost += b.area() / root * kIntersectionCost * double(l.tri_count + l.other_count);
+        cost += b.area() / root * kIntersectionCost * double(leaf_count(n.child[k]));
       } else {
         cost += b.area() / root * kTraversalCost;
       }
@@ -275,23 +335,31 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
            " must be in 1..8");
   const auto start = std::chrono::steady_clock::now();
-  std::vector<PrimRef> refs;
-  refs.reserve(scene.triangle_count() + scene.spheres().size() + scene.quadrics().size() + scene.polygons().size());
+  // Triangle references in parallel, then the zero-area ones dropped in order.
+  std::vector<PrimRef> refs(scene.triangle_count());
+  std::vector<uint8_t> keep(scene.triangle_count());
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
     const TriangleMesh& mesh = scene.meshes()[m];
-    for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-      const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
-      const Vec3f n = cross(b - a, c - a);
-      if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) continue;  // zero area: never hit
-      PrimRef r;
-      r.box.extend(a);
-      r.box.extend(b);
-      r.box.extend(c);
-      r.centroid = (a + b + c) * (1.0f / 3.0f);
-      r.prim_id = scene.mesh_base(m) + t;
-      refs.push_back(r);
-    }
+    const uint32_t base = scene.mesh_base(m);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t t = r.begin(); t < r.end(); ++t) {
+        const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+        const Vec3f n = cross(b - a, c - a);
+        keep[base + t] = !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f);  // zero area: never hit
+        PrimRef& ref = refs[base + t];
+        ref.box = Box3f();
+        ref.box.extend(a);
+        ref.box.extend(b);
+        ref.box.extend(c);
+        ref.centroid = (a + b + c) * (1.0f / 3.0f);
+        ref.prim_id = base + t;
+      }
+    });
   }
+  size_t kept = 0;
+  for (size_t i = 0; i < refs.size(); ++i)
+    if (keep[i]) refs[kept++] = refs[i];
+  refs.resize(kept);
   for (uint32_t id = scene.sphere_base(); id < scene.plane_base(); ++id) {
     PrimRef r;
     r.box = scene.prim_bounds(id);
@@ -307,11 +375,12 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     out.bounds = root->box;
     Collapser(scene, refs, out).root(*root);
   }
+  out.first_analytic = scene.sphere_base();
+  out.has_analytic = scene.plane_base() > scene.sphere_base();
   out.stats.nodes = uint32_t(out.nodes.size());
-  out.stats.leaves = uint32_t(out.leaves.size());
+  out.stats.slots = uint32_t(out.tris.size() * 8);
   out.stats.sah_cost = sah_cost(out);
-  out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.leaves.size() * sizeof(Bvh8Leaf) +
-                    out.tris.size() * sizeof(Tri8) + out.others.size() * sizeof(uint32_t);
+  out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.tris.size() * sizeof(Tri8);
   out.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -26,11 +26,22 @@ inline constexpr float kSlabPad = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f
 /// its inverse -inf pairs with the right plane.
 struct SingleRay {
   float8 org_x, org_y, org_z, inv_x, inv_y, inv_z;
+  float8 oi_x, oi_y, oi_z;  ///< org * inv, for the one-FMA slab distances
+  float8 abs_pad;           ///< bound on the rounding error of org * inv (see intersect_node)
+  bool axis_parallel;       ///< a direction component is +-0: use the exact slab form
   int near_x, near_y, near_z, far_x, far_y, far_z;
 
   explicit SingleRay(const Ray& r)
       : org_x(r.org.x), org_y(r.org.y), org_z(r.org.z),
-        inv_x(1.0f / r.dir.x), inv_y(1.0f / r.dir.y), inv_z(1.0f / r.dir.z) {
+        inv_x(1.0f / r.dir.x), inv_y(1.0f / r.dir.y), inv_z(1.0f / r.dir.z),
+        oi_x(org_x * inv_x), oi_y(org_y * inv_y), oi_z(org_z * inv_z),
+        axis_parallel(r.dir.x == 0.0f || r.dir.y == 0.0f || r.dir.z == 0.0f) {
+    // fms(p, inv, oi) rounds org * inv once (error <= |org * inv| 2^-24) and the result once
+    // (covered by kSlabPad); the exit distance is widened by twice the first bound.
+    float m = 0.0f;
+    for (int a = 0; a < 3; ++a)
+      if (r.dir[a] != 0.0f) m = std::max(m, std::abs(r.org[a] / r.dir[a]));
+    abs_pad = float8(m * 0x1p-23f);
     const bool nx = std::signbit(r.dir.x), ny = std::signbit(r.dir.y), nz = std::signbit(r.dir.z);
     near_x = nx ? 24 : 0;  far_x = nx ? 0 : 24;
     near_y = ny ? 32 : 8;  far_y = ny ? 8 : 32;
@@ -40,22 +51,40 @@ struct SingleRay {
 
 /// Slab test ×8: one ray against the 8 child boxes of `n` (seeds' slab method; the swap is
 /// the octant's near/far choice). Returns the bit mask of children hit within [tnear, tfar]
-/// and their entry distances. A 0 * inf slab (origin on a face plane, direction parallel to
-/// it) is NaN and drops out of the max/min chains, so it imposes no constraint, as a closed
-/// box should; empty children (lo = +inf, hi = -inf) never hit.
+/// and their entry distances.
+///
+/// Common case: each slab distance is one FMA, plane * inv - org * inv (as Embree's fast
+/// traversal); the exit distance is widened by kSlabPad for the final rounding and by
+/// abs_pad for the rounding of org * inv, so the test stays conservative. A ray with a +-0
+/// direction component takes the exact form (plane - org) * inv instead: its 0 * inf slab
+/// (origin on a face plane, parallel to it) is NaN and drops out of the max/min chains, so
+/// it imposes no constraint, as a closed box should. Empty children (lo = +inf, hi = -inf)
+/// never hit.
 inline uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar, float8& t_enter) {
-  const float* base = n.lo_x;
-  const float8 tn_x = (float8::load_aligned(base + r.near_x) - r.org_x) * r.inv_x;
-  const float8 tn_y = (float8::load_aligned(base + r.near_y) - r.org_y) * r.inv_y;
-  const float8 tn_z = (float8::load_aligned(base + r.near_z) - r.org_z) * r.inv_z;
-  const float8 tf_x = (float8::load_aligned(base + r.far_x) - r.org_x) * r.inv_x;
-  const float8 tf_y = (float8::load_aligned(base + r.far_y) - r.org_y) * r.inv_y;
-  const float8 tf_z = (float8::load_aligned(base + r.far_z) - r.org_z) * r.inv_z;
   using simd::max_b_on_nan;
   using simd::min_b_on_nan;
+  const float* base = n.lo_x;
+  float8 tn_x, tn_y, tn_z, tf_x, tf_y, tf_z, slack;
+  if (!r.axis_parallel) {
+    tn_x = xsimd::fms(float8::load_aligned(base + r.near_x), r.inv_x, r.oi_x);
+    tn_y = xsimd::fms(float8::load_aligned(base + r.near_y), r.inv_y, r.oi_y);
+    tn_z = xsimd::fms(float8::load_aligned(base + r.near_z), r.inv_z, r.oi_z);
+    tf_x = xsimd::fms(float8::load_aligned(base + r.far_x), r.inv_x, r.oi_x);
+    tf_y = xsimd::fms(float8::load_aligned(base + r.far_y), r.inv_y, r.oi_y);
+    tf_z = xsimd::fms(float8::load_aligned(base + r.far_z), r.inv_z, r.oi_z);
+    slack = r.abs_pad;
+  } else {
+    tn_x = (float8::load_aligned(base + r.near_x) - r.org_x) * r.inv_x;
+    tn_y = (float8::load_aligned(base + r.near_y) - r.org_y) * r.inv_y;
+    tn_z = (float8::load_aligned(base + r.near_z) - r.org_z) * r.inv_z;
+    tf_x = (float8::load_aligned(base + r.far_x) - r.org_x) * r.inv_x;
+    tf_y = (float8::load_aligned(base + r.far_y) - r.org_y) * r.inv_y;
+    tf_z = (float8::load_aligned(base + r.far_z) - r.org_z) * r.inv_z;
+    slack = float8(0.0f);
+  }
   t_enter = max_b_on_nan(tn_z, max_b_on_nan(tn_y, max_b_on_nan(tn_x, float8(tnear))));
   const float8 t_exit = min_b_on_nan(tf_z, min_b_on_nan(tf_y, min_b_on_nan(tf_x, float8(tfar))));
-  return simd::movemask(t_enter <= t_exit * kSlabPad);
+  return simd::movemask(t_enter <= xsimd::fma(t_exit, float8(kSlabPad), slack));
 }
 
 /// Eight rays in SoA prepared for the packet traversal.
@@ -91,8 +120,8 @@ struct Mt8 {
 
 /// Möller–Trumbore ×8 (Möller and Trumbore 1997, "Fast, Minimum Storage Ray/Triangle
 /// Intersection", JGT 2(1)), lane by lane exactly as rp::intersect_triangle_mt: the same
-/// operations in the same order, no FMA (the TU is built with -ffp-contract=off), divisions
-/// by det, so each lane has the bits of the scalar routine. Serves one ray against 8
+/// operations in the same order, no FMA (the TU is built with -ffp-contract=off), one
+/// reciprocal of det, so each lane has the bits of the scalar routine. Serves one ray against 8
 /// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane
 /// hits when det != 0, b1 in [0, 1], b2 >= 0, b1 + b2 <= 1 and tnear <= t <= tfar, t finite.
 inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
@@ -100,10 +129,11 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
   const Vec3x8 s1 = simd::cross(dir, e2);
   const float8 det = simd::dot(s1, e1);
   const Vec3x8 s = org - v0;
-  const float8 b1 = simd::dot(s1, s) / det;
+  const float8 inv_det = float8(1.0f) / det;
+  const float8 b1 = simd::dot(s1, s) * inv_det;
   const Vec3x8 s2 = simd::cross(s, e1);
-  const float8 b2 = simd::dot(s2, dir) / det;
-  const float8 t = simd::dot(s2, e2) / det;
+  const float8 b2 = simd::dot(s2, dir) * inv_det;
+  const float8 t = simd::dot(s2, e2) * inv_det;
   const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
   const mask8 hit = (det != zero) & (b1 >= zero) & (b1 <= one) & (b2 >= zero) & (b1 + b2 <= one) & (t >= tnear) &
                     (t <= tfar) & (t < inf);

@@ -37,7 +37,7 @@ class SimdBackend final : public Backend {
     info_.bytes = bvh_.stats.bytes;
     info_.stats = {{"nodes", double(bvh_.stats.nodes)},  {"leaves", double(bvh_.stats.leaves)},
                    {"depth", double(bvh_.stats.depth)},  {"sah_cost", bvh_.stats.sah_cost},
-                   {"prims", double(bvh_.stats.prims)}};
+                   {"prims", double(bvh_.stats.prims)},  {"slots", double(bvh_.stats.slots)}};
   }
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
@@ -63,6 +63,20 @@ class SimdBackend final : public Backend {
  private:
   // ---- single ray: one ray against the 8 children of a node ----
 
+  /// Starts loading the nodes (or leaf blocks) of the children in `bits`, which traversal is
+  /// about to visit or push: hides part of the memory latency that dominates traversal.
+  void prefetch_children(const Bvh8Node& n, uint32_t bits) const noexcept {
+    for (; bits; bits &= bits - 1) {
+      const int32_t c = n.child[std::countr_zero(bits)];
+      const char* p = is_leaf(c) ? reinterpret_cast<const char*>(&bvh_.tris[leaf_first(c) / 8])
+                                 : reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
+      _mm_prefetch(p, _MM_HINT_T0);
+      _mm_prefetch(p + 64, _MM_HINT_T0);
+      _mm_prefetch(p + 128, _MM_HINT_T0);
+      _mm_prefetch(p + 192, _MM_HINT_T0);
+    }
+  }
+
   /// Closest hit of one ray; children visited near-first by their entry distance, the far
   /// ones pushed first; popped entries farther than the current hit are skipped.
   Hit intersect_single(const Ray& r) const noexcept {
@@ -87,6 +101,7 @@ class SimdBackend final : public Backend {
               ref = n.child[std::countr_zero(bits)];
               continue;
             }
+            prefetch_children(n, bits);
             alignas(32) float dist[8];
             t_enter.store_aligned(dist);
             Entry hit[8];
@@ -103,36 +118,34 @@ class SimdBackend final : public Backend {
             continue;
           }
         } else {
-          const Bvh8Leaf& leaf = bvh_.leaves[size_t(~ref)];
-          for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count;) {
-            const uint32_t block = s / 8, lo = s % 8;
-            const uint32_t hi = std::min<uint32_t>(8, lo + (leaf.tri_first + leaf.tri_count - s));
-            const Tri8& tb = bvh_.tris[block];
-            const Tri8View tv(tb);
-            const Mt8 h = moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, float8(tfar));
-            const uint32_t bits = movemask(h.hit) & lane_range(lo, hi);
-            if (bits) {
-              const float tmin = simd::reduce_min(xsimd::select(h.hit, h.t, float8(std::numeric_limits<float>::infinity())));
-              const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
-              const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
-              alignas(32) float u[8], v[8];
-              h.u.store_aligned(u);
-              h.v.store_aligned(v);
-              tfar = tmin;
-              best = {tmin, tb.prim_id[lane], u[lane], v[lane]};
-            }
-            s += hi - lo;
+          const uint32_t first = leaf_first(ref), lo = first % 8;
+          const uint32_t in_leaf = lane_range(lo, lo + leaf_count(ref));
+          const Tri8& tb = bvh_.tris[first / 8];
+          const Tri8View tv(tb);
+          const Mt8 h = moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, float8(tfar));
+          const uint32_t bits = movemask(h.hit) & in_leaf;
+          if (bits) {
+            const float tmin = simd::reduce_min(xsimd::select(h.hit, h.t, float8(std::numeric_limits<float>::infinity())));
+            const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
+            const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
+            alignas(32) float u[8], v[8];
+            h.u.store_aligned(u);
+            h.v.store_aligned(v);
+            tfar = tmin;
+            best = {tmin, tb.prim_id[lane], u[lane], v[lane]};
           }
-          for (uint32_t k = 0; k < leaf.other_count; ++k) {
-            const uint32_t id = bvh_.others[leaf.other_first + k];
-            Ray rr = r;
-            rr.tfar = tfar;
-            const Intersection<float> h = scene_.intersect_analytic(id, rr);
-            if (h.hit) {
-              tfar = h.t;
-              best = {h.t, id, h.u, h.v};
+          if (bvh_.has_analytic)
+            for (uint32_t l = lo; l < lo + leaf_count(ref); ++l) {
+              const uint32_t id = tb.prim_id[l];
+              if (id < bvh_.first_analytic) continue;
+              Ray rr = r;
+              rr.tfar = tfar;
+              const Intersection<float> ah = scene_.intersect_analytic(id, rr);
+              if (ah.hit) {
+                tfar = ah.t;
+                best = {ah.t, id, ah.u, ah.v};
+              }
             }
-          }
         }
         for (;;) {  // pop, skipping subtrees entered beyond the current hit
           if (sp == 0) goto done;
@@ -168,16 +181,14 @@ class SimdBackend final : public Backend {
           stack[sp++] = n.child[std::countr_zero(bits)];
         continue;
       }
-      const Bvh8Leaf& leaf = bvh_.leaves[size_t(~ref)];
-      for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count;) {
-        const uint32_t lo = s % 8, hi = std::min<uint32_t>(8, lo + (leaf.tri_first + leaf.tri_count - s));
-        const Tri8View tv(bvh_.tris[s / 8]);
-        if (movemask(moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, tfar8).hit) & lane_range(lo, hi))
-          return true;
-        s += hi - lo;
-      }
-      for (uint32_t k = 0; k < leaf.other_count; ++k)
-        if (scene_.intersect_analytic(bvh_.others[leaf.other_first + k], r).hit) return true;
+      const uint32_t first = leaf_first(ref), lo = first % 8, count = leaf_count(ref);
+      const Tri8& tb = bvh_.tris[first / 8];
+      const Tri8View tv(tb);
+      if (movemask(moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, tfar8).hit) & lane_range(lo, lo + count))
+        return true;
+      if (bvh_.has_analytic)
+        for (uint32_t l = lo; l < lo + count; ++l)
+          if (tb.prim_id[l] >= bvh_.first_analytic && scene_.intersect_analytic(tb.prim_id[l], r).hit) return true;
     }
     return false;
   }
@@ -240,6 +251,30 @@ class SimdBackend final : public Backend {
     sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
   }
 
+  /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
+  void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, float8& tfar, float8& u, float8& v,
+                       uint32_t* prim) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    tfar.store_aligned(tf);
+    u.store_aligned(uu);
+    v.store_aligned(vv);
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Ray r = rays[size_t(lane)];
+      r.tfar = tf[lane];
+      const Intersection<float> h = scene_.intersect_analytic(id, r);
+      if (h.hit) {
+        tf[lane] = h.t;
+        uu[lane] = h.u;
+        vv[lane] = h.v;
+        prim[lane] = id;
+      }
+    }
+    tfar = float8::load_aligned(tf);
+    u = float8::load_aligned(uu);
+    v = float8::load_aligned(vv);
+  }
+
   void intersect_packet(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
     RayPacket p;
     float8 tfar;
@@ -262,11 +297,15 @@ class SimdBackend final : public Backend {
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
-        const Bvh8Leaf& leaf = bvh_.leaves[size_t(~e.ref)];
         const mask8 lanes = simd::mask_from_bits(e.mask);
-        for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count; ++s) {
+        const uint32_t first = leaf_first(e.ref);
+        for (uint32_t s = first; s < first + leaf_count(e.ref); ++s) {
           const Tri8& tb = bvh_.tris[s / 8];
-          const uint32_t l = s % 8;
+          const uint32_t l = s % 8, id = tb.prim_id[l];
+          if (id >= bvh_.first_analytic) {
+            analytic_packet(id, rays, e.mask, tfar, u, v, prim);
+            continue;
+          }
           const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
                                          Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
                                          Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
@@ -276,31 +315,7 @@ class SimdBackend final : public Backend {
           tfar = xsimd::select(upd, h.t, tfar);
           u = xsimd::select(upd, h.u, u);
           v = xsimd::select(upd, h.v, v);
-          for (uint32_t b = bits; b; b &= b - 1) prim[std::countr_zero(b)] = tb.prim_id[l];
-        }
-        if (leaf.other_count) {
-          alignas(32) float tf[8], uu[8], vv[8];
-          tfar.store_aligned(tf);
-          u.store_aligned(uu);
-          v.store_aligned(vv);
-          for (uint32_t k = 0; k < leaf.other_count; ++k) {
-            const uint32_t id = bvh_.others[leaf.other_first + k];
-            for (uint32_t b = e.mask; b; b &= b - 1) {
-              const int lane = std::countr_zero(b);
-              Ray r = rays[size_t(lane)];
-              r.tfar = tf[lane];
-              const Intersection<float> h = scene_.intersect_analytic(id, r);
-              if (h.hit) {
-                tf[lane] = h.t;
-                uu[lane] = h.u;
-                vv[lane] = h.v;
-                prim[lane] = id;
-              }
-            }
-          }
-          tfar = float8::load_aligned(tf);
-          u = float8::load_aligned(uu);
-          v = float8::load_aligned(vv);
+          for (uint32_t b = bits; b; b &= b - 1) prim[std::countr_zero(b)] = id;
         }
       }
     }
@@ -345,25 +360,23 @@ class SimdBackend final : public Backend {
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
-        const Bvh8Leaf& leaf = bvh_.leaves[size_t(~e.ref)];
-        for (uint32_t s = leaf.tri_first; s < leaf.tri_first + leaf.tri_count && e.mask; ++s) {
+        const uint32_t first = leaf_first(e.ref);
+        for (uint32_t s = first; s < first + leaf_count(e.ref) && e.mask; ++s) {
           const Tri8& tb = bvh_.tris[s / 8];
-          const uint32_t l = s % 8;
-          const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                                         Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
-                                         Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
-          const uint32_t hit = movemask(h.hit) & e.mask;
+          const uint32_t l = s % 8, id = tb.prim_id[l];
+          uint32_t hit = 0;
+          if (id >= bvh_.first_analytic) {
+            for (uint32_t b = e.mask; b; b &= b - 1)
+              if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
+          } else {
+            const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                                           Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
+                                           Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+            hit = movemask(h.hit) & e.mask;
+          }
           done |= hit;
           e.mask &= ~hit;
         }
-        for (uint32_t k = 0; k < leaf.other_count && e.mask; ++k)
-          for (uint32_t b = e.mask; b; b &= b - 1) {
-            const int lane = std::countr_zero(b);
-            if (scene_.intersect_analytic(bvh_.others[leaf.other_first + k], rays[size_t(lane)]).hit) {
-              done |= 1u << lane;
-              e.mask &= ~(1u << lane);
-            }
-          }
         live = active & ~done;
       }
     }

@@ -1,0 +1,52 @@
+#include "engine/loaders/load.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include "engine/error.h"
+
+namespace rp {
+
+/// Lights for a file that brings none, placed from the scene bounds (centre c, radius
+/// r = half the diagonal; models are taken as Y up and seen from +Z, as the real models are):
+/// - a key PointLight at c + (0.5, 1.5, 2) r, above the front and a little to the right,
+///   with an intensity that gives an irradiance of 0.8 at c (intensity = 0.8 d^2);
+/// - a directional fill from the upper left front, direction normalize(1, -1, -1),
+///   irradiance 0.3.
+static void add_default_lights(Scene& scene) {
+  const Box3f b = scene.bounds();
+  const Vec3f c = b.empty() ? Vec3f(0.0f) : b.center();
+  float r = b.empty() ? 0.0f : 0.5f * length(b.extent());
+  if (!(r > 0.0f) || !std::isfinite(r)) r = 1.0f;
+  const Vec3f offset = Vec3f(0.5f, 1.5f, 2.0f) * r;
+  scene.add_light(PointLight{.position = c + offset, .intensity = Vec3f(0.8f * dot(offset, offset))});
+  scene.add_light(DirectionalLight{.direction = normalize(Vec3f(1.0f, -1.0f, -1.0f)), .irradiance = Vec3f(0.3f)});
+}
+
+Scene load_scene(const std::string& path) {
+  if (path == "default") return make_default_scene();
+
+  // The extension is what follows the last '.' of the file name (not of a directory).
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  const std::string ext = dot != std::string::npos && (slash == std::string::npos || dot > slash)
+                              ? path.substr(dot)
+                              : std::string();
+  std::string lower = ext;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+
+  Scene scene;
+  if (lower == ".obj")
+    load_obj(path, scene);
+  else if (lower == ".ply")
+    load_ply(path, scene);
+  else
+    throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply)"));
+
+  RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
+  if (scene.point_lights().empty() && scene.directional_lights().empty()) add_default_lights(scene);
+  return scene;
+}
+
+}  // namespace rp

@@ -1,0 +1,23 @@
+#pragma once
+/// Scene files: OBJ (+MTL) through tinyobjloader, PLY (ascii, binary little and big endian).
+
+#include <string>
+
+#include "engine/scene.h"
+
+namespace rp {
+
+/// Loads `path` by its extension (.obj, .ply, case-insensitive), or the embedded default
+/// scene for the name "default". The scene has no camera unless the file gives one; lights
+/// are added when the file has none (a key light above the front and a directional fill) so
+/// that a render shows the model. Throws rp::Error with the file and line (or byte offset)
+/// of the first problem.
+Scene load_scene(const std::string& path);
+
+/// Appends the triangles of an OBJ file (and its MTL materials, when found) to `scene`.
+void load_obj(const std::string& path, Scene& scene);
+
+/// Appends the triangles of a PLY file to `scene`.
+void load_ply(const std::string& path, Scene& scene);
+
+}  // namespace rp

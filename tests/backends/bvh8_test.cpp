@@ -1,0 +1,265 @@
+// The simd backend's 8-wide BVH and kernels: structure invariants, determinism across thread
+// counts, and the 8-wide kernels against the scalar routines of engine/geometry.
+// Built for AVX2+FMA with -ffp-contract=off (CMake links rp::simd and rp::warnings).
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstring>
+#include <functional>
+#include <random>
+#include <set>
+
+#include "backends/simd/bvh8.h"
+#include "backends/simd/kernels.h"
+#include "engine/geometry/slab.h"
+#include "engine/geometry/triangle.h"
+
+namespace rp::bvh8 {
+namespace {
+
+Scene soup(uint32_t seed, int count, bool with_degenerate) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), s(-0.1f, 0.1f);
+  TriangleMesh m;
+  m.name = "soup";
+  for (int i = 0; i < count; ++i) {
+    const Vec3f c{u(rng), u(rng), u(rng)};
+    for (int k = 0; k < 3; ++k) m.positions.push_back(c + Vec3f{s(rng), s(rng), s(rng)});
+    const uint32_t b = uint32_t(m.positions.size() - 3);
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
+    if (with_degenerate && i % 50 == 0) m.indices.insert(m.indices.end(), {b, b, b + 1});  // zero area
+  }
+  Scene sc;
+  sc.add_mesh(std::move(m));
+  sc.add_sphere({{0.5f, 0.5f, 0.5f}, 0.2f, 0});
+  sc.add_quadric({Quadric<float>::cylinder({-0.5f, 0.0f, 0.3f}, 0.2f, 0.2f, 0.4f, 1), 0});
+  const std::vector<Vec3f> tri{{0, 0, 1.5f}, {1, 0, 1.5f}, {0, 1, 1.5f}};
+  sc.add_polygon(tri, 0);
+  return sc;
+}
+
+/// prim_ids of a leaf.
+std::vector<uint32_t> leaf_prims(const Bvh8& t, int32_t ref) {
+  std::vector<uint32_t> ids;
+  for (uint32_t s = leaf_first(ref); s < leaf_first(ref) + leaf_count(ref); ++s) ids.push_back(t.tris[s / 8].prim_id[s % 8]);
+  return ids;
+}
+
+/// Every leaf reference of the tree.
+std::vector<int32_t> leaves(const Bvh8& t) {
+  std::vector<int32_t> out;
+  for (const Bvh8Node& n : t.nodes)
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c)
+      if (is_leaf(n.child[c])) out.push_back(n.child[c]);
+  return out;
+}
+
+TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
+  for (SplitRule rule : {SplitRule::sah, SplitRule::median}) {
+    const Scene sc = soup(1, 3000, true);
+    const Bvh8 t = build(sc, {rule, 8});
+    std::multiset<uint32_t> seen;
+    const std::vector<int32_t> refs = leaves(t);
+    EXPECT_EQ(refs.size(), size_t(t.stats.leaves));
+    for (int32_t ref : refs)
+      for (uint32_t id : leaf_prims(t, ref)) seen.insert(id);
+    size_t degenerate = 0;
+    for (uint32_t id = 0; id < sc.prim_count() - sc.planes().size(); ++id) {
+      const PrimRef r = sc.locate(id);
+      bool zero_area = false;
+      if (r.kind == PrimKind::triangle) {
+        const TriangleMesh& m = sc.meshes()[r.shape];
+        const Vec3f n = cross(m.vertex(r.local, 1) - m.vertex(r.local, 0), m.vertex(r.local, 2) - m.vertex(r.local, 0));
+        zero_area = n.x == 0 && n.y == 0 && n.z == 0;
+      }
+      degenerate += zero_area;
+      EXPECT_EQ(seen.count(id), zero_area ? 0u : 1u) << "prim " << id;
+    }
+    EXPECT_EQ(degenerate, 60u);
+    EXPECT_EQ(seen.size(), size_t(t.stats.prims));
+    for (int32_t ref : refs) {
+      EXPECT_LE(leaf_count(ref), 8u);
+      EXPECT_EQ(leaf_first(ref) / 8, (leaf_first(ref) + leaf_count(ref) - 1) / 8) << "a leaf straddles two blocks";
+    }
+    // Padding slots hold no primitive; used slots hold each primitive once (checked above).
+    size_t used = 0;
+    for (const Tri8& b : t.tris)
+      for (uint32_t id : b.prim_id) used += id != kInvalidId;
+    EXPECT_EQ(used, seen.size());
+  }
+}
+
+TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
+  const Scene sc = soup(2, 2000, false);
+  const Bvh8 t = build(sc, {});
+  std::function<Box3f(int32_t)> bounds_below = [&](int32_t ref) {
+    Box3f b;
+    if (is_leaf(ref)) {
+      for (uint32_t id : leaf_prims(t, ref)) {
+        const PrimRef r = sc.locate(id);
+        if (r.kind == PrimKind::triangle)
+          for (int k = 0; k < 3; ++k) b.extend(sc.meshes()[r.shape].vertex(r.local, k));
+        else
+          b.extend(sc.prim_bounds(id));
+      }
+      return b;
+    }
+    const Bvh8Node& n = t.nodes[size_t(ref)];
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      const Box3f child({n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]});
+      const Box3f below = bounds_below(n.child[c]);
+      EXPECT_TRUE(child.contains(below.lo) && child.contains(below.hi)) << "node " << ref << " child " << c;
+      EXPECT_EQ(child, below) << "child boxes are tight";
+      b.extend(child);
+    }
+    return b;
+  };
+  const Box3f all = bounds_below(0);
+  EXPECT_EQ(all, t.bounds);
+  EXPECT_GT(t.stats.nodes, 1u);
+  EXPECT_GT(t.stats.depth, 1u);
+  EXPECT_GT(t.stats.sah_cost, 1.0);
+  EXPECT_EQ(t.stats.bytes, t.nodes.size() * sizeof(Bvh8Node) + t.tris.size() * sizeof(Tri8));
+}
+
+TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
+  const Scene sc = soup(3, 60000, false);  // large enough for the parallel recursion
+  auto run = [&](int threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    return build(sc, {});
+  };
+  const Bvh8 a = run(1), b = run(2);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  ASSERT_EQ(a.tris.size(), b.tris.size());
+  EXPECT_EQ(0, std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(Bvh8Node)));
+  EXPECT_EQ(0, std::memcmp(a.tris.data(), b.tris.data(), a.tris.size() * sizeof(Tri8)));
+}
+
+/// The seeds' rule: longest axis, centroid median, balanced. Halving n until it fits a leaf
+/// of 4 leaves every leaf with 2..4 primitives (5 splits into 2 + 3); SAH has no such floor.
+TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
+  const Scene sc = soup(4, 5000, false);
+  const Bvh8 t = build(sc, {SplitRule::median, 4});
+  uint32_t lo = 99, hi = 0;
+  for (int32_t ref : leaves(t)) {
+    lo = std::min(lo, leaf_count(ref));
+    hi = std::max(hi, leaf_count(ref));
+  }
+  EXPECT_LE(hi, 4u);
+  EXPECT_GE(lo, 2u);
+}
+
+TEST(Bvh8Build, EmptySceneHasNoNodes) {
+  const Bvh8 t = build(Scene{}, {});
+  EXPECT_TRUE(t.empty());
+  EXPECT_EQ(t.stats.bytes, 0u);
+}
+
+/// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt bit for bit, both ways of use.
+TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  auto v3 = [&] { return Vec3f{u(rng), u(rng), u(rng)}; };
+  int hits = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    Tri8 block{};
+    Vec3f v0[8], v1[8], v2[8];
+    for (int l = 0; l < 8; ++l) {
+      v0[l] = v3();
+      v1[l] = v0[l] + v3() * 0.5f;
+      v2[l] = v0[l] + v3() * 0.5f;
+      if (iter % 7 == 0 && l == 3) v2[l] = v1[l];  // degenerate lane
+      const Vec3f e1 = v1[l] - v0[l], e2 = v2[l] - v0[l];
+      block.v0_x[l] = v0[l].x; block.v0_y[l] = v0[l].y; block.v0_z[l] = v0[l].z;
+      block.e1_x[l] = e1.x; block.e1_y[l] = e1.y; block.e1_z[l] = e1.z;
+      block.e2_x[l] = e2.x; block.e2_y[l] = e2.y; block.e2_z[l] = e2.z;
+    }
+    // Aimed at a random point of a random lane's plane, near or inside that triangle.
+    const int k = iter % 8;
+    const float a = std::abs(u(rng)) * 0.6f, b = std::abs(u(rng)) * 0.6f;
+    const Vec3f org = v3() * 2.0f;
+    Ray r{org, 0.0f, (v0[k] + (v1[k] - v0[k]) * a + (v2[k] - v0[k]) * b) - org, iter % 3 ? 100.0f : 0.7f};
+    if (iter % 11 == 0) r.dir.y = -0.0f;
+    const Tri8View tv(block);
+    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.e1, tv.e2, float8(r.tnear), float8(r.tfar));
+    alignas(32) float t[8], uu[8], vv[8];
+    h.t.store_aligned(t);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    const uint32_t bits = simd::movemask(h.hit);
+    for (int l = 0; l < 8; ++l) {
+      const Intersection<float> s = intersect_triangle_mt(r, v0[l], v1[l], v2[l]);
+      ASSERT_EQ(bool(bits >> l & 1u), s.hit) << "iter " << iter << " lane " << l;
+      if (!s.hit) continue;
+      ++hits;
+      EXPECT_EQ(std::bit_cast<uint32_t>(t[l]), std::bit_cast<uint32_t>(s.t));
+      EXPECT_EQ(std::bit_cast<uint32_t>(uu[l]), std::bit_cast<uint32_t>(s.u));
+      EXPECT_EQ(std::bit_cast<uint32_t>(vv[l]), std::bit_cast<uint32_t>(s.v));
+      // The same triangle broadcast against the ray broadcast (the packet form).
+      const Mt8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v1[l] - v0[l]),
+                                     Vec3x8(v2[l] - v0[l]), float8(r.tnear), float8(r.tfar));
+      EXPECT_EQ(simd::movemask(p.hit), 0xffu);
+      EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));
+    }
+  }
+  EXPECT_GT(hits, 1000);
+}
+
+/// Slab ×8 is conservative against the scalar slab test of engine/geometry/slab.h: it never
+/// misses a box the scalar test hits, and extra hits are within its padding.
+TEST(Kernels, SlabTestsAreConservativeAgainstTheScalarSlab) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  std::uniform_int_distribution<int> pick(0, 5);
+  int hits = 0;
+  for (int iter = 0; iter < 20000; ++iter) {
+    Bvh8Node n;
+    Box3f boxes[8];
+    for (int c = 0; c < 8; ++c) {
+      Vec3f a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)};
+      if (c == 2) b.y = a.y;  // a flat box
+      boxes[c] = Box3f(min(a, b), max(a, b));
+      n.lo_x[c] = boxes[c].lo.x; n.lo_y[c] = boxes[c].lo.y; n.lo_z[c] = boxes[c].lo.z;
+      n.hi_x[c] = boxes[c].hi.x; n.hi_y[c] = boxes[c].hi.y; n.hi_z[c] = boxes[c].hi.z;
+      n.child[c] = c;
+    }
+    Ray r{{u(rng) * 2, u(rng) * 2, u(rng) * 2}, 0.0f, {u(rng), u(rng), u(rng)}, 10.0f};
+    // Axis-parallel rays with +-0 and origins on box faces.
+    const int special = pick(rng);
+    if (special == 0) r.dir = {0.0f, -0.0f, 1.0f};
+    if (special == 1) { r.dir = {-0.0f, 1.0f, 0.0f}; r.org.x = boxes[iter % 8].lo.x; r.org.z = boxes[iter % 8].hi.z; }
+    float8 t_enter;
+    const uint32_t bits = intersect_node(n, SingleRay(r), r.tnear, r.tfar, t_enter);
+    RayPacket p;
+    p.org = Vec3x8(r.org);
+    p.dir = Vec3x8(r.dir);
+    p.inv = {float8(1.0f) / p.dir.x, float8(1.0f) / p.dir.y, float8(1.0f) / p.dir.z};
+    p.neg_x = simd::sign_mask(p.dir.x);
+    p.neg_y = simd::sign_mask(p.dir.y);
+    p.neg_z = simd::sign_mask(p.dir.z);
+    p.tnear = float8(r.tnear);
+    for (int c = 0; c < 8; ++c) {
+      const SlabHit<float> s = rp::intersect_box(r, boxes[c]);
+      const bool simd_hit = bits >> c & 1u;
+      const bool packet_hit = intersect_box(p, boxes[c].lo, boxes[c].hi, float8(r.tfar)) == 0xffu;
+      EXPECT_EQ(simd_hit, packet_hit) << "iter " << iter << " child " << c;
+      if (s.hit) {
+        ++hits;
+        EXPECT_TRUE(simd_hit) << "iter " << iter << " child " << c << ": the 8-wide slab test missed a box: org ("
+                              << r.org.x << ", " << r.org.y << ", " << r.org.z << ") dir (" << r.dir.x << ", "
+                              << r.dir.y << ", " << r.dir.z << ") box (" << boxes[c].lo.x << ", " << boxes[c].lo.y
+                              << ", " << boxes[c].lo.z << ")-(" << boxes[c].hi.x << ", " << boxes[c].hi.y << ", "
+                              << boxes[c].hi.z << ") scalar [" << s.t_enter << ", " << s.t_exit << "]";
+      } else if (simd_hit) {
+        const SlabHit<double> d = rp::intersect_box(Rayd{Vec3d(r.org), 0.0, Vec3d(r.dir), 10.0}, Box3d(Vec3d(boxes[c].lo), Vec3d(boxes[c].hi)));
+        EXPECT_TRUE(d.hit || d.t_enter - d.t_exit <= 1e-6 * std::max(1.0, std::abs(d.t_exit)))
+            << "iter " << iter << " child " << c << ": a hit well outside the box";
+      }
+    }
+  }
+  EXPECT_GT(hits, 5000);
+}
+
+}  // namespace
+}  // namespace rp::bvh8
