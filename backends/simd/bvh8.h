@@ -2,8 +2,12 @@
 /// The 8-wide BVH of the simd backend: layout and build. Plain C++ (no SIMD types), so the
 /// layout can be inspected and tested anywhere; traversal lives in simd_backend.cpp.
 
+#include <sys/mman.h>
+
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <vector>
 
 #include "engine/bbox.h"
@@ -44,6 +48,29 @@ struct alignas(32) Tri8 {
 };
 static_assert(sizeof(Tri8) == 320);
 
+/// Allocator for the tree's arrays: 2 MiB-aligned and advised as transparent huge pages
+/// (madvise MADV_HUGEPAGE) when large, so random traversal of a big tree misses the TLB far
+/// less often. Small arrays use ordinary aligned allocation.
+template <typename T>
+struct HugePageAllocator {
+  using value_type = T;
+  static constexpr size_t kHuge = size_t(2) << 20;
+  HugePageAllocator() = default;
+  template <typename U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  T* allocate(size_t n) {
+    const size_t bytes = n * sizeof(T);
+    const size_t align = bytes >= kHuge ? kHuge : alignof(T) < 64 ? 64 : alignof(T);
+    void* p = std::aligned_alloc(align, (bytes + align - 1) / align * align);
+    if (!p) throw std::bad_alloc();
+    if (bytes >= kHuge) madvise(p, (bytes + align - 1) / align * align, MADV_HUGEPAGE);
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, size_t) { std::free(p); }
+  template <typename U>
+  bool operator==(const HugePageAllocator<U>&) const { return true; }
+};
+
 enum class SplitRule : uint8_t {
   sah,     ///< binned surface-area heuristic (16 bins per axis), the default
   median,  ///< the seeds' rule: longest axis of the centroids, balanced median split
@@ -67,8 +94,8 @@ struct BuildStats {
 
 /// The built tree. Immutable after build().
 struct Bvh8 {
-  std::vector<Bvh8Node> nodes;  ///< nodes[0] is the root when !empty()
-  std::vector<Tri8> tris;
+  std::vector<Bvh8Node, HugePageAllocator<Bvh8Node>> nodes;  ///< nodes[0] is the root when !empty()
+  std::vector<Tri8, HugePageAllocator<Tri8>> tris;
   uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a slot are analytic
   bool has_analytic = false;             ///< any analytic primitive in the tree
   Box3f bounds;

@@ -20,6 +20,9 @@ using simd::Vec3x8;
 /// tree holds at most 7 pending children per level.
 constexpr int kStackSize = 1024;
 
+/// A packet entry with at most this many active lanes continues as single rays.
+constexpr int kSingleRayLanes = 2;
+
 /// Lane bits [lo, hi) of a block.
 inline uint32_t lane_range(uint32_t lo, uint32_t hi) { return ((1u << hi) - 1u) & ~((1u << lo) - 1u); }
 
@@ -77,20 +80,28 @@ class SimdBackend final : public Backend {
     }
   }
 
-  /// Closest hit of one ray; children visited near-first by their entry distance, the far
-  /// ones pushed first; popped entries farther than the current hit are skipped.
+  /// Closest hit of one ray.
   Hit intersect_single(const Ray& r) const noexcept {
     Hit best;
     if (!valid_ray(r)) return best;
-    float tfar = r.tfar;
-    if (!bvh_.empty()) {
+    if (!bvh_.empty()) traverse_closest(r, 0, best);
+    scene_.intersect_planes(r, best);
+    return best;
+  }
+
+  /// Closest hit of a valid ray in the subtree `root`, replacing `best` by any hit within
+  /// [tnear, min(tfar, best.t)]. Children are visited near-first by their entry distance, the
+  /// far ones pushed first; popped entries farther than the current hit are skipped.
+  void traverse_closest(const Ray& r, int32_t root, Hit& best) const noexcept {
+    float tfar = std::min(r.tfar, best.t);
+    {
       const SingleRay sr(r);
       const Vec3x8 org(r.org), dir(r.dir);
       const float8 tnear8(r.tnear);
       struct Entry { int32_t ref; float t; };
       Entry stack[kStackSize];
       int sp = 0;
-      int32_t ref = 0;
+      int32_t ref = root;
       for (;;) {
         if (!is_leaf(ref)) {
           const Bvh8Node& n = bvh_.nodes[size_t(ref)];
@@ -148,7 +159,7 @@ class SimdBackend final : public Backend {
             }
         }
         for (;;) {  // pop, skipping subtrees entered beyond the current hit
-          if (sp == 0) goto done;
+          if (sp == 0) return;
           const Entry e = stack[--sp];
           if (e.t <= tfar) {
             ref = e.ref;
@@ -157,21 +168,22 @@ class SimdBackend final : public Backend {
         }
       }
     }
-  done:
-    scene_.intersect_planes(r, best);
-    return best;
   }
 
   /// Any hit of one (valid) ray; stops at the first.
   bool occluded_single(const Ray& r) const noexcept {
     if (scene_.occluded_by_planes(r)) return true;
-    if (bvh_.empty()) return false;
+    return !bvh_.empty() && traverse_any(r, 0);
+  }
+
+  /// Any hit of a valid ray in the subtree `root`.
+  bool traverse_any(const Ray& r, int32_t root) const noexcept {
     const SingleRay sr(r);
     const Vec3x8 org(r.org), dir(r.dir);
     const float8 tnear8(r.tnear), tfar8(r.tfar);
     int32_t stack[kStackSize];
     int sp = 0;
-    stack[sp++] = 0;
+    stack[sp++] = root;
     while (sp > 0) {
       const int32_t ref = stack[--sp];
       if (!is_leaf(ref)) {
@@ -223,8 +235,12 @@ class SimdBackend final : public Backend {
   /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
   /// direction signs (the key sum_a sign_a (lo_a + hi_a) of each child, one 8-wide op).
   struct Child { int32_t ref; uint32_t mask; float key; };
-  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const float8& tfar, uint32_t mask,
-                              const float8& sign_x, const float8& sign_y, const float8& sign_z, Child* out) {
+  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const PacketBeam& beam, const float8& tfar,
+                              uint32_t mask, const float8& sign_x, const float8& sign_y, const float8& sign_z,
+                              Child* out) {
+    uint32_t candidates = 0xffu;
+    if (beam.valid)
+      candidates = beam.cull(n, simd::reduce_max(xsimd::select(simd::mask_from_bits(mask), tfar, float8(0.0f))));
     const float8 key8 = sign_x * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
                         sign_y * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
                         sign_z * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
@@ -232,6 +248,7 @@ class SimdBackend final : public Backend {
     key8.store_aligned(key);
     int k = 0;
     for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      if (!(candidates >> c & 1u)) continue;
       const uint32_t m = intersect_box(p, {n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]}, tfar) & mask;
       if (!m) continue;
       Child e{n.child[c], m, key[c]};
@@ -249,6 +266,31 @@ class SimdBackend final : public Backend {
     sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);
     sy = float8(std::signbit(d.y) ? -1.0f : 1.0f);
     sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
+  }
+
+  /// The lanes of `mask` through the subtree `ref` one ray at a time: a packet whose rays
+  /// have drifted apart costs 8 lanes of work per box and triangle for one or two useful
+  /// ones, so below kSingleRayLanes active lanes the packet hands its rays to the single-ray
+  /// traversal (Benthin et al., "Combining Single and Packet-Ray Tracing for Arbitrary Ray
+  /// Distributions on the Intel MIC Architecture", IEEE TVCG 18(9), 2012).
+  void single_rays_closest(int32_t ref, uint32_t mask, std::span<const Ray> rays, float8& tfar, float8& u, float8& v,
+                           uint32_t* prim) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    tfar.store_aligned(tf);
+    u.store_aligned(uu);
+    v.store_aligned(vv);
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Hit h{tf[lane], prim[lane], uu[lane], vv[lane]};
+      traverse_closest(rays[size_t(lane)], ref, h);
+      tf[lane] = h.t;
+      uu[lane] = h.u;
+      vv[lane] = h.v;
+      prim[lane] = h.prim_id;
+    }
+    tfar = float8::load_aligned(tf);
+    u = float8::load_aligned(uu);
+    v = float8::load_aligned(vv);
   }
 
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
@@ -285,15 +327,20 @@ class SimdBackend final : public Backend {
     if (active && !bvh_.empty()) {
       float8 sx, sy, sz;
       packet_signs(p, active, sx, sy, sz);
+      const PacketBeam beam(p, active);
       struct Entry { int32_t ref; uint32_t mask; };
       Entry stack[kStackSize];
       int sp = 0;
       stack[sp++] = {0, active};
       while (sp > 0) {
         const Entry e = stack[--sp];
+        if (simd::lane_count(e.mask) <= kSingleRayLanes) {
+          single_rays_closest(e.ref, e.mask, rays, tfar, u, v, prim);
+          continue;
+        }
         if (!is_leaf(e.ref)) {
           Child kids[8];
-          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, tfar, e.mask, sx, sy, sz, kids);
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, beam, tfar, e.mask, sx, sy, sz, kids);
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
@@ -346,6 +393,7 @@ class SimdBackend final : public Backend {
     if (live && !bvh_.empty()) {
       float8 sx, sy, sz;
       packet_signs(p, live, sx, sy, sz);
+      const PacketBeam beam(p, live);
       struct Entry { int32_t ref; uint32_t mask; };
       Entry stack[kStackSize];
       int sp = 0;
@@ -354,9 +402,15 @@ class SimdBackend final : public Backend {
         Entry e = stack[--sp];
         e.mask &= live;
         if (!e.mask) continue;
+        if (simd::lane_count(e.mask) <= kSingleRayLanes) {
+          for (uint32_t b = e.mask; b; b &= b - 1)
+            if (traverse_any(rays[size_t(std::countr_zero(b))], e.ref)) done |= b & (~b + 1);
+          live = active & ~done;
+          continue;
+        }
         if (!is_leaf(e.ref)) {
           Child kids[8];
-          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, tfar, e.mask, sx, sy, sz, kids);
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, beam, tfar, e.mask, sx, sy, sz, kids);
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }

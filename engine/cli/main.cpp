@@ -14,6 +14,7 @@
 #include "engine/camera.h"
 #include "engine/error.h"
 #include "engine/image_io.h"
+#include "engine/loaders/load.h"
 #include "engine/render.h"
 #include "engine/scene.h"
 
@@ -43,7 +44,26 @@ Resolution parse_resolution(const std::string& text) {
   return {int(w), int(h)};
 }
 
+/// Unknown or unavailable backends and unknown variants are the user's mistake (status 2),
+/// found before any scene is loaded.
+void check_backend(const std::string& name, const std::string& variant) {
+  std::string names;
+  for (const rp::BackendEntry& e : rp::list_backends()) {
+    names += (names.empty() ? "" : ", ") + e.name;
+    if (e.name != name) continue;
+    if (!e.available) throw UsageError(rp::cat("--backend: ", name, " is not available on this machine: ", e.unavailable_reason));
+    std::string variants;
+    for (const std::string& v : e.variants) {
+      if (v == variant) return;
+      variants += (variants.empty() ? "" : ", ") + v;
+    }
+    throw UsageError(rp::cat("--variant: '", variant, "' is not a variant of ", name, " (", variants, ")"));
+  }
+  throw UsageError(rp::cat("--backend: unknown backend '", name, "' (available: ", names, ")"));
+}
+
 struct RenderArgs {
+  std::string scene = "default";
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
   std::string backend{rp::kDefaultBackend};
@@ -60,14 +80,10 @@ int run_render(const RenderArgs& a) {
   std::optional<tbb::global_control> limit;
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
 
-  const rp::Scene scene = rp::make_default_scene();
-  std::unique_ptr<rp::Backend> backend;
-  try {
-    backend = rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
-  } catch (const rp::Error& e) {
-    // Unknown names are the user's mistake, not a run-time failure.
-    throw UsageError(rp::cat("--backend: ", e.what()));
-  }
+  check_backend(a.backend, a.variant);
+  const rp::Scene scene = rp::load_scene(a.scene);
+  const std::unique_ptr<rp::Backend> backend =
+      rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
   const rp::PinholeCamera camera(scene.camera().value_or(rp::frame_bounds(scene.bounds())), res.width, res.height);
   rp::RenderSettings settings{res.width, res.height, a.spp, a.seed, a.max_depth};
   const rp::RenderResult r = rp::render(scene, *backend, camera, settings);
@@ -104,7 +120,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   RenderArgs ra;
-  CLI::App* render = app.add_subcommand("render", "Render the embedded default scene to an image");
+  CLI::App* render = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
+  render->add_option("--scene", ra.scene, "Scene: 'default' or an .obj/.ply file")->capture_default_str();
   render->add_option("-o,--output", ra.output, "Output image; format by extension (.png, .exr, ...)")
       ->capture_default_str();
   render->add_option("--resolution", ra.resolution, "Image size WIDTHxHEIGHT")->capture_default_str();

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -328,6 +329,27 @@ TEST(Registry, UnknownBackendIsAnErrorListingTheNames) {
   } catch (const Error& e) {
     EXPECT_STREQ(e.what(), "unknown backend 'nope' (available: embree, simd)");
   }
+}
+
+TEST(Registry, SimdIsOfferedExactlyWhenTheCpuHasAvx2AndFma) {
+  __builtin_cpu_init();
+  const bool cpu = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  const std::vector<BackendEntry> all = list_backends();
+  const auto it = std::find_if(all.begin(), all.end(), [](const BackendEntry& e) { return e.name == "simd"; });
+  ASSERT_NE(it, all.end());
+  EXPECT_EQ(it->available, cpu);
+  const Scene scene;
+  if (!it->available) {
+    EXPECT_FALSE(it->unavailable_reason.empty());
+    try {
+      make_backend("simd", scene);
+      ADD_FAILURE() << "an unavailable backend was built";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(it->unavailable_reason), std::string::npos) << e.what();
+    }
+    GTEST_SKIP() << "simd backend not run: " << it->unavailable_reason;
+  }
+  EXPECT_EQ(make_backend("simd", scene)->info().name, "simd");
 }
 
 TEST(Registry, UnknownVariantIsAnError) {

@@ -87,7 +87,7 @@ TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
 }
 
 TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
-  for (const std::string args : {"render --resolution 10by10", "render --resolution 0x10",
+  for (const std::string args : {"render --resolution 10by10", "render --variant fastest", "render --backend simd --variant robust", "render --resolution 0x10",
                                  "render --resolution 100000x100000", "render --spp 0", "render --spp abc",
                                  "render --threads -1", "render --no-such-flag", "frobnicate"}) {
     const Result r = run(args + " -o " + (dir_ / "x.png").string());
@@ -96,6 +96,25 @@ TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
     EXPECT_EQ(r.output.rfind("raypack: ", 0), 0u) << args << ": " << r.output;
   }
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, MissingSceneFileIsAnErrorWithStatusOne) {
+  const fs::path scene = dir_ / "nope.obj";
+  const Result r = run("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: " + scene.string() + ": cannot open: No such file or directory\n");
+  EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, RendersAnObjFileWithTheSimdBackend) {
+  const fs::path scene = dir_ / "quad.obj", out = dir_ / "quad.png";
+  std::ofstream(scene) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n";
+  const Result r = run("render --backend simd --scene " + scene.string() + " --resolution 32x32 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("with simd/default"), std::string::npos) << r.output;
+  const rp::Image img = rp::read_image(out.string());
+  EXPECT_EQ(img.width, 32);
+  EXPECT_EQ(img.height, 32);
 }
 
 TEST_F(Cli, UnwritableOutputIsAnErrorWithStatusOneAndNoFile) {
