@@ -45,9 +45,11 @@ void check(RTCDevice device, const char* what) {
 
 Device& device_for(const std::string& config) {
   static std::mutex mutex;
-  static std::map<std::string, std::unique_ptr<Device>> devices;
+  // Never destroyed: a backend held in a static (a benchmark fixture, say) may release its
+  // scene during exit, after function-local statics built later than it are gone.
+  static auto* devices = new std::map<std::string, std::unique_ptr<Device>>;
   std::lock_guard lock(mutex);
-  std::unique_ptr<Device>& d = devices[config];
+  std::unique_ptr<Device>& d = (*devices)[config];
   if (!d) {
     auto created = std::make_unique<Device>();
     created->handle = rtcNewDevice(config.empty() ? nullptr : config.c_str());

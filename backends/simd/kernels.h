@@ -92,6 +92,8 @@ struct RayPacket {
   Vec3x8 org, dir, inv;
   mask8 neg_x, neg_y, neg_z;  ///< sign bit of each direction component
   float8 tnear;
+  Vec3x8 oi;       ///< org * inv, for the one-FMA slab form of intersect_box_octant
+  float8 abs_pad;  ///< bound on the rounding error of org * inv, per lane
 };
 
 /// Slab test ×8 across rays: the 8 rays of `p` against box [lo, hi], each ray with its own
@@ -164,6 +166,24 @@ struct PacketBeam {
     return simd::movemask(enter - slack <= exit);
   }
 };
+
+/// Slab test ×8 across rays for a packet whose rays share one octant and have no zero
+/// direction component (PacketBeam::valid): near and far planes chosen once per packet, one
+/// FMA per slab distance with the error bounds of intersect_node. Returns the lanes that hit.
+inline uint32_t intersect_box_octant(const RayPacket& p, const bool neg[3], const Vec3f& lo, const Vec3f& hi,
+                                     const float8& tfar) {
+  using simd::max_b_on_nan;
+  using simd::min_b_on_nan;
+  const float8 tn_x = xsimd::fms(float8(neg[0] ? hi.x : lo.x), p.inv.x, p.oi.x);
+  const float8 tn_y = xsimd::fms(float8(neg[1] ? hi.y : lo.y), p.inv.y, p.oi.y);
+  const float8 tn_z = xsimd::fms(float8(neg[2] ? hi.z : lo.z), p.inv.z, p.oi.z);
+  const float8 tf_x = xsimd::fms(float8(neg[0] ? lo.x : hi.x), p.inv.x, p.oi.x);
+  const float8 tf_y = xsimd::fms(float8(neg[1] ? lo.y : hi.y), p.inv.y, p.oi.y);
+  const float8 tf_z = xsimd::fms(float8(neg[2] ? lo.z : hi.z), p.inv.z, p.oi.z);
+  const float8 t_enter = max_b_on_nan(tn_z, max_b_on_nan(tn_y, max_b_on_nan(tn_x, p.tnear)));
+  const float8 t_exit = min_b_on_nan(tf_z, min_b_on_nan(tf_y, min_b_on_nan(tf_x, tfar)));
+  return simd::movemask(t_enter <= xsimd::fma(t_exit, float8(kSlabPad), p.abs_pad));
+}
 
 /// Result of moller_trumbore8: lanes that hit, with t and the barycentrics (u, v).
 struct Mt8 {

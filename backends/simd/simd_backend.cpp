@@ -228,6 +228,8 @@ class SimdBackend final : public Backend {
     p.neg_y = simd::sign_mask(p.dir.y);
     p.neg_z = simd::sign_mask(p.dir.z);
     p.tnear = float8::load_aligned(tn);
+    p.oi = {p.org.x * p.inv.x, p.org.y * p.inv.y, p.org.z * p.inv.z};
+    p.abs_pad = xsimd::max(xsimd::abs(p.oi.x), xsimd::max(xsimd::abs(p.oi.y), xsimd::abs(p.oi.z))) * float8(0x1p-23f);
     tfar = float8::load_aligned(tf);
     return active;
   }
@@ -249,7 +251,8 @@ class SimdBackend final : public Backend {
     int k = 0;
     for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
       if (!(candidates >> c & 1u)) continue;
-      const uint32_t m = intersect_box(p, {n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]}, tfar) & mask;
+      const Vec3f lo{n.lo_x[c], n.lo_y[c], n.lo_z[c]}, hi{n.hi_x[c], n.hi_y[c], n.hi_z[c]};
+      const uint32_t m = (beam.valid ? intersect_box_octant(p, beam.neg, lo, hi, tfar) : intersect_box(p, lo, hi, tfar)) & mask;
       if (!m) continue;
       Child e{n.child[c], m, key[c]};
       int j = k++;

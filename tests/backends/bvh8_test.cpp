@@ -239,11 +239,19 @@ TEST(Kernels, SlabTestsAreConservativeAgainstTheScalarSlab) {
     p.neg_y = simd::sign_mask(p.dir.y);
     p.neg_z = simd::sign_mask(p.dir.z);
     p.tnear = float8(r.tnear);
+    p.oi = {p.org.x * p.inv.x, p.org.y * p.inv.y, p.org.z * p.inv.z};
+    p.abs_pad = xsimd::max(xsimd::abs(p.oi.x), xsimd::max(xsimd::abs(p.oi.y), xsimd::abs(p.oi.z))) * float8(0x1p-23f);
+    const bool octant_ok = r.dir.x != 0.0f && r.dir.y != 0.0f && r.dir.z != 0.0f;
+    const bool neg[3] = {std::signbit(r.dir.x), std::signbit(r.dir.y), std::signbit(r.dir.z)};
     for (int c = 0; c < 8; ++c) {
       const SlabHit<float> s = rp::intersect_box(r, boxes[c]);
       const bool simd_hit = bits >> c & 1u;
       const bool packet_hit = intersect_box(p, boxes[c].lo, boxes[c].hi, float8(r.tfar)) == 0xffu;
       EXPECT_EQ(simd_hit, packet_hit) << "iter " << iter << " child " << c;
+      if (octant_ok) {
+        const bool octant_hit = intersect_box_octant(p, neg, boxes[c].lo, boxes[c].hi, float8(r.tfar)) == 0xffu;
+        EXPECT_TRUE(!s.hit || octant_hit) << "iter " << iter << " child " << c << ": the one-octant packet test missed a box";
+      }
       if (s.hit) {
         ++hits;
         EXPECT_TRUE(simd_hit) << "iter " << iter << " child " << c << ": the 8-wide slab test missed a box: org ("
