@@ -2,7 +2,7 @@
 // available backend, plus Embree limited to AVX2 ("embree-avx2": equal SIMD width with the
 // simd backend), on identical rays, traced by all threads (TBB; --threads=N or the core
 // count). Scenes: the embedded default and, when ../shared/scenes is present, bunny.obj and
-// dragon.ply.
+// dragon.ply. Rays from engine/raygen.h.
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -11,20 +11,17 @@
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <random>
 #include <thread>
 
 #include "backends/registry.h"
-#include "engine/camera.h"
 #include "engine/loaders/load.h"
-#include "engine/offset.h"
+#include "engine/raygen.h"
 #include "engine/scene.h"
 
 #ifndef RP_SHARED_SCENES
@@ -38,33 +35,13 @@ struct RaySets {
   std::vector<Ray> primary, shadow, diffuse;
 };
 
-/// Primary: pinhole over the whole model in 4x2 packets (1024x1024). Shadow: from each
-/// primary hit to the first light. Diffuse: one cosine-distributed bounce from each primary
-/// hit (seeded). Origins leave the surface by rp::offset_ray_origin.
-RaySets make_rays(const Scene& scene, const Backend& backend, int width, int height) {
-  RaySets rs;
-  const PinholeCamera cam(scene.camera().value_or(frame_bounds(scene.bounds())), width, height);
-  for (int y = 0; y < height; y += 2)
-    for (int x = 0; x < width; x += 4)
-      for (int lane = 0; lane < 8; ++lane) rs.primary.push_back(cam.generate(x + lane % 4 + 0.5f, y + lane / 4 + 0.5f));
-  std::vector<Hit> hits(rs.primary.size());
-  backend.intersect(rs.primary, hits, Coherence::coherent);
-  const Box3f b = scene.bounds();
-  const Vec3f light = scene.point_lights().empty() ? b.hi + b.extent() : scene.point_lights()[0].position;
-  std::mt19937 rng(2024);
-  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
-  for (size_t i = 0; i < hits.size(); ++i) {
-    if (!hits[i].hit()) continue;
-    const SurfacePoint sp = scene.surface(rs.primary[i], hits[i]);
-    const Vec3f n = dot(sp.geometric_normal, rs.primary[i].dir) < 0.0f ? sp.geometric_normal : -sp.geometric_normal;
-    const Vec3f o = offset_ray_origin(sp.position, n);
-    rs.shadow.push_back({o, 0.0f, light - o, 1.0f - 1e-4f});
-    const float r = std::sqrt(u01(rng)), phi = 2.0f * float(kPi) * u01(rng);
-    const Basis<float> tb = orthonormal_basis(n);
-    const Vec3f d = tb.t * (r * std::cos(phi)) + tb.b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0f, 1.0f - r * r));
-    rs.diffuse.push_back({o, 0.0f, d, std::numeric_limits<float>::infinity()});
-  }
-  return rs;
+/// 1024x1024 primary rays in 4x2 packets, then shadow and diffuse rays from their hits
+/// (engine/raygen.h), the hits taken from `backend`.
+RaySets make_rays(const Scene& scene, const Backend& backend) {
+  const RaySet primary = primary_rays(scene, 1024, 1024);
+  std::vector<Hit> hits(primary.rays.size());
+  intersect_parallel(backend, primary.rays, hits, Coherence::coherent);
+  return {primary.rays, shadow_rays(scene, primary, hits).rays, diffuse_rays(scene, primary, hits, 2024).rays};
 }
 
 /// The backends measured: registry name, options, and the label in benchmark names.
@@ -98,21 +75,16 @@ SceneFixture& fixture(const std::string& scene_name) {
     f = std::make_unique<SceneFixture>();
     f->scene = load_scene(scene_files().at(scene_name));
     for (const Method& m : methods()) f->backends[m.label] = make_backend(m.name, f->scene, m.options);
-    f->rays = make_rays(f->scene, *f->backends.at("embree"), 1024, 1024);
+    f->rays = make_rays(f->scene, *f->backends.at("embree"));
   }
   return *f;
 }
 
-/// Traces `rays` with all threads in chunks of 4096 (a multiple of the packet size).
+/// Traces `rays` with all threads.
 void trace(const Backend& b, const std::vector<Ray>& rays, std::vector<Hit>& hits, std::vector<uint8_t>& occ,
            bool shadow, Coherence coh) {
-  constexpr size_t kChunk = 4096;
-  tbb::parallel_for(size_t(0), (rays.size() + kChunk - 1) / kChunk, [&](size_t c) {
-    const size_t begin = c * kChunk, n = std::min(kChunk, rays.size() - begin);
-    const std::span<const Ray> r(rays.data() + begin, n);
-    if (shadow) b.occluded(r, std::span<uint8_t>(occ.data() + begin, n), coh);
-    else b.intersect(r, std::span<Hit>(hits.data() + begin, n), coh);
-  });
+  if (shadow) occluded_parallel(b, rays, occ, coh);
+  else intersect_parallel(b, rays, hits, coh);
 }
 
 void BM_Trace(benchmark::State& state, const std::string& label, const std::string& scene_name, const std::string& kind) {

@@ -4,7 +4,14 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -14,7 +21,11 @@
 #include "engine/camera.h"
 #include "engine/error.h"
 #include "engine/image_io.h"
+#include "engine/diff.h"
 #include "engine/loaders/load.h"
+#include "engine/rayfile.h"
+#include "engine/raygen.h"
+#include "engine/reference.h"
 #include "engine/render.h"
 #include "engine/scene.h"
 
@@ -62,6 +73,29 @@ void check_backend(const std::string& name, const std::string& variant) {
   throw UsageError(rp::cat("--backend: unknown backend '", name, "' (available: ", names, ")"));
 }
 
+/// Writes `text` to `path` through a temporary name beside it, then renames.
+void write_text_file(const std::string& path, const std::string& text) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  const fs::path tmp = target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + target.filename().string());
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw rp::Error(rp::cat("cannot write '", path, "'"));
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw rp::Error(rp::cat("cannot write '", path, "': ", ec.message()));
+  }
+}
+
 struct RenderArgs {
   std::string scene = "default";
   std::string output = "raypack.png";
@@ -97,6 +131,160 @@ int run_render(const RenderArgs& a) {
                  r.stats.seconds, double(r.stats.rays()) / r.stats.seconds * 1e-6,
                  (unsigned long long)r.stats.primary, (unsigned long long)r.stats.shadow,
                  (unsigned long long)r.stats.reflection, info.build_seconds, double(info.bytes) / (1 << 20));
+  }
+  return 0;
+}
+
+/// Hit records (with geometric normals) for writing to a hit file.
+std::vector<rp::HitRecord> to_records(const rp::Scene& scene, std::span<const rp::Ray> rays, std::span<const rp::Hit> hits) {
+  std::vector<rp::HitRecord> out(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i)
+    if (hits[i].hit())
+      out[i] = {hits[i].t, hits[i].prim_id, hits[i].u, hits[i].v, scene.surface(rays[i], hits[i]).geometric_normal};
+  return out;
+}
+
+rp::Coherence parse_coherence(const std::string& c) {
+  if (c == "coherent") return rp::Coherence::coherent;
+  if (c == "incoherent") return rp::Coherence::incoherent;
+  throw UsageError(rp::cat("--coherence: '", c, "' is not coherent or incoherent"));
+}
+
+struct TraceArgs {
+  std::string scene = "default", rays, output, backend{rp::kDefaultBackend}, variant = "default";
+  std::string coherence = "incoherent";
+  int threads = 0;
+  bool quiet = false;
+};
+
+int run_trace(const TraceArgs& a) {
+  check_backend(a.backend, a.variant);
+  const rp::Coherence coherence = parse_coherence(a.coherence);
+  std::optional<tbb::global_control> limit;
+  if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
+  const rp::Scene scene = rp::load_scene(a.scene);
+  const std::vector<rp::Ray> rays = rp::read_rays(a.rays);
+  const auto backend = rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
+  std::vector<rp::Hit> hits(rays.size());
+  const auto start = std::chrono::steady_clock::now();
+  rp::intersect_parallel(*backend, rays, hits, coherence);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  rp::write_hits(a.output, to_records(scene, rays, hits));
+  if (!a.quiet) {
+    const size_t n_hit = size_t(std::count_if(hits.begin(), hits.end(), [](const rp::Hit& h) { return h.hit(); }));
+    std::fprintf(stderr, "raypack: traced %zu rays (%zu hits) with %s/%s in %.3f s (%.2f Mrays/s); wrote %s\n",
+                 rays.size(), n_hit, a.backend.c_str(), a.variant.c_str(), seconds,
+                 seconds > 0 ? double(rays.size()) / seconds * 1e-6 : 0.0, a.output.c_str());
+  }
+  return 0;
+}
+
+struct DiffArgs {
+  std::string scene = "default", rays = "primary";
+  size_t count = 1 << 20;
+  uint64_t seed = 1;
+  std::string a{rp::kDefaultBackend}, b = "simd", variant_a = "default", variant_b = "default";
+  std::string coherence;
+  double tie_tolerance = 1e-6, t_tolerance = 1e-4;
+  bool reference = true;
+  std::string json, image;
+  double min_agreement = 0;
+  int threads = 0;
+};
+
+/// A side of the diff: a backend by name, or the reference itself.
+struct DiffSide {
+  std::string label;
+  std::vector<rp::Hit> hits;
+};
+
+int run_diff(const DiffArgs& a) {
+  for (const auto& [name, variant] : {std::pair{a.a, a.variant_a}, std::pair{a.b, a.variant_b}})
+    if (name != "reference") check_backend(name, variant);
+  std::optional<tbb::global_control> limit;
+  if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
+  if (a.count == 0 || a.count > (size_t(1) << 28))
+    throw UsageError(rp::cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
+  const rp::Scene scene = rp::load_scene(a.scene);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
+  rp::RaySet set;
+  rp::Coherence coherence = rp::Coherence::incoherent;
+  if (a.rays == "primary" || a.rays == "diffuse") {
+    const int side = std::max(2, int(std::ceil(std::sqrt(double(a.count)))));
+    const int w = (side + 3) / 4 * 4, h = (side + 1) / 2 * 2;
+    set = rp::primary_rays(scene, w, h);
+    coherence = rp::Coherence::coherent;
+    if (a.rays == "diffuse") {
+      // Bounces from the primary hits (found by the reference), as many rounds of one bounce
+      // per hit as it takes to reach --count rays.
+      const rp::Reference reference(scene);
+      std::vector<rp::ReferenceHit> rh(set.rays.size());
+      reference.intersect(set.rays, rh);
+      std::vector<rp::Hit> hits(set.rays.size());
+      size_t n_hit = 0;
+      for (size_t i = 0; i < rh.size(); ++i)
+        if (rh[i].hit()) {
+          hits[i] = {float(rh[i].t), rh[i].prim_id, float(rh[i].u), float(rh[i].v)};
+          ++n_hit;
+        }
+      if (n_hit == 0) throw rp::Error(rp::cat(a.scene, ": no camera ray hits the scene, so there are no diffuse rays"));
+      rp::RaySet bounces;
+      for (uint64_t round = 0; bounces.rays.size() < a.count; ++round) {
+        const rp::RaySet more = rp::diffuse_rays(scene, set, hits, a.seed + round);
+        bounces.rays.insert(bounces.rays.end(), more.rays.begin(), more.rays.end());
+        bounces.pixel.insert(bounces.pixel.end(), more.pixel.begin(), more.pixel.end());
+      }
+      bounces.rays.resize(a.count);
+      bounces.pixel.resize(a.count);
+      bounces.width = set.width;
+      bounces.height = set.height;
+      set = std::move(bounces);
+      coherence = rp::Coherence::incoherent;
+    }
+  } else if (a.rays == "random") {
+    set = rp::random_rays(scene, a.count, a.seed);
+  } else {
+    set.rays = rp::read_rays(a.rays);
+  }
+  if (!a.coherence.empty()) coherence = parse_coherence(a.coherence);
+
+  std::vector<rp::ReferenceHit> ref;
+  if (a.reference || a.a == "reference" || a.b == "reference") {
+    const rp::Reference reference(scene);
+    ref.resize(set.rays.size());
+    reference.intersect(set.rays, ref);
+  }
+  auto side = [&](const std::string& name, const std::string& variant) {
+    DiffSide s{name == "reference" ? name : name + "/" + variant, std::vector<rp::Hit>(set.rays.size())};
+    if (name == "reference") {
+      for (size_t i = 0; i < ref.size(); ++i)
+        if (ref[i].hit()) s.hits[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
+    } else {
+      const auto backend = rp::make_backend(name, scene, {.variant = variant, .device_config = {}});
+      rp::intersect_parallel(*backend, set.rays, s.hits, coherence);
+    }
+    return s;
+  };
+  const DiffSide sa = side(a.a, a.variant_a), sb = side(a.b, a.variant_b);
+  const rp::DiffOptions options{a.tie_tolerance, a.t_tolerance};
+  const rp::DiffResult d = rp::diff_hits(scene, set.rays, sa.hits, sb.hits, a.reference ? std::span<const rp::ReferenceHit>(ref) : std::span<const rp::ReferenceHit>(), options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  std::printf("raypack diff: scene %s, rays %s%s, %s\n%s", a.scene.c_str(), a.rays.c_str(),
+              a.reference ? ", reference: double-precision watertight" : "",
+              coherence == rp::Coherence::coherent ? "coherent (packets)" : "incoherent (single rays)",
+              rp::format_table(d, sa.label, sb.label).c_str());
+  std::printf("(%.2f s)\n", seconds);
+  if (!a.json.empty()) {
+    const std::string text = rp::to_json(d, a.scene, a.rays, sa.label, sb.label, options);
+    write_text_file(a.json, text);
+  }
+  if (!a.image.empty()) rp::write_image(a.image, rp::mismatch_image(d, set, sa.hits));
+  if (100.0 * d.agreement() < a.min_agreement) {
+    std::fprintf(stderr, "raypack: agreement %.5f%% is below --min-agreement %g%%\n", 100.0 * d.agreement(), a.min_agreement);
+    return 3;
   }
   return 0;
 }
@@ -137,6 +325,43 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   render->add_flag("-q,--quiet", ra.quiet, "Print nothing on success");
 
+  TraceArgs ta;
+  CLI::App* trace = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");
+  trace->add_option("--scene", ta.scene, "Scene: 'default' or an .obj/.ply file")->capture_default_str();
+  trace->add_option("--rays", ta.rays, "Ray file (.csv, or the binary format)")->required();
+  trace->add_option("-o,--output", ta.output, "Hit file (.csv, or the binary format)")->required();
+  trace->add_option("--backend", ta.backend, "Backend name")->capture_default_str();
+  trace->add_option("--variant", ta.variant, "Backend variant")->capture_default_str();
+  trace->add_option("--coherence", ta.coherence, "coherent (groups of 8 as packets) or incoherent")->capture_default_str();
+  trace->add_option("-t,--threads", ta.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  trace->add_flag("-q,--quiet", ta.quiet, "Print nothing on success");
+
+  DiffArgs da;
+  CLI::App* diff = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
+  diff->add_option("--scene", da.scene, "Scene: 'default' or an .obj/.ply file")->capture_default_str();
+  diff->add_option("--rays", da.rays, "primary, diffuse, random, or a ray file")->capture_default_str();
+  diff->add_option("--count", da.count, "Generated rays (primary: the nearest packet-aligned square image)")
+      ->capture_default_str();
+  diff->add_option("--seed", da.seed, "Seed of generated diffuse and random rays")->capture_default_str();
+  diff->add_option("-a", da.a, "Backend A, or 'reference'")->capture_default_str();
+  diff->add_option("-b", da.b, "Backend B, or 'reference'")->capture_default_str();
+  diff->add_option("--variant-a", da.variant_a, "Variant of A")->capture_default_str();
+  diff->add_option("--variant-b", da.variant_b, "Variant of B")->capture_default_str();
+  diff->add_option("--coherence", da.coherence, "coherent or incoherent (default: coherent for primary rays)");
+  diff->add_option("--tie-tolerance", da.tie_tolerance, "Relative t difference of a tie")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  diff->add_option("--t-tolerance", da.t_tolerance, "Relative t difference allowed on the same primitive")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  diff->add_flag("--reference,!--no-reference", da.reference, "Arbitrate with the double-precision reference")
+      ->capture_default_str();
+  diff->add_option("--json", da.json, "Write the summary as JSON");
+  diff->add_option("--image", da.image, "Write the per-ray classes as an image (camera rays)");
+  diff->add_option("--min-agreement", da.min_agreement, "Exit with status 3 below this agreement, in percent")
+      ->check(CLI::Range(0.0, 100.0));
+  diff->add_option("-t,--threads", da.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+
   app.add_subcommand("backends", "List the backends, their variants and availability");
 
   try {
@@ -153,6 +378,8 @@ int main(int argc, char** argv) {
   }
   try {
     if (*render) return run_render(ra);
+    if (*trace) return run_trace(ta);
+    if (*diff) return run_diff(da);
     return run_backends();
   } catch (const UsageError& e) {
     std::cerr << "raypack: " << e.what() << '\n';

@@ -1,0 +1,473 @@
+#include "engine/rayfile.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string_view>
+#include <system_error>
+
+#include "engine/error.h"
+
+namespace rp {
+
+namespace {
+
+// The binary formats are little-endian IEEE-754; this build stores floats as they are in memory.
+static_assert(std::endian::native == std::endian::little, "rayfile.cpp assumes a little-endian machine");
+static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == 4, "float must be IEEE-754 binary32");
+static_assert(sizeof(HitRecord) == 28, "HitRecord is 28 bytes");
+
+constexpr uint32_t kVersion = 1;
+constexpr size_t kHeaderBytes = 16;
+constexpr size_t kChunkRecords = 4096;  // records decoded or encoded per read / write call
+
+/// What tells the two binary formats apart.
+struct BinaryFormat {
+  const char* magic;      // 4 ASCII bytes
+  const char* kind;       // "ray" / "hit" in "not a raypack ray file"
+  const char* one;        // noun for a count of 1
+  const char* many;       // noun for other counts
+  size_t record_bytes;
+};
+constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 32};
+constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 28};
+
+constexpr const char* kRayCsvHeader = "ox,oy,oz,dx,dy,dz,tnear,tfar";
+constexpr const char* kHitCsvHeader = "t,prim_id,u,v,ng_x,ng_y,ng_z";
+
+std::string errno_message(int e) { return std::generic_category().message(e); }
+
+bool is_csv(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".csv";
+}
+
+/// Text from a file safe to quote in a one-line message: non-printable bytes become '?',
+/// long text is cut to 32 characters and marked with "...".
+std::string printable(std::string_view s) {
+  constexpr size_t kMax = 32;
+  std::string out;
+  for (size_t i = 0; i < s.size() && i < kMax; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    out += (c >= 0x20 && c < 0x7f) ? char(c) : '?';
+  }
+  if (s.size() > kMax) out += "...";
+  return out;
+}
+
+/// count * k in decimal, exact even when the product does not fit in 64 bits.
+std::string times(uint64_t count, uint64_t k) {
+  if (k == 0 || count <= UINT64_MAX / k) return std::to_string(count * k);
+  std::string digits = std::to_string(count);
+  uint64_t carry = 0;
+  for (auto it = digits.rbegin(); it != digits.rend(); ++it) {
+    const uint64_t x = uint64_t(*it - '0') * k + carry;
+    *it = char('0' + x % 10);
+    carry = x / 10;
+  }
+  for (; carry != 0; carry /= 10) digits.insert(digits.begin(), char('0' + carry % 10));
+  return digits;
+}
+
+/// An open file for reading, closed on scope exit. A directory is refused at open.
+class InputFile {
+ public:
+  explicit InputFile(const std::string& path) : path_(path) {
+    f_ = std::fopen(path.c_str(), "rb");
+    if (!f_) throw Error(cat(path, ": cannot open: ", errno_message(errno)));
+    struct stat st {};
+    if (::fstat(::fileno(f_), &st) != 0) throw Error(cat(path, ": cannot open: ", errno_message(errno)));
+    if (S_ISDIR(st.st_mode)) throw Error(cat(path, ": cannot open: ", errno_message(EISDIR)));
+    regular_ = S_ISREG(st.st_mode);
+    if (regular_) size_ = uint64_t(st.st_size);
+  }
+  ~InputFile() {
+    if (f_) std::fclose(f_);
+  }
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+
+  std::FILE* get() const { return f_; }
+  const std::string& path() const { return path_; }
+  /// Regular files report their size; pipes and devices do not.
+  bool regular() const { return regular_; }
+  uint64_t size() const { return size_; }
+
+  /// Throws for a stream error after a short read at byte `offset`.
+  [[noreturn]] void fail_read(uint64_t offset) const {
+    if (std::ferror(f_)) throw Error(cat(path_, ": read error at byte ", offset, ": ", errno_message(errno)));
+    throw Error(cat(path_, ": truncated at byte ", offset, " (the file shrank while it was read)"));
+  }
+
+ private:
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  bool regular_ = false;
+  uint64_t size_ = 0;
+};
+
+/// The bytes of a binary file with their total known up front: a regular file is read in
+/// place; a pipe or device is read to its end into memory first.
+class ByteSource {
+ public:
+  explicit ByteSource(InputFile& in) : in_(in) {
+    if (in.regular()) {
+      size_ = in.size();
+      return;
+    }
+    unsigned char buf[1 << 16];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, in.get())) > 0) memory_.insert(memory_.end(), buf, buf + n);
+    if (std::ferror(in.get())) in.fail_read(memory_.size());
+    in_memory_ = true;
+    size_ = memory_.size();
+  }
+
+  uint64_t size() const { return size_; }
+
+  /// Reads the next n bytes; callers never ask past size().
+  void read(unsigned char* dst, size_t n) {
+    if (in_memory_) {
+      std::memcpy(dst, memory_.data() + offset_, n);
+    } else if (std::fread(dst, 1, n, in_.get()) != n) {
+      in_.fail_read(offset_);
+    }
+    offset_ += n;
+  }
+
+ private:
+  InputFile& in_;
+  std::vector<unsigned char> memory_;
+  bool in_memory_ = false;
+  uint64_t size_ = 0, offset_ = 0;
+};
+
+uint32_t load_u32(const unsigned char* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+uint64_t load_u64(const unsigned char* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+/// Reads a binary file of `fmt`, decoding each record with decode(bytes, Record&).
+template <typename Record, typename Decode>
+std::vector<Record> read_binary(const std::string& path, const BinaryFormat& fmt, Decode decode) {
+  InputFile in(path);
+  ByteSource src(in);
+  const uint64_t size = src.size();
+  unsigned char header[kHeaderBytes] = {};
+  src.read(header, size_t(std::min<uint64_t>(size, kHeaderBytes)));
+  if (size >= 4 && std::memcmp(header, fmt.magic, 4) != 0)
+    throw Error(cat(path, ": not a raypack ", fmt.kind, " file (magic '",
+                    printable({reinterpret_cast<const char*>(header), 4}), "', expected '", fmt.magic, "')"));
+  if (size < kHeaderBytes)
+    throw Error(cat(path, ": truncated: ", size, " bytes, the header needs ", kHeaderBytes));
+  const uint32_t version = load_u32(header + 4);
+  if (version != kVersion) throw Error(cat(path, ": unsupported version ", version, " (", kVersion, ")"));
+  const uint64_t count = load_u64(header + 8);
+  const uint64_t follow = size - kHeaderBytes;
+  // Checked before anything is allocated: a corrupt count must not reserve memory.
+  if (count > follow / fmt.record_bytes || count * fmt.record_bytes != follow)
+    throw Error(cat(path, ": the header declares ", count, " ", count == 1 ? fmt.one : fmt.many, " (",
+                    times(count, fmt.record_bytes), " bytes) but ", follow, " bytes follow it"));
+
+  std::vector<Record> out(static_cast<size_t>(count));
+  std::vector<unsigned char> chunk(kChunkRecords * fmt.record_bytes);
+  for (size_t first = 0; first < out.size(); first += kChunkRecords) {
+    const size_t n = std::min(kChunkRecords, out.size() - first);
+    src.read(chunk.data(), n * fmt.record_bytes);
+    for (size_t i = 0; i < n; ++i) decode(chunk.data() + i * fmt.record_bytes, out[first + i]);
+  }
+  return out;
+}
+
+// Records are copied field by field with memcpy so every bit pattern (signalling NaNs
+// included) is kept.
+void decode_ray(const unsigned char* p, Ray& r) {
+  std::memcpy(&r.org.x, p + 0, 4);
+  std::memcpy(&r.org.y, p + 4, 4);
+  std::memcpy(&r.org.z, p + 8, 4);
+  std::memcpy(&r.dir.x, p + 12, 4);
+  std::memcpy(&r.dir.y, p + 16, 4);
+  std::memcpy(&r.dir.z, p + 20, 4);
+  std::memcpy(&r.tnear, p + 24, 4);
+  std::memcpy(&r.tfar, p + 28, 4);
+}
+void encode_ray(const Ray& r, unsigned char* p) {
+  std::memcpy(p + 0, &r.org.x, 4);
+  std::memcpy(p + 4, &r.org.y, 4);
+  std::memcpy(p + 8, &r.org.z, 4);
+  std::memcpy(p + 12, &r.dir.x, 4);
+  std::memcpy(p + 16, &r.dir.y, 4);
+  std::memcpy(p + 20, &r.dir.z, 4);
+  std::memcpy(p + 24, &r.tnear, 4);
+  std::memcpy(p + 28, &r.tfar, 4);
+}
+void decode_hit(const unsigned char* p, HitRecord& h) {
+  std::memcpy(&h.t, p + 0, 4);
+  std::memcpy(&h.prim_id, p + 4, 4);
+  std::memcpy(&h.u, p + 8, 4);
+  std::memcpy(&h.v, p + 12, 4);
+  std::memcpy(&h.ng.x, p + 16, 4);
+  std::memcpy(&h.ng.y, p + 20, 4);
+  std::memcpy(&h.ng.z, p + 24, 4);
+}
+void encode_hit(const HitRecord& h, unsigned char* p) {
+  std::memcpy(p + 0, &h.t, 4);
+  std::memcpy(p + 4, &h.prim_id, 4);
+  std::memcpy(p + 8, &h.u, 4);
+  std::memcpy(p + 12, &h.v, 4);
+  std::memcpy(p + 16, &h.ng.x, 4);
+  std::memcpy(p + 20, &h.ng.y, 4);
+  std::memcpy(p + 24, &h.ng.z, 4);
+}
+
+/// A file written under a temporary name beside its target and renamed over it by commit().
+/// Until then the target is untouched; a writer destroyed without commit() removes the
+/// temporary. Every failure throws "<path>: cannot write: <reason>".
+class AtomicWriter {
+ public:
+  explicit AtomicWriter(const std::string& path) : path_(path) {
+    namespace fs = std::filesystem;
+    static std::atomic<uint64_t> serial{0};
+    const fs::path target(path);
+    tmp_ = (target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) +
+                                    "-" + target.filename().string() + ".tmp"))
+               .string();
+    f_ = std::fopen(tmp_.c_str(), "wbx");  // x: never reuse a file someone else made
+    if (!f_) fail(errno_message(errno));
+    created_ = true;
+  }
+  ~AtomicWriter() {
+    if (f_) std::fclose(f_);
+    if (created_ && !committed_) std::remove(tmp_.c_str());
+  }
+  AtomicWriter(const AtomicWriter&) = delete;
+  AtomicWriter& operator=(const AtomicWriter&) = delete;
+
+  void write(const void* data, size_t n) {
+    if (n != 0 && std::fwrite(data, 1, n, f_) != n) fail(errno_message(errno));
+  }
+
+  /// Flushes to the disk, closes, and renames the temporary over the target.
+  void commit() {
+    if (std::fflush(f_) != 0 || ::fsync(::fileno(f_)) != 0) fail(errno_message(errno));
+    std::FILE* f = f_;
+    f_ = nullptr;
+    if (std::fclose(f) != 0) fail(errno_message(errno));
+    std::error_code ec;
+    std::filesystem::rename(tmp_, path_, ec);
+    if (ec) fail(ec.message());
+    committed_ = true;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& reason) const { throw Error(cat(path_, ": cannot write: ", reason)); }
+
+  std::string path_, tmp_;
+  std::FILE* f_ = nullptr;
+  bool created_ = false, committed_ = false;
+};
+
+template <typename Record, typename Encode>
+void write_binary(const std::string& path, const BinaryFormat& fmt, std::span<const Record> records, Encode encode) {
+  AtomicWriter out(path);
+  unsigned char header[kHeaderBytes];
+  std::memcpy(header, fmt.magic, 4);
+  std::memcpy(header + 4, &kVersion, 4);
+  const uint64_t count = records.size();
+  std::memcpy(header + 8, &count, 8);
+  out.write(header, kHeaderBytes);
+  std::vector<unsigned char> chunk(kChunkRecords * fmt.record_bytes);
+  for (size_t first = 0; first < records.size(); first += kChunkRecords) {
+    const size_t n = std::min(kChunkRecords, records.size() - first);
+    for (size_t i = 0; i < n; ++i) encode(records[first + i], chunk.data() + i * fmt.record_bytes);
+    out.write(chunk.data(), n * fmt.record_bytes);
+  }
+  out.commit();
+}
+
+/// Lines of a text file without their "\n" or "\r\n", numbered from 1.
+class LineReader {
+ public:
+  explicit LineReader(InputFile& in) : in_(in) {}
+  ~LineReader() { std::free(buf_); }
+  LineReader(const LineReader&) = delete;
+  LineReader& operator=(const LineReader&) = delete;
+
+  /// The next line, or false at the end of the file.
+  bool next(std::string_view& line) {
+    const ssize_t n = ::getline(&buf_, &cap_, in_.get());
+    if (n < 0) {
+      if (std::ferror(in_.get())) in_.fail_read(offset_);
+      return false;
+    }
+    offset_ += uint64_t(n);
+    ++number_;
+    line = std::string_view(buf_, size_t(n));
+    if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    return true;
+  }
+  uint64_t number() const { return number_; }
+
+ private:
+  InputFile& in_;
+  char* buf_ = nullptr;
+  size_t cap_ = 0;
+  uint64_t number_ = 0, offset_ = 0;
+};
+
+/// Where a CSV value came from, for messages.
+struct CsvPlace {
+  const std::string& path;
+  uint64_t line;
+};
+
+float parse_float(const CsvPlace& at, std::string_view s) {
+  float v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || end != s.data() + s.size() || ec == std::errc::invalid_argument)
+    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is not a number"));
+  if (ec == std::errc::result_out_of_range)
+    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is out of the float32 range"));
+  return v;
+}
+
+uint32_t parse_prim_id(const CsvPlace& at, std::string_view s) {
+  int64_t v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || end != s.data() + s.size() || ec != std::errc() || v < -1 || v >= int64_t(kInvalidId))
+    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is not a primitive id"));
+  return v == -1 ? kInvalidId : uint32_t(v);
+}
+
+/// Reads a CSV file whose line 1 is `header` and whose other lines hold N values each, turned
+/// into a Record by make(place, values).
+template <size_t N, typename Record, typename Make>
+std::vector<Record> read_csv(const std::string& path, std::string_view header, Make make) {
+  InputFile in(path);
+  LineReader lines(in);
+  std::string_view line;
+  if (!lines.next(line) || line != header)
+    throw Error(cat(path, ": line 1: expected the header '", header, "'"));
+  std::vector<Record> out;
+  uint64_t blank = 0;  // first blank line seen; fine only if nothing follows it
+  std::string_view values[N];
+  while (lines.next(line)) {
+    if (line.empty()) {
+      if (blank == 0) blank = lines.number();
+      continue;
+    }
+    if (blank != 0) throw Error(cat(path, ": line ", blank, ": blank line before the end of the data"));
+    size_t n = 0;
+    for (size_t start = 0;;) {
+      const size_t comma = line.find(',', start);
+      const std::string_view value = line.substr(start, comma == std::string_view::npos ? comma : comma - start);
+      if (n < N) values[n] = value;
+      ++n;
+      if (comma == std::string_view::npos) break;
+      start = comma + 1;
+    }
+    if (n != N) throw Error(cat(path, ": line ", lines.number(), ": ", n, n == 1 ? " value" : " values", ", expected ", N));
+    out.push_back(make(CsvPlace{path, lines.number()}, values));
+  }
+  return out;
+}
+
+/// printf("%.9g") in the C locale whatever the global locale; every NaN is "nan".
+void append_float(std::string& s, float x) {
+  if (std::isnan(x)) {
+    s += "nan";
+    return;
+  }
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, 9);
+  s.append(buf, r.ptr);
+}
+
+/// Writes `header` and one line per record, formed by line(record, text).
+template <typename Record, typename Line>
+void write_csv(const std::string& path, std::string_view header, std::span<const Record> records, Line line) {
+  AtomicWriter out(path);
+  std::string text(header);
+  text += '\n';
+  for (const Record& r : records) {
+    line(r, text);
+    text += '\n';
+    if (text.size() >= (1 << 16)) {
+      out.write(text.data(), text.size());
+      text.clear();
+    }
+  }
+  out.write(text.data(), text.size());
+  out.commit();
+}
+
+}  // namespace
+
+std::vector<Ray> read_rays(const std::string& path) {
+  if (!is_csv(path)) return read_binary<Ray>(path, kRayFormat, decode_ray);
+  return read_csv<8, Ray>(path, kRayCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+    Ray r;
+    r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
+    r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
+    r.tnear = parse_float(at, s[6]);
+    r.tfar = parse_float(at, s[7]);
+    return r;
+  });
+}
+
+void write_rays(const std::string& path, std::span<const Ray> rays) {
+  if (!is_csv(path)) return write_binary(path, kRayFormat, rays, encode_ray);
+  write_csv(path, kRayCsvHeader, rays, [](const Ray& r, std::string& s) {
+    const float v[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
+    for (int i = 0; i < 8; ++i) {
+      if (i) s += ',';
+      append_float(s, v[i]);
+    }
+  });
+}
+
+std::vector<HitRecord> read_hits(const std::string& path) {
+  if (!is_csv(path)) return read_binary<HitRecord>(path, kHitFormat, decode_hit);
+  return read_csv<7, HitRecord>(path, kHitCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+    HitRecord h;
+    h.t = parse_float(at, s[0]);
+    h.prim_id = parse_prim_id(at, s[1]);
+    h.u = parse_float(at, s[2]);
+    h.v = parse_float(at, s[3]);
+    h.ng = {parse_float(at, s[4]), parse_float(at, s[5]), parse_float(at, s[6])};
+    return h;
+  });
+}
+
+void write_hits(const std::string& path, std::span<const HitRecord> hits) {
+  if (!is_csv(path)) return write_binary(path, kHitFormat, hits, encode_hit);
+  write_csv(path, kHitCsvHeader, hits, [](const HitRecord& h, std::string& s) {
+    append_float(s, h.t);
+    s += ',';
+    s += h.prim_id == kInvalidId ? std::string("-1") : std::to_string(h.prim_id);
+    for (float x : {h.u, h.v, h.ng.x, h.ng.y, h.ng.z}) {
+      s += ',';
+      append_float(s, x);
+    }
+  });
+}
+
+}  // namespace rp

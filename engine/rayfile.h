@@ -1,0 +1,92 @@
+#pragma once
+/// Ray and hit files: the batches that cross the backend seam, saved to disk so a trace can
+/// be replayed, diffed between backends or produced by another program.
+///
+/// Two formats each, chosen by the extension: `.csv` (any case: `.CSV`, `.Csv`) is text,
+/// every other extension (or none) is binary. Both are described byte for byte below.
+///
+/// Binary ray file (extension not .csv): a 16-byte header, then `count` 32-byte records.
+/// Every field is little-endian; floats are IEEE-754 binary32 stored bit for bit (-0, inf,
+/// NaN payloads and denormals survive a round trip unchanged).
+/// ```
+///   offset  size  field
+///        0     4  magic: the ASCII bytes 'R' 'P' 'R' 'Y' (0x52 0x50 0x52 0x59)
+///        4     4  version: uint32 = 1
+///        8     8  count: uint64, number of rays
+///       16  32*n  records, record i at byte 16 + 32*i:
+///                   +0 org.x  +4 org.y  +8 org.z   float32
+///                  +12 dir.x +16 dir.y +20 dir.z   float32
+///                  +24 tnear +28 tfar              float32
+/// ```
+/// The file is exactly 16 + 32 * count bytes; shorter or longer is an error. Note the record
+/// order (org, dir, tnear, tfar) differs from the in-memory Ray (org, tnear, dir, tfar).
+///
+/// Binary hit file: the same 16-byte header with magic 'R' 'P' 'H' 'T' (0x52 0x50 0x48 0x54),
+/// version 1, count = number of hits, then `count` 28-byte records, record i at 16 + 28*i:
+/// ```
+///   +0 t: float32   +4 prim_id: uint32   +8 u: float32   +12 v: float32
+///   +16 ng.x  +20 ng.y  +24 ng.z: float32
+/// ```
+/// The file is exactly 16 + 28 * count bytes.
+///
+/// CSV ray file: UTF-8/ASCII text, lines end in "\n" or "\r\n". Line 1 is exactly
+/// `ox,oy,oz,dx,dy,dz,tnear,tfar`; each following line is one ray as 8 comma-separated
+/// numbers in that order, no spaces, no quotes. Numbers are what std::from_chars accepts
+/// for float (decimal or exponent notation, optional leading '-', `inf`, `-inf`, `nan`,
+/// `-nan`, case-insensitive; no '+', no hex) and must be within the float32 range.
+/// Blank lines are accepted only at the end of the file. The writer formats every float as
+/// printf's `%.9g` in the C locale (std::to_chars, general, precision 9), which reads back
+/// to the same bits for every finite value, ±0 and ±inf; every NaN is written `nan`, so a
+/// NaN's sign and payload do not survive CSV. The writer ends every line with "\n".
+///
+/// CSV hit file: the same rules with line 1 exactly `t,prim_id,u,v,ng_x,ng_y,ng_z` and 7
+/// values per line. prim_id is a decimal integer in [-1, 4294967294]; -1 stands for
+/// kInvalidId (a miss), so a default HitRecord (a miss) is written `inf,-1,0,0,0,0,0`.
+///
+/// Every failure throws rp::Error with a one-line message that starts with the path and
+/// names the line (CSV) or the counts and byte sizes (binary), e.g.
+/// `rays.bin: the header declares 4000000000 rays (128000000000 bytes) but 64 bytes follow it`
+/// or `rays.csv: line 5: 7 values, expected 8`. A declared count is checked against the file
+/// size before anything is allocated for it.
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "engine/math.h"
+#include "engine/ray.h"
+
+namespace rp {
+
+/// One traced hit as stored in hit files: t (+inf on a miss), prim_id (kInvalidId on a miss),
+/// barycentrics u, v, and the unit geometric normal ng (0,0,0 on a miss). 28 bytes in memory
+/// and on disk. t is in units of the ray direction's length (see engine/ray.h).
+struct HitRecord {
+  float t = std::numeric_limits<float>::infinity();  ///< ray parameter of the hit; +inf on a miss
+  uint32_t prim_id = kInvalidId;                      ///< primitive index; kInvalidId on a miss
+  float u = 0, v = 0;                                 ///< barycentrics as in Hit; 0 on a miss
+  Vec3f ng{};                                         ///< unit geometric normal; (0,0,0) on a miss
+};
+
+/// Reads rays from `path`: CSV when the extension is .csv (case-insensitive), else the binary
+/// format. Reads only; any malformed byte or line throws rp::Error naming the path and the
+/// line or byte count (see the top of this header for the formats and messages).
+std::vector<Ray> read_rays(const std::string& path);
+
+/// Writes `rays` to `path` in the format the extension selects (.csv, any case: CSV; else
+/// binary). The data goes to a temporary file beside `path` (`.raypack-<pid>-<n>-<name>.tmp`)
+/// that is renamed over `path` when complete, so `path` is never half-written; on failure the
+/// temporary is removed and rp::Error `<path>: cannot write: <reason>` is thrown.
+void write_rays(const std::string& path, std::span<const Ray> rays);
+
+/// Reads hits from `path`: CSV when the extension is .csv (case-insensitive), else the binary
+/// format. Reads only; errors as read_rays (a ray file is rejected by its magic 'RPRY').
+std::vector<HitRecord> read_hits(const std::string& path);
+
+/// Writes `hits` to `path` in the format the extension selects, through a temporary file and
+/// a rename exactly as write_rays; prim_id kInvalidId is written -1 in CSV.
+void write_hits(const std::string& path, std::span<const HitRecord> hits);
+
+}  // namespace rp

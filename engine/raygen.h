@@ -1,0 +1,46 @@
+#pragma once
+/// Ray sets shared by `raypack diff`, `raypack trace` users and the benchmarks: camera rays in
+/// 4x2 packets, shadow and diffuse rays from their hits, and random rays around a scene.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "engine/backend.h"
+#include "engine/scene.h"
+
+namespace rp {
+
+/// Rays and, for rays that descend from a camera pixel, that pixel (y * width + x), so a
+/// per-ray result can be drawn as an image; pixel is empty for rays with no pixel.
+struct RaySet {
+  std::vector<Ray> rays;
+  std::vector<uint32_t> pixel;
+  int width = 0, height = 0;
+};
+
+/// Pinhole rays through the pixel centres of a width x height image of `scene` (its camera,
+/// or one framing its bounds), in 4x2-pixel blocks: every 8 consecutive rays form a packet.
+/// Pixels past the right or bottom edge of a partial block are left out, so only images
+/// whose sides are multiples of 4 and 2 give whole packets throughout.
+RaySet primary_rays(const Scene& scene, int width, int height);
+
+/// From each hit of `primary` (hits[i] for primary.rays[i]): a shadow ray to the first point
+/// light (or, without one, towards a point above the scene's bounds), origin moved off the
+/// surface by offset_ray_origin, tfar just short of the light.
+RaySet shadow_rays(const Scene& scene, const RaySet& primary, std::span<const Hit> hits);
+
+/// From each hit of `primary`: one cosine-distributed bounce about the face-forwarded
+/// geometric normal, from a seeded stream (the same seed gives the same rays).
+RaySet diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const Hit> hits, uint64_t seed);
+
+/// `count` rays from random points on the sphere around the scene's bounds (radius twice the
+/// bounding sphere's) towards random points inside the bounds, seeded.
+RaySet random_rays(const Scene& scene, size_t count, uint64_t seed);
+
+/// Traces a batch with all threads (TBB) in chunks of 4096 rays (whole packets).
+void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence);
+void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint8_t> occluded,
+                       Coherence coherence);
+
+}  // namespace rp

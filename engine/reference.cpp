@@ -1,0 +1,359 @@
+#include "engine/reference.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "engine/backend.h"
+#include "engine/bbox.h"
+#include "engine/error.h"
+#include "engine/geometry/intersection.h"
+#include "engine/geometry/plane.h"
+#include "engine/geometry/sphere.h"
+#include "engine/geometry/triangle.h"
+#include "engine/scene.h"
+
+namespace rp {
+
+namespace {
+
+constexpr size_t kLeafSize = 4;
+/// Subtrees with more primitives than this are built as parallel TBB tasks.
+constexpr size_t kParallelBuild = 8192;
+/// Median split halves the primitive count per level: depth <= ceil(log2(2^32 / 4)) + 1.
+constexpr int kStackSize = 64;
+constexpr double kFloatMax = double(std::numeric_limits<float>::max());
+
+/// A bounded primitive during the build.
+struct BuildItem {
+  Box3f box;
+  Vec3d centroid;  ///< box centre, coordinates clamped to the float range (never NaN)
+  uint32_t prim_id;
+};
+
+/// Largest float <= x (x not NaN).
+float round_down(double x) {
+  float f = float(x);
+  if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// Smallest float >= x (x not NaN).
+float round_up(double x) {
+  float f = float(x);
+  if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// The smallest float box containing the double box b grown by pad on every side.
+Box3f outward(const Box3d& b, double pad) {
+  Box3f f;
+  for (int k = 0; k < 3; ++k) {
+    f.lo[k] = round_down(b.lo[k] - pad);
+    f.hi[k] = round_up(b.hi[k] + pad);
+  }
+  return f;
+}
+
+double max_abs(const Vec3d& v) { return max_component(abs(v)); }
+
+BuildItem make_item(const Box3f& box, uint32_t prim_id) {
+  Vec3d c;
+  for (int k = 0; k < 3; ++k)
+    c[k] = 0.5 * (std::clamp(double(box.lo[k]), -kFloatMax, kFloatMax) +
+                  std::clamp(double(box.hi[k]), -kFloatMax, kFloatMax));
+  return {box, c, prim_id};
+}
+
+/// Nodes of the subtree over n primitives; the tree shape depends on n alone (median split),
+/// which lets every subtree be built in parallel straight into its depth-first slot.
+uint32_t count_nodes(size_t n, std::unordered_map<size_t, uint32_t>& memo) {
+  if (n <= kLeafSize) return 1;
+  if (auto it = memo.find(n); it != memo.end()) return it->second;
+  const uint32_t c = 1 + count_nodes(n / 2, memo) + count_nodes(n - n / 2, memo);
+  memo.emplace(n, c);
+  return c;
+}
+
+/// Lets the hit h of primitive id replace best when it is closer, or equally close with a
+/// larger prim_id (the order-independent tie rule of reference.h).
+inline void take(const Intersection<double>& h, uint32_t id, ReferenceHit& best) {
+  if (h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id))) best = {h.t, id, h.u, h.v};
+}
+
+}  // namespace
+
+/// Per-ray constants of the conservative slab test (see Reference::intersect).
+struct Reference::RayBoxes {
+  double inv[3];        // 1/dir, or +-2^1020 for a +-0 component
+  double org_near[3];   // origin moved so that (near face - org_near) is the grown near face
+  double org_far[3];    // likewise for the far face
+  int near[3], far[3];  // index into Node::bounds of the near and far face per axis
+  double tnear;
+
+  RayBoxes(const Rayd& r, double scene_scale) : tnear(r.tnear) {
+    // Guard s: every box is grown by s on every side (Ize 2013, "Robust BVH Ray Traversal",
+    // JCGT 2(2), grows the exit distance by 2 gamma_3 instead). s = 2^-32 (|org|_inf + M) is
+    // 2^21 unit roundoffs of every coordinate and coordinate difference the ray meets, so it
+    // dwarfs the three roundings of a slab distance (gamma_3, relative to |face - org|) and
+    // the error of a primitive's own t: a computed hit t always lies in the computed grown
+    // interval. The 2^-880 floor keeps s > 0, so s * 2^1020 > FLT_MAX >= any finite tfar.
+    const double s = 0x1p-32 * (max_abs(r.org) + scene_scale) + 0x1p-880;
+    for (int k = 0; k < 3; ++k) {
+      const double d = r.dir[k];
+      inv[k] = d == 0.0 ? std::copysign(0x1p1020, d) : 1.0 / d;
+      const bool neg = std::signbit(inv[k]);
+      near[k] = neg ? k + 3 : k;
+      far[k] = neg ? k : k + 3;
+      // Positive direction: near face lo - s, far face hi + s; negative: near hi + s, far lo - s.
+      org_near[k] = neg ? r.org[k] - s : r.org[k] + s;
+      org_far[k] = neg ? r.org[k] + s : r.org[k] - s;
+    }
+  }
+
+  /// True when the ray may meet the grown box of n within [tnear, tmax]; t_enter is then
+  /// the (grown) entry distance, the key for near-first order and for culling by the
+  /// closest hit. No NaN can arise: the reciprocals are finite and non-zero.
+  bool hit(const Node& n, double tmax, double& t_enter) const {
+    const double t0x = (double(n.bounds[near[0]]) - org_near[0]) * inv[0];
+    const double t0y = (double(n.bounds[near[1]]) - org_near[1]) * inv[1];
+    const double t0z = (double(n.bounds[near[2]]) - org_near[2]) * inv[2];
+    const double t1x = (double(n.bounds[far[0]]) - org_far[0]) * inv[0];
+    const double t1y = (double(n.bounds[far[1]]) - org_far[1]) * inv[1];
+    const double t1z = (double(n.bounds[far[2]]) - org_far[2]) * inv[2];
+    const double enter = std::max(std::max(t0x, t0y), std::max(t0z, tnear));
+    const double exit = std::min(std::min(t1x, t1y), std::min(t1z, tmax));
+    t_enter = enter;
+    return enter <= exit;
+  }
+};
+
+Reference::Reference(const Scene& scene) {
+  const auto start = std::chrono::steady_clock::now();
+  sphere_base_ = scene.sphere_base();
+  quadric_base_ = scene.quadric_base();
+  polygon_base_ = scene.polygon_base();
+  plane_base_ = scene.plane_base();
+
+  // Every bounded primitive with its box, in prim_id order.
+  std::vector<BuildItem> items;
+  items.reserve(plane_base_);
+  for (size_t m = 0; m < scene.meshes().size(); ++m) {
+    const TriangleMesh& mesh = scene.meshes()[m];
+    for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+      Box3f b;  // the float box of float vertices: exact
+      for (int c = 0; c < 3; ++c) b.extend(mesh.vertex(t, c));
+      items.push_back(make_item(b, scene.mesh_base(m) + t));
+    }
+  }
+  for (uint32_t i = 0; i < scene.spheres().size(); ++i) {
+    const Sphere& s = scene.spheres()[i];
+    const SphereD sd{Vec3d(s.center), double(s.radius)};
+    spheres_.push_back(sd);
+    // Padded well beyond the rounding of a grazing double hit, then rounded outward.
+    const double pad = 0x1p-10 * sd.radius + 0x1p-20 * max_abs(sd.center);
+    const Vec3d r(sd.radius);
+    items.push_back(make_item(outward(Box3d(sd.center - r, sd.center + r), pad), sphere_base_ + i));
+  }
+  for (uint32_t i = 0; i < scene.quadrics().size(); ++i) {
+    const Quadric<float>& q = scene.quadrics()[i].quadric;
+    Quadric<double> d;
+    d.A = q.A; d.B = q.B; d.C = q.C; d.D = q.D; d.E = q.E;
+    d.F = q.F; d.G = q.G; d.H = q.H; d.I = q.I; d.J = q.J;
+    d.center = Vec3d(q.center);
+    d.clip = Box3d(Vec3d(q.clip.lo), Vec3d(q.clip.hi));
+    quadrics_.push_back(d);
+    // A hit point, as computed, lies in the clip box: the float clip box bounds it exactly.
+    items.push_back(make_item(q.clip, quadric_base_ + i));
+  }
+  for (uint32_t i = 0; i < scene.polygons().size(); ++i) {
+    const PolygonShape& p = scene.polygons()[i];
+    PolygonD pd{uint32_t(polygon_vertices_.size()), p.count, {}, p.convex};
+    for (uint32_t k = 0; k < p.count; ++k) polygon_vertices_.push_back(Vec3d(scene.polygon_vertices()[p.first + k]));
+    const std::span<const Vec3d> verts = std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count);
+    pd.plane = polygon_plane<double>(verts);
+    polygons_.push_back(pd);
+    // Hits lie on the plane over the projected outline; for a slightly non-planar polygon
+    // that region leaves the vertices' box, so the box also holds each vertex lifted along
+    // the dropped axis onto the plane (the region is their convex hull's lift).
+    Box3d b;
+    const int a = pd.plane.drop_axis;
+    const ProjectionAxes pa = projection_axes(a);
+    for (const Vec3d& v : verts) {
+      b.extend(v);
+      if (pd.plane.n[a] != 0.0) {
+        Vec3d lifted = v;
+        lifted[a] = -(pd.plane.d + pd.plane.n[pa.x] * v[pa.x] + pd.plane.n[pa.y] * v[pa.y]) / pd.plane.n[a];
+        if (std::isfinite(lifted[a])) b.extend(lifted);
+      }
+    }
+    const double pad = 0x1p-10 * max_component(b.extent()) + 0x1p-20 * std::max(max_abs(b.lo), max_abs(b.hi));
+    items.push_back(make_item(outward(b, pad), polygon_base_ + i));
+  }
+  for (const Plane& p : scene.planes()) planes_.push_back({Vec3d(p.normal), double(p.d)});
+
+  if (!items.empty()) {
+    std::unordered_map<size_t, uint32_t> memo;
+    nodes_.resize(count_nodes(items.size(), memo));
+    const auto subtree_nodes = [&memo](size_t n) { return n <= kLeafSize ? 1u : memo.at(n); };
+    // Median split on the longest axis of the centroid bounds (ties: lower axis; equal
+    // centroids: lower prim_id, a total order, so the partition is unique). Depth-first
+    // layout: the left child follows its parent, the right child follows the left subtree.
+    const auto build = [&](auto&& self, size_t begin, size_t end, uint32_t node) -> void {
+      Box3f box;
+      Box3d centroids;
+      for (size_t i = begin; i < end; ++i) {
+        box.extend(items[i].box);
+        centroids.extend(items[i].centroid);
+      }
+      Node& n = nodes_[node];
+      for (int k = 0; k < 3; ++k) {
+        n.bounds[k] = box.lo[k];
+        n.bounds[k + 3] = box.hi[k];
+      }
+      const size_t count = end - begin;
+      if (count <= kLeafSize) {
+        n.index = uint32_t(begin);
+        n.count = uint32_t(count);
+        return;
+      }
+      const Vec3d e = centroids.extent();
+      const int axis = e.x >= e.y ? (e.x >= e.z ? 0 : 2) : (e.y >= e.z ? 1 : 2);
+      const size_t mid = begin + count / 2;
+      std::nth_element(items.begin() + std::ptrdiff_t(begin), items.begin() + std::ptrdiff_t(mid),
+                       items.begin() + std::ptrdiff_t(end), [axis](const BuildItem& a, const BuildItem& b) {
+                         return a.centroid[axis] < b.centroid[axis] ||
+                                (a.centroid[axis] == b.centroid[axis] && a.prim_id < b.prim_id);
+                       });
+      const uint32_t left = node + 1;
+      const uint32_t right = left + subtree_nodes(mid - begin);
+      n.index = right;
+      n.count = 0;
+      if (count > kParallelBuild) {
+        tbb::parallel_invoke([&] { self(self, begin, mid, left); }, [&] { self(self, mid, end, right); });
+      } else {
+        self(self, begin, mid, left);
+        self(self, mid, end, right);
+      }
+    };
+    build(build, 0, items.size(), 0);
+
+    prims_.resize(items.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, items.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i < range.end(); ++i) {
+        LeafPrim& p = prims_[i];
+        p.prim_id = items[i].prim_id;
+        if (p.prim_id < sphere_base_) {
+          const PrimRef ref = scene.locate(p.prim_id);
+          for (int c = 0; c < 3; ++c) p.v[c] = scene.meshes()[ref.shape].vertex(ref.local, c);
+        } else {
+          p.v[0] = p.v[1] = p.v[2] = Vec3f(0.0f);
+        }
+      }
+    });
+
+    const Node& root = nodes_[0];
+    double m = 0;
+    for (float b : root.bounds) m = std::max(m, std::abs(double(b)));
+    scene_scale_ = std::min(m, kFloatMax);
+  }
+  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Reference::intersect_prim(const Rayd& r, const LeafPrim& p, ReferenceHit& best) const noexcept {
+  const uint32_t id = p.prim_id;
+  if (id < sphere_base_) {
+    take(intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2])), id, best);
+  } else if (id < quadric_base_) {
+    const SphereD& s = spheres_[id - sphere_base_];
+    take(intersect_sphere_algebraic(r, s.center, s.radius), id, best);
+  } else if (id < polygon_base_) {
+    take(intersect_quadric(r, quadrics_[id - quadric_base_]), id, best);
+  } else {
+    const PolygonD& pd = polygons_[id - polygon_base_];
+    take(intersect_polygon<double>(r, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count),
+                                   pd.plane, pd.convex),
+         id, best);
+  }
+}
+
+void Reference::traverse(const Rayd& r, ReferenceHit& best) const noexcept {
+  // Near-first depth-first traversal; a box is entered when its grown slab interval meets
+  // [tnear, min(tfar, best.t)] (closed: a hit at exactly best.t may still win the tie).
+  const RayBoxes rb(r, scene_scale_);
+  struct Entry {
+    uint32_t node;
+    double t;
+  };
+  Entry stack[kStackSize];
+  int sp = 0;
+  double t_root;
+  if (!rb.hit(nodes_[0], r.tfar, t_root)) return;
+  uint32_t ni = 0;
+  for (;;) {
+    const Node& n = nodes_[ni];
+    if (n.count == 0) {
+      const double tmax = std::min(r.tfar, best.t);
+      double tl, tr;
+      const bool hl = rb.hit(nodes_[ni + 1], tmax, tl);
+      const bool hr = rb.hit(nodes_[n.index], tmax, tr);
+      if (hl && hr) {
+        // Nearer child first; the left one when both enter at the same t.
+        RP_DCHECK(sp < kStackSize);
+        if (tr < tl) {
+          stack[sp++] = {ni + 1, tl};
+          ni = n.index;
+        } else {
+          stack[sp++] = {n.index, tr};
+          ni = ni + 1;
+        }
+        continue;
+      }
+      if (hl || hr) {
+        ni = hl ? ni + 1 : n.index;
+        continue;
+      }
+    } else {
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(r, prims_[k], best);
+    }
+    // Next deferred child that may still hold a hit at t <= best.t.
+    for (;;) {
+      if (sp == 0) return;
+      const Entry e = stack[--sp];
+      if (e.t <= best.t) {
+        ni = e.node;
+        break;
+      }
+    }
+  }
+}
+
+ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
+  ReferenceHit best;
+  if (!valid_ray(ray)) return best;
+  const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
+  if (!nodes_.empty()) traverse(r, best);
+  for (uint32_t k = 0; k < planes_.size(); ++k)
+    take(intersect_plane(r, planes_[k].normal, planes_[k].d), plane_base_ + k, best);
+  return best;
+}
+
+void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const {
+  RP_CHECK(rays.size() == hits.size(), "Reference::intersect: ", rays.size(), " rays but ", hits.size(), " hits");
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i) hits[i] = intersect(rays[i]);
+  });
+}
+
+size_t Reference::bytes() const {
+  return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(LeafPrim) + spheres_.size() * sizeof(SphereD) +
+         quadrics_.size() * sizeof(Quadric<double>) + polygons_.size() * sizeof(PolygonD) +
+         polygon_vertices_.size() * sizeof(Vec3d) + planes_.size() * sizeof(PlaneD);
+}
+
+}  // namespace rp

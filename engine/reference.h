@@ -1,0 +1,133 @@
+#pragma once
+/// The double-precision reference intersector: the arbiter `raypack diff` consults when two
+/// backends disagree. It gives the answer of a brute-force loop over every primitive in double
+/// (tests/backends/oracle.h), fast enough for millions of rays.
+///
+/// What it computes. The ray is converted exactly to double; each primitive is tested by the
+/// double instantiation of its engine/geometry routine on its float data converted exactly to
+/// double, against the ray's whole closed interval [tnear, tfar]:
+/// - triangles: intersect_triangle_watertight<double> (Woop, Benthin & Wald 2013);
+/// - spheres: intersect_sphere_algebraic<double>;
+/// - quadrics: intersect_quadric<double> on the converted coefficients, center and clip;
+/// - polygons: intersect_polygon<double> with polygon_plane<double> of the converted vertices;
+/// - planes: intersect_plane<double>.
+/// The answer is the hit of smallest t; among hits at exactly the same t the LARGEST prim_id
+/// wins. Because every primitive is tested against the full interval (not one shortened by
+/// earlier hits), this rule does not depend on the order primitives are visited in: the
+/// result is a function of the scene and the ray alone, whatever the BVH or thread count.
+/// It is also what an ascending-id scan that replaces at `t <= best` gives (oracle.h,
+/// Scene::intersect_planes: a plane takes a tie).
+///
+/// How. A binary BVH over the bounded primitives (median split on the longest axis of the
+/// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
+/// bound the float geometry exactly (triangles, quadric clip boxes) or outward-rounded and
+/// padded (spheres, polygons), traversed near-first in double with a conservative slab test
+/// (see Reference::intersect). Unbounded planes are tested beside it.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "engine/geometry/polygon.h"
+#include "engine/geometry/quadric.h"
+#include "engine/math.h"
+#include "engine/ray.h"
+
+namespace rp {
+
+class Scene;
+
+/// Closest hit in double precision; t is in units of the ray direction's length.
+/// On a miss: prim_id == kInvalidId, t == +inf, u == v == 0. (u, v) as rp::Hit documents:
+/// Embree's barycentrics for triangles, the primitive's surface parameters otherwise.
+struct ReferenceHit {
+  double t = std::numeric_limits<double>::infinity();
+  uint32_t prim_id = kInvalidId;
+  double u = 0, v = 0;
+
+  constexpr bool hit() const { return prim_id != kInvalidId; }
+};
+
+/// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
+/// immutable and safe to query from many threads at once.
+class Reference {
+ public:
+  /// Builds the BVH over every triangle, sphere, quadric and polygon of `scene` (planes are
+  /// kept beside it), in parallel over TBB; the structure is the same for any thread count.
+  explicit Reference(const Scene& scene);
+
+  /// Closest hit of `ray` (converted exactly to double) within [tnear, tfar], both ends
+  /// closed; invalid rays (valid_ray() false) miss. See the file comment for the tie rule.
+  ///
+  /// Traversal is conservative: a box is culled only when the ray provably misses it, so the
+  /// BVH never changes the brute-force answer. Slab distances are computed in double against
+  /// the box grown by a per-ray guard s = 2^-32 (|org|_inf + M), M the scene's largest
+  /// |coordinate| (in the spirit of Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2), which
+  /// widens the exit distance by 2 gamma_3; the guard is an absolute widening that also
+  /// covers the rounding of each primitive's own t). Hence a ray through a box face, edge or
+  /// vertex, an origin on a face, a zero-thickness box, and a hit at exactly tnear, tfar or
+  /// the current closest t (a tie) are never culled. A +-0 direction component gets the
+  /// finite reciprocal +-2^1020 instead of +-inf, so no product is 0 * inf: slab distances
+  /// are never NaN and plain min/max suffice. Limit: a hit whose own t is wrong by more than
+  /// the guard (a ray within ~1e-6 radians of a triangle's plane, a sphere grazed from
+  /// ~10^6 radii away) may be culled; such answers are ill-conditioned anyway.
+  ReferenceHit intersect(const Ray& ray) const noexcept;
+
+  /// hits[i] = intersect(rays[i]) for every i, in parallel over TBB (each ray independent,
+  /// so the result does not depend on scheduling). Throws rp::Error when the sizes differ.
+  void intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const;
+
+  /// Wall-clock seconds the constructor took.
+  double build_seconds() const { return build_seconds_; }
+  /// Bytes of the acceleration structure and the converted primitive data (capacity excluded).
+  size_t bytes() const;
+  /// BVH nodes (0 when the scene has no bounded primitive).
+  size_t node_count() const { return nodes_.size(); }
+
+ private:
+  /// Binary BVH node in depth-first order; the left child of an interior node follows it.
+  /// 32 bytes.
+  struct Node {
+    float bounds[6];  ///< lo.x, lo.y, lo.z, hi.x, hi.y, hi.z (closed box)
+    uint32_t index;   ///< interior: right child; leaf: first entry of prims_
+    uint32_t count;   ///< 0 for an interior node, else primitives in the leaf (1..4)
+  };
+  /// One primitive of a leaf: the float vertices of a triangle (unused for other kinds, whose
+  /// converted data are looked up by prim_id). 40 bytes.
+  struct LeafPrim {
+    Vec3f v[3];
+    uint32_t prim_id;
+  };
+  struct SphereD {
+    Vec3d center;
+    double radius;
+  };
+  struct PolygonD {
+    uint32_t first, count;  ///< range of polygon_vertices_
+    PolygonPlane<double> plane;
+    bool convex;
+  };
+  struct PlaneD {
+    Vec3d normal;
+    double d;
+  };
+  struct RayBoxes;
+
+  void traverse(const Rayd& r, ReferenceHit& best) const noexcept;
+  void intersect_prim(const Rayd& r, const LeafPrim& p, ReferenceHit& best) const noexcept;
+
+  std::vector<Node> nodes_;
+  std::vector<LeafPrim> prims_;
+  std::vector<SphereD> spheres_;
+  std::vector<Quadric<double>> quadrics_;
+  std::vector<PolygonD> polygons_;
+  std::vector<Vec3d> polygon_vertices_;
+  std::vector<PlaneD> planes_;
+  uint32_t sphere_base_ = 0, quadric_base_ = 0, polygon_base_ = 0, plane_base_ = 0;
+  double scene_scale_ = 0;  ///< M: largest |coordinate| of the root box, capped to FLT_MAX
+  double build_seconds_ = 0;
+};
+
+}  // namespace rp

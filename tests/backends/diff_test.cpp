@@ -1,0 +1,154 @@
+// raypack diff's classification: a backend against itself, a deliberately wrong intersector
+// (a test double) and ties on a shared edge, arbitrated by the double-precision reference.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "backends/registry.h"
+#include "engine/diff.h"
+#include "engine/raygen.h"
+#include "engine/reference.h"
+
+namespace rp {
+namespace {
+
+std::vector<Hit> trace(const Backend& b, const std::vector<Ray>& rays, Coherence c) {
+  std::vector<Hit> hits(rays.size());
+  b.intersect(rays, hits, c);
+  return hits;
+}
+
+std::vector<ReferenceHit> reference_hits(const Scene& s, const std::vector<Ray>& rays) {
+  std::vector<ReferenceHit> r(rays.size());
+  Reference(s).intersect(rays, r);
+  return r;
+}
+
+TEST(Diff, EveryBackendAgreesWithItself) {
+  const Scene scene = make_default_scene();
+  const RaySet set = primary_rays(scene, 64, 48);
+  const std::vector<ReferenceHit> ref = reference_hits(scene, set.rays);
+  for (const std::string& name : available_backends()) {
+    auto b = make_backend(name, scene);
+    const std::vector<Hit> h = trace(*b, set.rays, Coherence::coherent);
+    const DiffResult d = diff_hits(scene, set.rays, h, h, ref, {});
+    EXPECT_EQ(d.agreement(), 1.0) << name;
+    EXPECT_EQ(d.count[size_t(DiffClass::agree)], set.rays.size()) << name;
+    // And the reference confirms the answer on nearly every ray (all but near-edge rays).
+    EXPECT_GE(double(d.support[size_t(DiffClass::agree)].both), 0.99 * double(set.rays.size())) << name;
+    EXPECT_EQ(d.support[size_t(DiffClass::agree)].a + d.support[size_t(DiffClass::agree)].b, 0u) << name;
+  }
+}
+
+/// A test double: a real backend whose answers are broken on purpose, ray by ray.
+class WrongBackend final : public Backend {
+ public:
+  explicit WrongBackend(std::unique_ptr<Backend> real) : real_(std::move(real)) {}
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence c) const noexcept override {
+    real_->intersect(rays, hits, c);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (!hits[i].hit()) continue;
+      switch (i % 10) {
+        case 1: hits[i] = Hit{}; break;                                   // a leak
+        case 2: hits[i].t *= 1.001f; break;                               // t off by 1e-3
+        case 3: hits[i].prim_id ^= 1u; hits[i].t *= 1.01f; break;         // wrong primitive, farther
+        default: break;
+      }
+    }
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> o, Coherence c) const noexcept override {
+    real_->occluded(rays, o, c);
+  }
+  const BackendInfo& info() const noexcept override { return real_->info(); }
+
+ private:
+  std::unique_ptr<Backend> real_;
+};
+
+TEST(Diff, ADeliberatelyWrongIntersectorIsCaughtAndClassified) {
+  // A mesh only, so every hit's neighbour id (prim ^ 1) is another triangle.
+  const Scene def = make_default_scene();
+  Scene scene;
+  TriangleMesh knot = def.meshes()[0];
+  knot.material = 0;
+  scene.add_mesh(knot);
+  scene.set_camera(*def.camera());
+  const RaySet set = primary_rays(scene, 64, 64);
+  auto good = make_backend("embree", scene);
+  const WrongBackend bad(make_backend("embree", scene));
+  const std::vector<Hit> a = trace(*good, set.rays, Coherence::coherent);
+  const std::vector<Hit> b = trace(bad, set.rays, Coherence::coherent);
+  size_t leaks = 0, t_off = 0, wrong = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (!a[i].hit()) continue;
+    leaks += i % 10 == 1;
+    t_off += i % 10 == 2;
+    wrong += i % 10 == 3;
+  }
+  ASSERT_GT(leaks, 50u);
+  const DiffResult d = diff_hits(scene, set.rays, a, b, reference_hits(scene, set.rays), {});
+  EXPECT_EQ(d.count[size_t(DiffClass::hit_miss)], leaks);
+  EXPECT_EQ(d.count[size_t(DiffClass::t_error)], t_off);
+  EXPECT_EQ(d.count[size_t(DiffClass::wrong_prim)], wrong);
+  EXPECT_EQ(d.count[size_t(DiffClass::tie)], 0u);
+  // The reference sides with the real intersector on every broken ray, except rays within
+  // a hair of an edge where the reference and Embree may choose differently.
+  for (DiffClass c : {DiffClass::hit_miss, DiffClass::t_error, DiffClass::wrong_prim}) {
+    const Support& s = d.support[size_t(c)];
+    EXPECT_EQ(s.b, 0u) << to_string(c);
+    EXPECT_GE(double(s.a), 0.99 * double(d.count[size_t(c)])) << to_string(c);
+  }
+  EXPECT_NEAR(d.agreement(), 1.0 - double(leaks + t_off + wrong) / double(a.size()), 1e-12);
+}
+
+TEST(Diff, RaysThroughASharedEdgeAreTies) {
+  // The unit square at z = 0 as two triangles sharing the diagonal from (0,0) to (1,1).
+  Scene scene;
+  TriangleMesh quad;
+  quad.name = "quad";
+  quad.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  quad.indices = {0, 1, 2, 0, 2, 3};
+  scene.add_mesh(quad);
+  std::vector<Ray> rays;
+  for (int k = 1; k < 64; ++k) {
+    const float s = float(k) / 64.0f;  // exactly on the diagonal
+    rays.push_back({{s, s, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, 10.0f});
+  }
+  // A says triangle 0, B says triangle 1, at the same t: exactly what two correct backends
+  // may answer on a shared edge.
+  std::vector<Hit> a(rays.size(), Hit{1.0f, 0, 0.5f, 0.5f}), b(rays.size(), Hit{1.0f, 1, 0.5f, 0.0f});
+  b[3].t = std::nextafter(1.0f, 2.0f);  // a rounding apart is still a tie
+  const std::vector<ReferenceHit> ref = reference_hits(scene, rays);
+  for (const ReferenceHit& r : ref) {
+    EXPECT_TRUE(r.hit()) << "the watertight reference never leaks through the shared edge";
+    EXPECT_EQ(r.t, 1.0);
+  }
+  const DiffResult d = diff_hits(scene, rays, a, b, ref, {});
+  EXPECT_EQ(d.count[size_t(DiffClass::tie)], rays.size());
+  EXPECT_EQ(d.agreement(), 1.0);
+  // The reference hits one of the two at t = 1: it supports the side with its primitive.
+  const Support& s = d.support[size_t(DiffClass::tie)];
+  EXPECT_EQ(s.a + s.b + s.both, rays.size());
+}
+
+TEST(Diff, TableAndJsonNameEveryClass) {
+  const Scene scene = make_default_scene();
+  const RaySet set = primary_rays(scene, 16, 16);
+  auto e = make_backend("embree", scene);
+  const std::vector<Hit> h = trace(*e, set.rays, Coherence::coherent);
+  const DiffResult d = diff_hits(scene, set.rays, h, h, reference_hits(scene, set.rays), {});
+  const std::string table = format_table(d, "embree/default", "embree/default");
+  const std::string json = to_json(d, "default", "primary", "embree/default", "embree/default", {});
+  for (int c = 0; c < kDiffClasses; ++c) {
+    EXPECT_NE(table.find(to_string(DiffClass(c))), std::string::npos) << table;
+    EXPECT_NE(json.find(std::string("\"") + to_string(DiffClass(c)) + "\""), std::string::npos) << json;
+  }
+  EXPECT_NE(json.find("\"agreement\": 1.0"), std::string::npos) << json;
+  const Image img = mismatch_image(d, set, h);
+  EXPECT_EQ(img.width, 16);
+  EXPECT_EQ(img.height, 16);
+}
+
+}  // namespace
+}  // namespace rp

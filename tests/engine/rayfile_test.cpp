@@ -1,0 +1,537 @@
+// Ray and hit files: bit-exact round trips, the byte layout, and every error message.
+
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "engine/error.h"
+#include "engine/rayfile.h"
+
+namespace rp {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A fresh directory under the system temp dir, removed with everything in it.
+struct TempDir {
+  fs::path dir;
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "rayfile_test-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
+    dir = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::permissions(dir, fs::perms::owner_all, fs::perm_options::add, ec);
+    fs::remove_all(dir, ec);
+  }
+  std::string operator/(const std::string& name) const { return (dir / name).string(); }
+  /// Names of the entries in the directory, temporaries included.
+  std::set<std::string> entries() const {
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+    return names;
+  }
+};
+
+uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
+float from_bits(uint32_t b) { return std::bit_cast<float>(b); }
+
+std::array<uint32_t, 8> bits(const Ray& r) {
+  return {bits(r.org.x), bits(r.org.y), bits(r.org.z), bits(r.dir.x),
+          bits(r.dir.y), bits(r.dir.z), bits(r.tnear), bits(r.tfar)};
+}
+std::array<uint32_t, 7> bits(const HitRecord& h) {
+  return {bits(h.t), h.prim_id, bits(h.u), bits(h.v), bits(h.ng.x), bits(h.ng.y), bits(h.ng.z)};
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(bytes.data(), std::streamsize(bytes.size()));
+  ASSERT_TRUE(f.good()) << path;
+}
+std::string read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+/// A 16-byte binary header.
+std::string header(const char* magic, uint32_t version, uint64_t count) {
+  std::string h(16, '\0');
+  std::memcpy(h.data(), magic, 4);
+  std::memcpy(h.data() + 4, &version, 4);
+  std::memcpy(h.data() + 8, &count, 8);
+  return h;
+}
+
+/// what() of the rp::Error that f throws, or a note that it threw none.
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no rp::Error thrown)";
+}
+
+/// Float bit patterns a file must carry unchanged: signed zeros, denormals, extremes,
+/// infinities and (where the format allows) NaNs with sign and payload.
+const std::vector<uint32_t> kSpecialBits = {
+    0x00000000, 0x80000000,              // +0, -0
+    0x00000001, 0x80000001, 0x007fffff,  // smallest denormals, largest denormal
+    0x00800000, 0x7f7fffff, 0xff7fffff,  // FLT_MIN, ±FLT_MAX
+    0x7f800000, 0xff800000,              // ±inf
+    0x3f800000, 0xbfc00000, 0x3eaaaaab,  // 1, -1.5, 1/3
+    0x3dcccccd, 0x4b800001, 0x2edbe6ff,  // 0.1, 2^24+2, 1e-10
+    0x7fc00000, 0xffc00001, 0x7fc12345,  // quiet NaNs (sign, payload)
+    0x7f800001,                          // signalling NaN
+};
+
+std::vector<Ray> special_rays() {
+  std::vector<Ray> rays;
+  const size_t n = kSpecialBits.size();
+  for (size_t i = 0; i < n; ++i) {
+    auto v = [&](size_t k) { return from_bits(kSpecialBits[(i + 3 * k) % n]); };
+    rays.push_back({{v(0), v(1), v(2)}, v(6), {v(3), v(4), v(5)}, v(7)});
+  }
+  return rays;
+}
+
+std::vector<HitRecord> special_hits() {
+  std::vector<HitRecord> hits;
+  const size_t n = kSpecialBits.size();
+  const uint32_t ids[] = {0, 1, 7, 4294967294u, kInvalidId};
+  for (size_t i = 0; i < n; ++i) {
+    auto v = [&](size_t k) { return from_bits(kSpecialBits[(i + 5 * k) % n]); };
+    hits.push_back({v(0), ids[i % 5], v(1), v(2), {v(3), v(4), v(5)}});
+  }
+  hits.push_back(HitRecord{});  // a miss
+  return hits;
+}
+
+/// Rays made of seeded random bit patterns (NaNs included), enough to cross read/write chunks.
+std::vector<Ray> random_rays(size_t n) {
+  std::mt19937 rng(20240611);
+  std::vector<Ray> rays(n);
+  for (Ray& r : rays) {
+    r.org = {from_bits(rng()), from_bits(rng()), from_bits(rng())};
+    r.dir = {from_bits(rng()), from_bits(rng()), from_bits(rng())};
+    r.tnear = from_bits(rng());
+    r.tfar = from_bits(rng());
+  }
+  return rays;
+}
+
+/// CSV keeps every bit except a NaN's sign and payload: NaN reads back as some NaN.
+void expect_csv_equal(const std::array<uint32_t, 8>& want, const std::array<uint32_t, 8>& got, size_t i) {
+  for (size_t k = 0; k < 8; ++k) {
+    if (std::isnan(from_bits(want[k])))
+      EXPECT_TRUE(std::isnan(from_bits(got[k]))) << "ray " << i << " field " << k;
+    else
+      EXPECT_EQ(want[k], got[k]) << "ray " << i << " field " << k;
+  }
+}
+
+TEST(RayFileBinary, RoundTripIsBitExact) {
+  TempDir tmp;
+  const std::string path = tmp / "rays.bin";
+  for (const std::vector<Ray>& rays : {special_rays(), random_rays(5000), std::vector<Ray>{}}) {
+    write_rays(path, rays);
+    EXPECT_EQ(fs::file_size(path), 16 + 32 * rays.size());
+    const std::vector<Ray> back = read_rays(path);
+    ASSERT_EQ(back.size(), rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(bits(back[i]), bits(rays[i])) << "ray " << i;
+  }
+  // Every write went through a temporary that is gone now; reading wrote nothing.
+  EXPECT_EQ(tmp.entries(), std::set<std::string>{"rays.bin"});
+}
+
+TEST(RayFileBinary, LayoutIsHeaderThenOrgDirTnearTfar) {
+  TempDir tmp;
+  const std::string path = tmp / "one.rays";
+  const Ray r{{1, 2, 3}, 7, {4, 5, 6}, 8};
+  write_rays(path, std::vector<Ray>{r, r});
+  const std::string b = read_bytes(path);
+  ASSERT_EQ(b.size(), 16u + 64u);
+  EXPECT_EQ(b.substr(0, 16), header("RPRY", 1, 2));
+  EXPECT_EQ(b.substr(0, 16), std::string("RPRY\x01\0\0\0\x02\0\0\0\0\0\0\0", 16));
+  for (int rec = 0; rec < 2; ++rec)
+    for (int k = 0; k < 8; ++k) {
+      float f;
+      std::memcpy(&f, b.data() + 16 + 32 * rec + 4 * k, 4);
+      EXPECT_EQ(f, float(k + 1)) << "record " << rec << " field " << k;
+    }
+}
+
+TEST(RayFileBinary, ReadsFromAPipe) {
+  TempDir tmp;
+  const std::string path = tmp / "pipe";
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  const std::vector<Ray> rays = random_rays(3000);
+  std::string bytes = header("RPRY", 1, rays.size());
+  for (const Ray& r : rays) {
+    const float f[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
+    bytes.append(reinterpret_cast<const char*>(f), 32);
+  }
+  std::thread writer([&] { write_bytes(path, bytes); });
+  std::vector<Ray> back;
+  const std::string error = error_of([&] { back = read_rays(path); });
+  writer.join();
+  EXPECT_EQ(error, "(no rp::Error thrown)");
+  ASSERT_EQ(back.size(), rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(bits(back[i]), bits(rays[i])) << "ray " << i;
+}
+
+TEST(HitFileBinary, RoundTripIsBitExact) {
+  TempDir tmp;
+  const std::string path = tmp / "hits.bin";
+  std::vector<HitRecord> many(5000);
+  std::mt19937 rng(7);
+  for (HitRecord& h : many) h = {from_bits(rng()), uint32_t(rng()), from_bits(rng()), from_bits(rng()),
+                                 {from_bits(rng()), from_bits(rng()), from_bits(rng())}};
+  for (const std::vector<HitRecord>& hits : {special_hits(), many, std::vector<HitRecord>{}}) {
+    write_hits(path, hits);
+    EXPECT_EQ(fs::file_size(path), 16 + 28 * hits.size());
+    const std::vector<HitRecord> back = read_hits(path);
+    ASSERT_EQ(back.size(), hits.size());
+    for (size_t i = 0; i < hits.size(); ++i) EXPECT_EQ(bits(back[i]), bits(hits[i])) << "hit " << i;
+  }
+  EXPECT_EQ(tmp.entries(), std::set<std::string>{"hits.bin"});
+}
+
+TEST(HitFileBinary, LayoutIsHeaderThenTPrimUVNormal) {
+  TempDir tmp;
+  const std::string path = tmp / "hits";
+  write_hits(path, std::vector<HitRecord>{{2.5f, 0x01020304u, 0.25f, 0.5f, {0, -1, 0}}});
+  const std::string b = read_bytes(path);
+  ASSERT_EQ(b.size(), 16u + 28u);
+  EXPECT_EQ(b.substr(0, 16), std::string("RPHT\x01\0\0\0\x01\0\0\0\0\0\0\0", 16));
+  EXPECT_EQ(b.substr(20, 4), std::string("\x04\x03\x02\x01", 4));  // prim_id little-endian
+  const float want[7] = {2.5f, 0, 0.25f, 0.5f, 0, -1, 0};
+  for (int k : {0, 2, 3, 4, 5, 6}) {
+    float f;
+    std::memcpy(&f, b.data() + 16 + 4 * k, 4);
+    EXPECT_EQ(bits(f), bits(want[k])) << "field " << k;
+  }
+}
+
+TEST(RayFileCsv, RoundTripKeepsEveryBitButNanPayloads) {
+  TempDir tmp;
+  const std::string path = tmp / "rays.csv";
+  for (const std::vector<Ray>& rays : {special_rays(), random_rays(5000), std::vector<Ray>{}}) {
+    write_rays(path, rays);
+    const std::vector<Ray> back = read_rays(path);
+    ASSERT_EQ(back.size(), rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) expect_csv_equal(bits(rays[i]), bits(back[i]), i);
+  }
+  EXPECT_EQ(tmp.entries(), std::set<std::string>{"rays.csv"});
+}
+
+TEST(RayFileCsv, WriterUsesTheHeaderAndPercentNineG) {
+  TempDir tmp;
+  const std::string path = tmp / "rays.csv";
+  const float inf = std::numeric_limits<float>::infinity();
+  write_rays(path, std::vector<Ray>{{{0, -0.0f, 1.5f}, 0, {1.0f / 3, -inf, from_bits(1)}, inf},
+                                    {{from_bits(0xffc00001), 1e20f, -2}, 1e-3f, {0, 0, 1}, 100}});
+  EXPECT_EQ(read_bytes(path),
+            "ox,oy,oz,dx,dy,dz,tnear,tfar\n"
+            "0,-0,1.5,0.333333343,-inf,1.40129846e-45,0,inf\n"
+            "nan,1.00000002e+20,-2,0,0,1,0.00100000005,100\n");
+}
+
+TEST(RayFileCsv, ExtensionIsCaseInsensitive) {
+  TempDir tmp;
+  const std::vector<Ray> rays = {{{1, 2, 3}, 0, {0, 0, -1}, 10}};
+  for (const char* name : {"A.CSV", "b.Csv", "c.csv"}) {
+    write_rays(tmp / name, rays);
+    EXPECT_EQ(read_bytes(tmp / name), "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,0,0,-1,0,10\n") << name;
+    EXPECT_EQ(bits(read_rays(tmp / name).at(0)), bits(rays[0])) << name;
+  }
+  for (const char* name : {"d.csv.bin", "e.txt", "csv"}) {
+    write_rays(tmp / name, rays);
+    EXPECT_EQ(read_bytes(tmp / name).substr(0, 4), "RPRY") << name;
+  }
+}
+
+TEST(RayFileCsv, AcceptsCrlfAndTrailingBlankLines) {
+  TempDir tmp;
+  const std::string path = tmp / "crlf.csv";
+  write_bytes(path, "ox,oy,oz,dx,dy,dz,tnear,tfar\r\n1,2,3,4,5,6,0,inf\r\n-1,-2,-3,nan,-nan,-inf,0.5,1e-45\r\n\r\n\n");
+  const std::vector<Ray> rays = read_rays(path);
+  ASSERT_EQ(rays.size(), 2u);
+  EXPECT_EQ(bits(rays[0]), bits(Ray{{1, 2, 3}, 0, {4, 5, 6}, std::numeric_limits<float>::infinity()}));
+  EXPECT_EQ(rays[1].org, (Vec3f{-1, -2, -3}));
+  EXPECT_TRUE(std::isnan(rays[1].dir.x));
+  EXPECT_TRUE(std::isnan(rays[1].dir.y));
+  EXPECT_EQ(rays[1].dir.z, -std::numeric_limits<float>::infinity());
+  EXPECT_EQ(rays[1].tnear, 0.5f);
+  EXPECT_EQ(bits(rays[1].tfar), 1u);
+  // No newline at the end, and a header-only file, are fine too.
+  write_bytes(path, "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,1");
+  EXPECT_EQ(read_rays(path).size(), 1u);
+  write_bytes(path, "ox,oy,oz,dx,dy,dz,tnear,tfar");
+  EXPECT_EQ(read_rays(path).size(), 0u);
+}
+
+TEST(HitFileCsv, RoundTripAndMissIsWrittenAsMinusOne) {
+  TempDir tmp;
+  const std::string path = tmp / "hits.csv";
+  const std::vector<HitRecord> hits = special_hits();
+  write_hits(path, hits);
+  const std::vector<HitRecord> back = read_hits(path);
+  ASSERT_EQ(back.size(), hits.size());
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const auto w = bits(hits[i]), g = bits(back[i]);
+    EXPECT_EQ(w[1], g[1]) << "hit " << i << " prim_id";
+    for (size_t k : {0, 2, 3, 4, 5, 6}) {
+      if (std::isnan(from_bits(w[k])))
+        EXPECT_TRUE(std::isnan(from_bits(g[k]))) << "hit " << i << " field " << k;
+      else
+        EXPECT_EQ(w[k], g[k]) << "hit " << i << " field " << k;
+    }
+  }
+  write_hits(path, std::vector<HitRecord>{HitRecord{}, {2.5f, 7, 0.25f, 0.5f, {0, 0, 1}},
+                                          {1, 4294967294u, 0, 1, {-0.0f, 1, 0}}});
+  EXPECT_EQ(read_bytes(path),
+            "t,prim_id,u,v,ng_x,ng_y,ng_z\n"
+            "inf,-1,0,0,0,0,0\n"
+            "2.5,7,0.25,0.5,0,0,1\n"
+            "1,4294967294,0,1,-0,1,0\n");
+  const std::vector<HitRecord> three = read_hits(path);
+  ASSERT_EQ(three.size(), 3u);
+  EXPECT_EQ(bits(three[0]), bits(HitRecord{}));
+  EXPECT_EQ(three[2].prim_id, 4294967294u);
+  EXPECT_EQ(bits(three[2].ng.x), 0x80000000u);
+  EXPECT_EQ(tmp.entries(), std::set<std::string>{"hits.csv"});
+}
+
+TEST(RayFileErrors, MissingFileOrDirectoryCannotBeOpened) {
+  TempDir tmp;
+  for (const char* name : {"missing.bin", "missing.csv"}) {
+    const std::string p = tmp / name;
+    EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": cannot open: No such file or directory");
+    EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": cannot open: No such file or directory");
+  }
+  fs::create_directory(tmp / "dir.csv");
+  EXPECT_EQ(error_of([&] { read_rays(tmp / "dir.csv"); }), tmp / "dir.csv" + ": cannot open: Is a directory");
+  EXPECT_EQ(error_of([&] { read_hits(tmp.dir.string()); }), tmp.dir.string() + ": cannot open: Is a directory");
+}
+
+TEST(RayFileErrors, WrongMagicIsNamedWithNonPrintablesAsQuestionMarks) {
+  TempDir tmp;
+  const std::string p = tmp / "x.bin";
+  write_bytes(p, std::string("AB\x01\xff", 4) + std::string(60, '\0'));
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": not a raypack ray file (magic 'AB?\?', expected 'RPRY')");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": not a raypack hit file (magic 'AB?\?', expected 'RPHT')");
+  // A CSV file under a binary name is caught by its magic too.
+  write_bytes(p, "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,1\n");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": not a raypack ray file (magic 'ox,o', expected 'RPRY')");
+}
+
+TEST(RayFileErrors, RayAndHitFilesAreToldApart) {
+  TempDir tmp;
+  const std::string rays = tmp / "rays.bin", hits = tmp / "hits.bin";
+  write_rays(rays, std::vector<Ray>(2));
+  write_hits(hits, std::vector<HitRecord>(2));
+  EXPECT_EQ(error_of([&] { read_hits(rays); }), rays + ": not a raypack hit file (magic 'RPRY', expected 'RPHT')");
+  EXPECT_EQ(error_of([&] { read_rays(hits); }), hits + ": not a raypack ray file (magic 'RPHT', expected 'RPRY')");
+}
+
+TEST(RayFileErrors, UnsupportedVersion) {
+  TempDir tmp;
+  const std::string p = tmp / "v7.bin";
+  write_bytes(p, header("RPRY", 7, 0));
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": unsupported version 7 (1)");
+  write_bytes(p, header("RPHT", 0, 0));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": unsupported version 0 (1)");
+}
+
+TEST(RayFileErrors, FileShorterThanTheHeader) {
+  TempDir tmp;
+  const std::string p = tmp / "short.bin";
+  write_bytes(p, header("RPRY", 1, 0).substr(0, 9));
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": truncated: 9 bytes, the header needs 16");
+  write_bytes(p, header("RPHT", 1, 0).substr(0, 15));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": truncated: 15 bytes, the header needs 16");
+  write_bytes(p, "RP");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": truncated: 2 bytes, the header needs 16");
+  write_bytes(p, "");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": truncated: 0 bytes, the header needs 16");
+}
+
+TEST(RayFileErrors, AbsurdCountIsRejectedBeforeAllocating) {
+  TempDir tmp;
+  const std::string p = tmp / "absurd.bin";
+  const auto start = std::chrono::steady_clock::now();
+  write_bytes(p, header("RPRY", 1, 4000000000u) + std::string(64, '\0'));
+  EXPECT_EQ(error_of([&] { read_rays(p); }),
+            p + ": the header declares 4000000000 rays (128000000000 bytes) but 64 bytes follow it");
+  write_bytes(p, header("RPRY", 1, uint64_t(1) << 63) + std::string(64, '\0'));
+  EXPECT_EQ(error_of([&] { read_rays(p); }),
+            p + ": the header declares 9223372036854775808 rays (295147905179352825856 bytes) but 64 bytes follow it");
+  write_bytes(p, header("RPHT", 1, UINT64_MAX));
+  EXPECT_EQ(error_of([&] { read_hits(p); }),
+            p + ": the header declares 18446744073709551615 hits (516508834063867445220 bytes) but 0 bytes follow it");
+  // Allocating 128 GB (or failing to) would not be this quick; under ASan it would abort.
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+}
+
+TEST(RayFileErrors, TruncatedDataAndTrailingBytes) {
+  TempDir tmp;
+  const std::string p = tmp / "data.bin";
+  write_bytes(p, header("RPRY", 1, 3) + std::string(80, '\0'));
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": the header declares 3 rays (96 bytes) but 80 bytes follow it");
+  write_bytes(p, header("RPRY", 1, 1) + std::string(33, '\0'));
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": the header declares 1 ray (32 bytes) but 33 bytes follow it");
+  write_bytes(p, header("RPRY", 1, 0) + "x");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": the header declares 0 rays (0 bytes) but 1 bytes follow it");
+  write_bytes(p, header("RPHT", 1, 2) + std::string(57, '\0'));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (56 bytes) but 57 bytes follow it");
+  write_bytes(p, header("RPHT", 1, 2) + std::string(55, '\0'));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (56 bytes) but 55 bytes follow it");
+}
+
+TEST(RayFileErrors, CsvHeaderMustMatchExactly) {
+  TempDir tmp;
+  const std::string p = tmp / "h.csv";
+  const std::string want_rays = p + ": line 1: expected the header 'ox,oy,oz,dx,dy,dz,tnear,tfar'";
+  const std::string want_hits = p + ": line 1: expected the header 't,prim_id,u,v,ng_x,ng_y,ng_z'";
+  for (const char* text : {"", "\n", "ox,oy,oz,dx,dy,dz,tnear\n", "ox, oy, oz, dx, dy, dz, tnear, tfar\n",
+                           "1,2,3,4,5,6,0,1\n", "OX,OY,OZ,DX,DY,DZ,TNEAR,TFAR\n"}) {
+    write_bytes(p, text);
+    EXPECT_EQ(error_of([&] { read_rays(p); }), want_rays) << text;
+    EXPECT_EQ(error_of([&] { read_hits(p); }), want_hits) << text;
+  }
+  write_rays(p, std::vector<Ray>(1));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), want_hits);
+}
+
+TEST(RayFileErrors, CsvWrongValueCounts) {
+  TempDir tmp;
+  const std::string p = tmp / "n.csv";
+  const std::string head = "ox,oy,oz,dx,dy,dz,tnear,tfar\n", good = "1,2,3,4,5,6,0,1\n";
+  write_bytes(p, head + good + good + good + "1,2,3,4,5,6,0\n" + good);
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 5: 7 values, expected 8");
+  write_bytes(p, head + "1,2,3,4,5,6,0,1,\n");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 2: 9 values, expected 8");
+  write_bytes(p, head + good + "42\r\n");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 3: 1 value, expected 8");
+  write_bytes(p, "t,prim_id,u,v,ng_x,ng_y,ng_z\ninf,-1,0,0,0,0,0,0\n");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 2: 8 values, expected 7");
+  // A blank line is only fine at the end.
+  write_bytes(p, head + good + "\n" + good);
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 3: blank line before the end of the data");
+}
+
+TEST(RayFileErrors, CsvNonNumbers) {
+  TempDir tmp;
+  const std::string p = tmp / "nn.csv";
+  const std::string head = "ox,oy,oz,dx,dy,dz,tnear,tfar\n", good = "1,2,3,4,5,6,0,1\n";
+  write_bytes(p, head + good + "1,2,abc,4,5,6,0,1\n");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 3: 'abc' is not a number");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"1,,3,4,5,6,0,1", "''"},      {"1,2,3,4,5,6,0, 1", "' 1'"}, {"+1,2,3,4,5,6,0,1", "'+1'"},
+      {"1,2,3,4,5,6,0,1e", "'1e'"},  {"1,2,3,0x10,5,6,0,1", "'0x10'"},
+      {"1,2,3,4,5,6,0,1\t", "'1?'"}, {"1,2,3,4,5,6,0,\"1\"", "'\"1\"'"},
+      {"1,2,3,4,5,6,0," + std::string(40, 'z'), "'" + std::string(32, 'z') + "...'"}};
+  for (const auto& [line, shown] : cases) {
+    write_bytes(p, head + line + "\n");
+    EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 2: " + shown + " is not a number") << line;
+  }
+  write_bytes(p, head + "1,2,3,4,5,6,0,1e50\n");
+  EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 2: '1e50' is out of the float32 range");
+  write_bytes(p, "t,prim_id,u,v,ng_x,ng_y,ng_z\n1,0,0,0,0,0,1\n1,0,q,0,0,0,1\n");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 3: 'q' is not a number");
+}
+
+TEST(RayFileErrors, CsvPrimitiveIdMustBeAnIntegerFromMinusOneToTwoToTheThirtyTwoMinusTwo) {
+  TempDir tmp;
+  const std::string p = tmp / "ids.csv";
+  const std::string head = "t,prim_id,u,v,ng_x,ng_y,ng_z\n", good = "1,3,0,0,0,0,1\n";
+  write_bytes(p, head + good + good + "1,x,0,0,0,0,1\n");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 4: 'x' is not a primitive id");
+  for (const char* id : {"4294967295", "-2", "1.5", "", "1e3", "+1", "99999999999999999999", "inf"}) {
+    write_bytes(p, head + "1," + id + ",0,0,0,0,1\n");
+    EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 2: '" + id + "' is not a primitive id") << id;
+  }
+  write_bytes(p, head + "1,4294967294,0,0,0,0,1\ninf,-1,0,0,0,0,0\n2,0,0,0,0,0,1\n");
+  const std::vector<HitRecord> hits = read_hits(p);
+  ASSERT_EQ(hits.size(), 3u);
+  EXPECT_EQ(hits[0].prim_id, 4294967294u);
+  EXPECT_EQ(hits[1].prim_id, kInvalidId);
+  EXPECT_EQ(hits[2].prim_id, 0u);
+}
+
+TEST(RayFileWrite, MissingDirectoryGivesTheWriteErrorAndLeavesNoFile) {
+  TempDir tmp;
+  for (const char* name : {"rays.bin", "rays.csv"}) {
+    const std::string p = tmp / (std::string("no-such-dir/") + name);
+    EXPECT_EQ(error_of([&] { write_rays(p, std::vector<Ray>(3)); }), p + ": cannot write: No such file or directory");
+    EXPECT_EQ(error_of([&] { write_hits(p, std::vector<HitRecord>(3)); }),
+              p + ": cannot write: No such file or directory");
+  }
+  EXPECT_TRUE(tmp.entries().empty());
+  // A parent that is a file, not a directory.
+  write_bytes(tmp / "file", "x");
+  const std::string p = tmp / "file/rays.bin";
+  EXPECT_EQ(error_of([&] { write_rays(p, std::vector<Ray>(3)); }), p + ": cannot write: Not a directory");
+  EXPECT_EQ(tmp.entries(), std::set<std::string>{"file"});
+}
+
+TEST(RayFileWrite, UnwritableDirectoryGivesTheWriteErrorAndLeavesNoFile) {
+  if (::geteuid() == 0) GTEST_SKIP() << "root writes into read-only directories; nothing to check";
+  TempDir tmp;
+  fs::create_directory(tmp / "ro");
+  fs::permissions(tmp / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+  const std::string p = tmp / "ro/rays.bin";
+  EXPECT_EQ(error_of([&] { write_rays(p, std::vector<Ray>(3)); }), p + ": cannot write: Permission denied");
+  fs::permissions(tmp / "ro", fs::perms::owner_all);
+  EXPECT_TRUE(fs::is_empty(tmp / "ro"));
+}
+
+TEST(RayFileWrite, FailedRenameRemovesTheTemporaryAndKeepsTheTarget) {
+  TempDir tmp;
+  // The target is a directory: the temporary is written, the rename fails.
+  fs::create_directory(tmp / "taken.bin");
+  fs::create_directory(tmp / "taken.csv");
+  EXPECT_EQ(error_of([&] { write_rays(tmp / "taken.bin", std::vector<Ray>(3)); }),
+            tmp / "taken.bin" + ": cannot write: Is a directory");
+  EXPECT_EQ(error_of([&] { write_hits(tmp / "taken.csv", std::vector<HitRecord>(3)); }),
+            tmp / "taken.csv" + ": cannot write: Is a directory");
+  EXPECT_EQ(tmp.entries(), (std::set<std::string>{"taken.bin", "taken.csv"}));
+  EXPECT_TRUE(fs::is_directory(tmp / "taken.bin"));
+}
+
+TEST(RayFileWrite, RewriteReplacesTheWholeFile) {
+  TempDir tmp;
+  const std::string p = tmp / "r.csv";
+  write_rays(p, random_rays(100));
+  write_rays(p, std::vector<Ray>{{{1, 2, 3}, 0, {4, 5, 6}, 7}});
+  EXPECT_EQ(read_bytes(p), "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,7\n");
+  const std::string b = tmp / "r.bin";
+  write_rays(b, random_rays(100));
+  write_rays(b, std::vector<Ray>(1));
+  EXPECT_EQ(fs::file_size(b), 48u);
+  EXPECT_EQ(tmp.entries(), (std::set<std::string>{"r.csv", "r.bin"}));
+}
+
+}  // namespace
+}  // namespace rp

@@ -1,0 +1,559 @@
+// The double-precision reference (engine/reference.h): closed-form answers, watertightness,
+// exact agreement with a brute-force double loop, invalid rays, the tie rule, determinism.
+
+#include "engine/reference.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "engine/backend.h"
+#include "engine/error.h"
+#include "engine/geometry/plane.h"
+#include "engine/geometry/polygon.h"
+#include "engine/geometry/quadric.h"
+#include "engine/geometry/sphere.h"
+#include "engine/geometry/triangle.h"
+#include "engine/scene.h"
+#include "tests/backends/oracle.h"
+
+namespace rp {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Brute force with the reference's documented rule: every primitive tested against the
+/// whole [tnear, tfar] by the double routine; smallest t, ties to the larger prim_id.
+ReferenceHit brute_force(const Scene& s, const Ray& ray) {
+  ReferenceHit best;
+  if (!valid_ray(ray)) return best;
+  const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
+  const auto take = [&](const Intersection<double>& h, uint32_t id) {
+    if (h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id))) best = {h.t, id, h.u, h.v};
+  };
+  for (size_t m = 0; m < s.meshes().size(); ++m) {
+    const TriangleMesh& mesh = s.meshes()[m];
+    for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+      take(intersect_triangle_watertight(r, Vec3d(mesh.vertex(t, 0)), Vec3d(mesh.vertex(t, 1)), Vec3d(mesh.vertex(t, 2))),
+           s.mesh_base(m) + t);
+  }
+  for (uint32_t i = 0; i < s.spheres().size(); ++i)
+    take(intersect_sphere_algebraic(r, Vec3d(s.spheres()[i].center), double(s.spheres()[i].radius)), s.sphere_base() + i);
+  for (uint32_t i = 0; i < s.quadrics().size(); ++i)
+    take(intersect_quadric(r, test::to_d(s.quadrics()[i].quadric)), s.quadric_base() + i);
+  for (uint32_t i = 0; i < s.polygons().size(); ++i) {
+    const PolygonShape& p = s.polygons()[i];
+    std::vector<Vec3d> verts;
+    for (uint32_t k = 0; k < p.count; ++k) verts.push_back(Vec3d(s.polygon_vertices()[p.first + k]));
+    take(intersect_polygon<double>(r, verts, polygon_plane<double>(verts), p.convex), s.polygon_base() + i);
+  }
+  for (uint32_t i = 0; i < s.planes().size(); ++i)
+    take(intersect_plane(r, Vec3d(s.planes()[i].normal), double(s.planes()[i].d)), s.plane_base() + i);
+  return best;
+}
+
+float uniform(std::mt19937& rng, float lo, float hi) { return std::uniform_real_distribution<float>(lo, hi)(rng); }
+Vec3f uniform_vec(std::mt19937& rng, float lo, float hi) {
+  return {uniform(rng, lo, hi), uniform(rng, lo, hi), uniform(rng, lo, hi)};
+}
+/// A multiple of 0.25 in [-3, 3]: lands exactly on grid vertices, faces and box bounds.
+float grid(std::mt19937& rng) { return 0.25f * float(int(rng() % 25) - 12); }
+Vec3f grid_vec(std::mt19937& rng) { return {grid(rng), grid(rng), grid(rng)}; }
+float signed_zero(std::mt19937& rng) { return rng() % 2 ? 0.0f : -0.0f; }
+
+TriangleMesh mesh_of(std::vector<Vec3f> positions, std::vector<uint32_t> indices, const char* name) {
+  TriangleMesh m;
+  m.name = name;
+  m.positions = std::move(positions);
+  m.indices = std::move(indices);
+  return m;
+}
+
+/// Closed UV sphere (one vertex per pole), vertex coordinates rounded to multiples of
+/// 2^-10 so that every edge midpoint is exactly representable.
+TriangleMesh quantized_uv_sphere(int slices, int stacks, Vec3f centre, float radius) {
+  const auto q = [](double x) { return float(std::round(x * 1024.0) / 1024.0); };
+  std::vector<Vec3f> p{{centre.x, centre.y + q(radius), centre.z}};
+  for (int j = 1; j < stacks; ++j)
+    for (int i = 0; i < slices; ++i) {
+      const double th = kPi * j / stacks, ph = 2 * kPi * i / slices;
+      p.push_back(centre + Vec3f{q(radius * std::sin(th) * std::cos(ph)), q(radius * std::cos(th)),
+                                 q(radius * std::sin(th) * std::sin(ph))});
+    }
+  p.push_back({centre.x, centre.y - q(radius), centre.z});
+  const uint32_t south = uint32_t(p.size() - 1);
+  const auto ring = [&](int j, int i) { return uint32_t(1 + (j - 1) * slices + (i % slices)); };
+  std::vector<uint32_t> idx;
+  for (int i = 0; i < slices; ++i) idx.insert(idx.end(), {0u, ring(1, i + 1), ring(1, i)});
+  for (int j = 1; j + 1 < stacks; ++j)
+    for (int i = 0; i < slices; ++i) {
+      idx.insert(idx.end(), {ring(j, i), ring(j, i + 1), ring(j + 1, i)});
+      idx.insert(idx.end(), {ring(j, i + 1), ring(j + 1, i + 1), ring(j + 1, i)});
+    }
+  for (int i = 0; i < slices; ++i) idx.insert(idx.end(), {south, ring(stacks - 1, i), ring(stacks - 1, i + 1)});
+  return mesh_of(std::move(p), std::move(idx), "uv_sphere");
+}
+
+/// A closed axis-aligned box of 12 triangles.
+TriangleMesh box_mesh(Vec3f lo, Vec3f hi) {
+  std::vector<Vec3f> p;
+  for (int k = 0; k < 8; ++k) p.push_back({k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z});
+  std::vector<uint32_t> idx{0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                            2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  return mesh_of(std::move(p), std::move(idx), "box");
+}
+
+/// Every kind of primitive, translated by `offset`: a triangle soup (random and on the 0.25
+/// grid, so faces are axis-aligned and vertices shared), exact duplicates of some triangles
+/// in a second mesh (ties), a closed box and sphere mesh, spheres, every quadric, a convex
+/// and a star polygon, planes.
+Scene random_scene(uint32_t seed, int soup, Vec3f offset) {
+  std::mt19937 rng(seed);
+  Scene s;
+  std::vector<Vec3f> p;
+  std::vector<uint32_t> idx;
+  for (int t = 0; t < soup; ++t) {
+    const bool on_grid = rng() % 3 == 0;
+    const Vec3f a = on_grid ? grid_vec(rng) : uniform_vec(rng, -2.5f, 2.5f);
+    for (int c = 0; c < 3; ++c) {
+      Vec3f v = on_grid ? grid_vec(rng) : a + uniform_vec(rng, -0.6f, 0.6f);
+      if (on_grid && rng() % 2) v[c % 3] = a[c % 3];  // axis-aligned faces
+      p.push_back(offset + (c == 0 ? a : v));
+      idx.push_back(uint32_t(p.size() - 1));
+    }
+  }
+  s.add_mesh(mesh_of(p, idx, "soup"));
+  std::vector<uint32_t> dup;
+  for (uint32_t t = 0; t < uint32_t(soup); t += 7) dup.insert(dup.end(), {idx[3 * t], idx[3 * t + 1], idx[3 * t + 2]});
+  s.add_mesh(mesh_of(p, dup, "duplicates"));
+  s.add_mesh(box_mesh(offset + Vec3f{-0.5f, -0.5f, -0.5f}, offset + Vec3f{0.75f, 0.5f, 1.0f}));
+  s.add_mesh(quantized_uv_sphere(12, 6, offset + Vec3f{1.5f, 1.5f, -1.0f}, 0.75f));
+
+  for (int i = 0; i < 3; ++i) s.add_sphere({offset + uniform_vec(rng, -2, 2), uniform(rng, 0.1f, 0.8f), 0});
+  s.add_sphere({offset + Vec3f{0.25f, -1.0f, 0.5f}, 0.5f, 0});  // bounds on the grid
+  using Qf = Quadric<float>;
+  const auto c = [&] { return offset + uniform_vec(rng, -2, 2); };
+  const int axis = int(rng() % 3);
+  s.add_quadric({Qf::ellipsoid(c(), {0.5f, 0.3f, 0.4f}), 0});
+  s.add_quadric({Qf::cylinder(c(), 0.3f, 0.2f, 0.5f, axis), 0});
+  s.add_quadric({Qf::cone(c(), 0.4f, 0.4f, 0.6f, axis), 0});
+  s.add_quadric({Qf::hyperboloid_one_sheet(c(), 0.2f, 0.2f, 0.3f, 0.4f, axis), 0});
+  s.add_quadric({Qf::hyperboloid_two_sheets(c(), 0.2f, 0.2f, 0.2f, 0.5f, axis), 0});
+  s.add_quadric({Qf::paraboloid(c(), 0.3f, 0.3f, 0.5f, axis), 0});
+  const std::vector<Vec3f> quad{offset + Vec3f{-1.5f, -1.5f, -1.5f}, offset + Vec3f{-0.5f, -1.5f, -1.5f},
+                                offset + Vec3f{-0.5f, -0.5f, -1.5f}, offset + Vec3f{-1.5f, -0.5f, -1.5f}};
+  s.add_polygon(quad, 0);
+  std::vector<Vec3f> star;
+  for (int k = 0; k < 10; ++k) {
+    const float a = float(kPi) * (0.5f + float(k) / 5.0f), r = (k % 2 == 0) ? 0.7f : 0.3f;
+    const float x = r * std::cos(a), z = r * std::sin(a);
+    star.push_back(offset + Vec3f{1.0f + x, 0.3f * x - 0.5f, 1.2f + z});
+  }
+  s.add_polygon(star, 0);
+  const Vec3f n = normalize(Vec3f{0.1f, 1.0f, 0.05f});
+  s.add_plane({n, 2.8f - dot(n, offset), 0});
+  s.add_plane({{0.0f, 0.0f, 1.0f}, -(offset.z + 3.0f), 0});  // z = offset.z + 3, on the grid
+  return s;
+}
+
+/// Random rays (through the scene), axis-parallel rays from grid points with +-0 in the other
+/// components, rays aimed at grid points, a quarter with finite tfar, some with tnear > 0.
+std::vector<Ray> random_rays(uint32_t seed, int count, Vec3f offset) {
+  std::mt19937 rng(seed);
+  std::vector<Ray> rays;
+  for (int n = 0; n < count; ++n) {
+    Ray r;
+    switch (n % 3) {
+      case 0: {
+        r.org = offset + uniform_vec(rng, -4, 4);
+        r.dir = (offset + uniform_vec(rng, -2.5f, 2.5f) - r.org) * uniform(rng, 0.1f, 10.0f);
+        break;
+      }
+      case 1: {
+        const int axis = int(rng() % 3);
+        r.org = offset + grid_vec(rng);
+        r.org[axis] = offset[axis] + (rng() % 2 ? 4.0f : -4.0f);
+        for (int k = 0; k < 3; ++k) r.dir[k] = signed_zero(rng);
+        r.dir[axis] = (r.org[axis] > offset[axis] ? -1.0f : 1.0f) * (rng() % 2 ? 1.0f : 0.5f);
+        if (rng() % 4 == 0) r.org[axis] = offset[axis] + grid(rng);  // starts inside, maybe on a face
+        break;
+      }
+      default: {
+        r.org = offset + grid_vec(rng) + Vec3f{0.0f, 0.0f, 5.0f};
+        r.dir = offset + grid_vec(rng) - r.org;
+        break;
+      }
+    }
+    if (rng() % 4 == 0) r.tfar = uniform(rng, 0.5f, 6.0f);
+    if (rng() % 5 == 0) r.tnear = uniform(rng, 0.01f, 0.5f);
+    if (!is_finite(r.dir) || (r.dir.x == 0.0f && r.dir.y == 0.0f && r.dir.z == 0.0f)) r.dir = {0.0f, 0.0f, 1.0f};
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+/// hits equal the brute force bit for bit, and the independent oracle (tests/backends/oracle.h,
+/// which shortens tfar as it goes and keeps the first of equal hits) on prim_id, or on t when
+/// the two pick different primitives of a tie.
+void expect_matches_brute_force(const Scene& scene, const std::vector<Ray>& rays, const char* what,
+                                double min_hit_fraction = 0.2) {
+  const Reference ref(scene);
+  std::vector<ReferenceHit> hits(rays.size());
+  ref.intersect(rays, hits);
+  int mismatches = 0, hits_seen = 0, oracle_ties = 0;
+  for (size_t i = 0; i < rays.size() && mismatches < 10; ++i) {
+    const ReferenceHit want = brute_force(scene, rays[i]);
+    const ReferenceHit& got = hits[i];
+    hits_seen += got.hit();
+    const bool same = got.prim_id == want.prim_id && got.t == want.t && got.u == want.u && got.v == want.v;
+    if (!same) ++mismatches;
+    EXPECT_TRUE(same) << what << " ray " << i << ": reference prim " << got.prim_id << " t " << got.t
+                      << ", brute force prim " << want.prim_id << " t " << want.t;
+    const test::OracleHit o = test::oracle_intersect(scene, rays[i]);
+    if (o.prim_id != got.prim_id) {
+      ++oracle_ties;
+      EXPECT_EQ(o.t, got.t) << what << " ray " << i << ": oracle prim " << o.prim_id << ", reference prim " << got.prim_id;
+    }
+  }
+  EXPECT_EQ(mismatches, 0) << what;
+  EXPECT_GT(double(hits_seen), min_hit_fraction * double(rays.size())) << what << ": too few rays hit anything";
+  ::testing::Test::RecordProperty(std::string(what) + "_oracle_tie_picks", oracle_ties);
+}
+
+Ray ray(Vec3f org, Vec3f dir, float tnear = 0.0f, float tfar = kInf) { return {org, tnear, dir, tfar}; }
+
+// ---- Closed-form answers --------------------------------------------------------------
+
+TEST(ReferenceClosedForm, SphereAlongEachAxisHitsAtDistanceMinusRadius) {
+  Scene s;
+  const Vec3f c{1.5f, -2.25f, 3.0f};
+  s.add_sphere({c, 0.75f, 0});
+  const Reference ref(s);
+  std::mt19937 rng(1);
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f})
+      for (float scale : {1.0f, 2.0f, 0.5f}) {
+        Vec3f org = c, dir;
+        org[axis] += sign * 10.0f;
+        for (int k = 0; k < 3; ++k) dir[k] = signed_zero(rng);
+        dir[axis] = -sign * scale;
+        const ReferenceHit h = ref.intersect(ray(org, dir));
+        ASSERT_TRUE(h.hit());
+        EXPECT_EQ(h.prim_id, s.sphere_base());
+        EXPECT_EQ(h.t, 9.25 / double(scale)) << "axis " << axis << " sign " << sign;
+        // From inside, the far side: t = r / scale.
+        const ReferenceHit in = ref.intersect(ray(c, dir));
+        EXPECT_EQ(in.t, 0.75 / double(scale));
+        // The interval ends are closed.
+        EXPECT_TRUE(ref.intersect(ray(org, dir, 0.0f, float(9.25 / double(scale)))).hit());
+        EXPECT_TRUE(ref.intersect(ray(org, dir, float(9.25 / double(scale)))).hit());
+        EXPECT_EQ(ref.intersect(ray(org, dir, std::nextafter(float(9.25 / double(scale)), kInf))).t,
+                  10.75 / double(scale));
+        EXPECT_FALSE(ref.intersect(ray(org, dir, 0.0f, std::nextafter(float(9.25 / double(scale)), 0.0f))).hit());
+      }
+}
+
+TEST(ReferenceClosedForm, SeedEllipsoidHitsAtTwoMinusSqrtFourFifths) {
+  // Seeds 002, section 1 question 4: (x-2)^2/4 + (y-2)^2 + z^2/4 = 1, r(t) = t (1, 1, 0).
+  Scene s;
+  s.add_quadric({Quadric<float>::ellipsoid({2.0f, 2.0f, 0.0f}, {2.0f, 1.0f, 2.0f}), 0});
+  const Reference ref(s);
+  const double root = std::sqrt(4.0 / 5.0);
+  const ReferenceHit h = ref.intersect(ray({0, 0, 0}, {1, 1, 0}));
+  ASSERT_TRUE(h.hit());
+  EXPECT_EQ(h.prim_id, s.quadric_base());
+  EXPECT_NEAR(h.t, 2.0 - root, 1e-14);
+  const ReferenceHit h2 = ref.intersect(ray({0, 0, 0}, {1, 1, 0}, 2.0f));
+  ASSERT_TRUE(h2.hit());
+  EXPECT_NEAR(h2.t, 2.0 + root, 1e-14);
+}
+
+TEST(ReferenceClosedForm, PlaneHitsAtClosedFormTAndParallelOrBehindMisses) {
+  Scene s;
+  s.add_plane({{0.0f, 1.0f, 0.0f}, 2.0f, 0});  // y = -2
+  const Reference ref(s);
+  EXPECT_EQ(ref.intersect(ray({0.5f, 3.0f, -1.0f}, {0.0f, -1.0f, 0.0f})).t, 5.0);
+  const ReferenceHit h = ref.intersect(ray({0.5f, 3.0f, -1.0f}, {0.3f, -2.0f, 0.1f}));
+  EXPECT_EQ(h.t, 2.5);
+  EXPECT_EQ(h.prim_id, s.plane_base());
+  EXPECT_FALSE(ref.intersect(ray({0.5f, 3.0f, -1.0f}, {0.0f, 1.0f, 0.0f})).hit());
+  EXPECT_FALSE(ref.intersect(ray({0.5f, 3.0f, -1.0f}, {1.0f, 0.0f, -0.0f})).hit());
+  EXPECT_EQ(ref.node_count(), 0u);
+}
+
+TEST(ReferenceClosedForm, CylinderFromOutsideAndInside) {
+  Scene s;
+  s.add_quadric({Quadric<float>::cylinder({0, 0, 0}, 2, 2, 1), 0});  // radius 2 about y, |y| <= 1
+  const Reference ref(s);
+  EXPECT_NEAR(ref.intersect(ray({10.0f, 0.5f, 0.0f}, {-1.0f, 0.0f, -0.0f})).t, 8.0, 1e-13);
+  EXPECT_NEAR(ref.intersect(ray({0.0f, 0.5f, -10.0f}, {-0.0f, 0.0f, 2.0f})).t, 4.0, 1e-13);
+  EXPECT_NEAR(ref.intersect(ray({0.0f, 0.5f, 0.0f}, {1.0f, 0.0f, 0.0f})).t, 2.0, 1e-13);
+  EXPECT_FALSE(ref.intersect(ray({10.0f, 1.5f, 0.0f}, {-1.0f, 0.0f, 0.0f})).hit());  // above the clip
+  EXPECT_FALSE(ref.intersect(ray({0.0f, -5.0f, 0.0f}, {0.0f, 1.0f, 0.0f})).hit());   // along the open axis
+}
+
+// ---- Watertightness and robust traversal ----------------------------------------------
+
+TEST(ReferenceWatertight, UnitSquareOfTwoTrianglesIsHitOnItsDiagonalAndBoundary) {
+  Scene s;
+  s.add_mesh(mesh_of({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {0, 1, 2, 0, 2, 3}, "square"));
+  const Reference ref(s);
+  std::mt19937 rng(7);
+  int checked = 0;
+  for (int k = 0; k <= 64; ++k) {
+    const float x = float(k) / 64.0f;
+    // Straight down through (x, x, 0), with every sign of zero: both triangles at t = 1,
+    // the larger prim_id wins the tie; through the boundary x = 0, y = x etc. from origins
+    // on the box's faces (0 * inf would be NaN in a naive slab test).
+    for (const Vec2f& p : {Vec2f{x, x}, Vec2f{0.0f, x}, Vec2f{1.0f, x}, Vec2f{x, 0.0f}, Vec2f{x, 1.0f}})
+      for (int zeros = 0; zeros < 4; ++zeros) {
+        const Ray r = ray({p.x, p.y, 1.0f}, {zeros & 1 ? -0.0f : 0.0f, zeros & 2 ? -0.0f : 0.0f, -1.0f});
+        const ReferenceHit h = ref.intersect(r);
+        ASSERT_TRUE(h.hit()) << "(" << p.x << ", " << p.y << ")";
+        EXPECT_EQ(h.t, 1.0);
+        EXPECT_EQ(h.prim_id, brute_force(s, r).prim_id);
+        ++checked;
+      }
+    // Oblique rays through exact diagonal points, from both sides.
+    for (int n = 0; n < 8; ++n) {
+      const Vec3f off{float(int(rng() % 33) - 16) / 16.0f, float(int(rng() % 33) - 16) / 16.0f,
+                      n % 2 ? 1.0f : -1.0f};
+      const Ray r = ray(Vec3f{x, x, 0.0f} + off, -off);
+      const ReferenceHit h = ref.intersect(r);
+      ASSERT_TRUE(h.hit()) << x;
+      EXPECT_EQ(h.t, 1.0);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 65 * (5 * 4 + 8));
+}
+
+TEST(ReferenceWatertight, ClosedMeshNeverLeaksThroughSharedEdgesOrVertices) {
+  // Quantized vertices: every edge midpoint and every vertex is an exact float, and each ray
+  // org = target + q, dir = -q (q on a 2^-6 grid) passes exactly through its target at t = 1
+  // and then goes steeply inwards, so it must cross the closed surface.
+  Scene s;
+  s.add_mesh(quantized_uv_sphere(32, 16, {0.25f, -0.5f, 0.125f}, 1.0f));
+  const TriangleMesh& m = s.meshes()[0];
+  const Reference ref(s);
+  std::vector<Vec3f> targets(m.positions);
+  for (uint32_t t = 0; t < m.triangle_count(); ++t)
+    for (int c = 0; c < 3; ++c) targets.push_back((m.vertex(t, c) + m.vertex(t, (c + 1) % 3)) * 0.5f);
+  const Vec3f centre{0.25f, -0.5f, 0.125f};
+  std::mt19937 rng(99);
+  std::vector<Ray> rays;
+  for (const Vec3f& target : targets) {
+    const Vec3f radial = normalize(target - centre);
+    rays.push_back(ray(centre + (target - centre) * 2.0f, centre - target));  // through the centre too
+    for (int n = 0; n < 4; ++n) {
+      Vec3f q;
+      do {
+        q = radial * 2.0f + uniform_vec(rng, -1.2f, 1.2f);
+        for (int k = 0; k < 3; ++k) q[k] = std::round(q[k] * 64.0f) / 64.0f;
+      } while (dot(normalize(q), radial) < 0.6f);
+      rays.push_back(ray(target + q, -q));
+    }
+  }
+  std::vector<ReferenceHit> hits(rays.size());
+  ref.intersect(rays, hits);
+  int leaks = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    leaks += !hits[i].hit();
+    if (hits[i].hit()) {
+      EXPECT_LE(hits[i].t, 1.0 + 1e-12) << "ray " << i << " hit beyond its target";
+    }
+    if (i % 16 == 0) {
+      EXPECT_EQ(hits[i].prim_id, brute_force(s, rays[i]).prim_id);
+    }
+  }
+  EXPECT_EQ(leaks, 0) << "of " << rays.size() << " rays through edge midpoints and vertices";
+}
+
+TEST(ReferenceTraversal, AxisParallelRaysWithSignedZerosAlongBoxFacesEdgesAndVertices) {
+  // A closed box whose faces lie on BVH box faces; rays with origins on the grid (on the
+  // faces, edges and corners), +-0 in the other components, grazing along faces and edges.
+  Scene s;
+  s.add_mesh(box_mesh({-0.5f, -0.25f, 0.0f}, {0.5f, 0.75f, 1.0f}));
+  s.add_mesh(box_mesh({0.5f, -0.25f, 0.0f}, {1.0f, 0.25f, 0.5f}));  // shares a face plane
+  std::vector<Ray> rays;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f})
+      for (int a = -6; a <= 6; ++a)
+        for (int b = -6; b <= 6; ++b)
+          for (int zeros = 0; zeros < 4; ++zeros)
+            for (float start : {-3.0f, 0.0f, 0.5f}) {
+              Ray r;
+              r.org[axis] = start == -3.0f ? -3.0f * sign : start;
+              r.org[(axis + 1) % 3] = 0.25f * float(a);
+              r.org[(axis + 2) % 3] = 0.25f * float(b);
+              r.dir[axis] = sign;
+              r.dir[(axis + 1) % 3] = zeros & 1 ? -0.0f : 0.0f;
+              r.dir[(axis + 2) % 3] = zeros & 2 ? -0.0f : 0.0f;
+              rays.push_back(r);
+            }
+  expect_matches_brute_force(s, rays, "axis_parallel_boxes", 0.1);
+}
+
+// ---- Agreement with brute force -------------------------------------------------------
+
+TEST(ReferenceAgreement, EqualsBruteForceBitForBitOnRandomScenes) {
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    const Scene s = random_scene(seed, 300, {0, 0, 0});
+    expect_matches_brute_force(s, random_rays(seed + 100, 3000, {0, 0, 0}), "random_scene");
+  }
+}
+
+TEST(ReferenceAgreement, EqualsBruteForceFarFromTheOrigin) {
+  const Vec3f offset{1024.0f, -512.0f, 2048.0f};
+  const Scene s = random_scene(11, 300, offset);
+  expect_matches_brute_force(s, random_rays(111, 3000, offset), "offset_scene");
+}
+
+TEST(ReferenceAgreement, EqualsBruteForceOnADeepBvhBuiltInParallel) {
+  // More primitives than the parallel build threshold, so subtrees are built as TBB tasks.
+  Scene s = random_scene(21, 12000, {0, 0, 0});
+  s.add_mesh(quantized_uv_sphere(64, 32, {-1.0f, 0.5f, 0.25f}, 1.25f));
+  EXPECT_GT(s.prim_count(), 16000u);
+  expect_matches_brute_force(s, random_rays(121, 600, {0, 0, 0}), "deep_bvh");
+}
+
+// ---- Rules: invalid rays, empty scenes, ties, determinism -----------------------------
+
+TEST(ReferenceRules, InvalidRaysMiss) {
+  const Scene s = random_scene(5, 50, {0, 0, 0});
+  const Reference ref(s);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Ray good = ray({0.0f, 0.0f, 5.0f}, {0.0f, 0.0f, -1.0f});
+  ASSERT_TRUE(ref.intersect(good).hit());
+  std::vector<Ray> bad;
+  for (int k = 0; k < 3; ++k) {
+    for (float x : {nan, kInf, -kInf}) {
+      Ray r = good;
+      r.org[k] = x;
+      bad.push_back(r);
+      r = good;
+      r.dir[k] = x;
+      bad.push_back(r);
+    }
+  }
+  Ray r = good;
+  r.dir = {0.0f, -0.0f, 0.0f};
+  bad.push_back(r);
+  r = good;
+  r.tnear = -1.0f;
+  bad.push_back(r);
+  r = good;
+  r.tnear = 3.0f;
+  r.tfar = 2.0f;
+  bad.push_back(r);
+  r = good;
+  r.tfar = nan;
+  bad.push_back(r);
+  r = good;
+  r.tnear = nan;
+  bad.push_back(r);
+  std::vector<ReferenceHit> hits(bad.size(), ReferenceHit{1.0, 7, 0.5, 0.5});
+  ref.intersect(bad, hits);
+  for (size_t i = 0; i < bad.size(); ++i) {
+    const ReferenceHit h = ref.intersect(bad[i]);
+    EXPECT_FALSE(h.hit()) << "ray " << i;
+    EXPECT_EQ(h.t, std::numeric_limits<double>::infinity());
+    EXPECT_EQ(h.u, 0.0);
+    EXPECT_EQ(h.v, 0.0);
+    EXPECT_FALSE(hits[i].hit()) << "batch ray " << i;
+  }
+}
+
+TEST(ReferenceRules, EmptySceneMissesAndPlanesAloneNeedNoBvh) {
+  const Scene empty;
+  const Reference ref(empty);
+  EXPECT_EQ(ref.node_count(), 0u);
+  EXPECT_EQ(ref.bytes(), 0u);
+  EXPECT_GE(ref.build_seconds(), 0.0);
+  const std::vector<Ray> rays = random_rays(3, 300, {0, 0, 0});
+  std::vector<ReferenceHit> hits(rays.size());
+  ref.intersect(rays, hits);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_FALSE(ref.intersect(rays[i]).hit());
+    EXPECT_FALSE(hits[i].hit());
+  }
+  std::vector<ReferenceHit> none;
+  ref.intersect(std::span<const Ray>(), none);
+  EXPECT_THROW(ref.intersect(rays, none), Error);
+}
+
+TEST(ReferenceRules, AtEqualTTheLargerPrimIdWins) {
+  Scene s;
+  const std::vector<Vec3f> tri{{-1, -1, 0}, {2, -1, 0}, {-1, 2, 0}};
+  s.add_mesh(mesh_of(tri, {0, 1, 2}, "a"));
+  s.add_mesh(mesh_of(tri, {0, 1, 2}, "b"));  // the same triangle again: prim 1
+  s.add_polygon(std::vector<Vec3f>{{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}}, 0);
+  const Reference only_tris = [&] {
+    Scene t;
+    t.add_mesh(mesh_of(tri, {0, 1, 2}, "a"));
+    t.add_mesh(mesh_of(tri, {0, 1, 2}, "b"));
+    return Reference(t);
+  }();
+  const Ray down = ray({0.25f, 0.125f, 3.0f}, {0.0f, 0.0f, -1.0f});
+  EXPECT_EQ(only_tris.intersect(down).prim_id, 1u);
+  EXPECT_EQ(only_tris.intersect(down).t, 3.0);
+  const Reference ref(s);
+  EXPECT_EQ(ref.intersect(down).prim_id, s.polygon_base());  // triangle, triangle, polygon all at t = 3
+  Scene with_plane = s;
+  with_plane.add_plane({{0, 0, 1}, 0.0f, 0});  // z = 0: a plane takes a tie, as in Scene::intersect_planes
+  const Reference refp(with_plane);
+  EXPECT_EQ(refp.intersect(down).prim_id, with_plane.plane_base());
+  EXPECT_EQ(refp.intersect(down).t, 3.0);
+  EXPECT_EQ(refp.intersect(down).prim_id, brute_force(with_plane, down).prim_id);
+}
+
+TEST(ReferenceRules, BatchEqualsSingleRaysAndIsTheSameForAnyThreadCount) {
+  Scene s = random_scene(31, 9000, {0, 0, 0});  // over the parallel build threshold
+  const std::vector<Ray> rays = random_rays(131, 5000, {0, 0, 0});
+  std::vector<ReferenceHit> one(rays.size()), two(rays.size());
+  size_t bytes_one = 0, nodes_one = 0;
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    const Reference ref(s);
+    ref.intersect(rays, one);
+    bytes_one = ref.bytes();
+    nodes_one = ref.node_count();
+  }
+  const Reference ref(s);
+  ref.intersect(rays, two);
+  EXPECT_EQ(ref.bytes(), bytes_one);
+  EXPECT_EQ(ref.node_count(), nodes_one);
+  EXPECT_EQ(ref.node_count() % 2, 1u);  // binary tree: 2 * leaves - 1
+  EXPECT_GT(ref.bytes(), size_t(s.prim_count()) * 40);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const ReferenceHit single = ref.intersect(rays[i]);
+    ASSERT_EQ(one[i].prim_id, two[i].prim_id) << i;
+    ASSERT_EQ(one[i].t, two[i].t) << i;
+    ASSERT_EQ(single.prim_id, two[i].prim_id) << i;
+    ASSERT_EQ(single.t, two[i].t) << i;
+    ASSERT_EQ(single.u, two[i].u) << i;
+    ASSERT_EQ(single.v, two[i].v) << i;
+  }
+}
+
+TEST(ReferenceRules, OutlivesTheSceneItWasBuiltFrom) {
+  std::vector<Ray> rays = random_rays(41, 500, {0, 0, 0});
+  std::vector<ReferenceHit> want(rays.size());
+  std::unique_ptr<const Reference> ref;
+  {
+    const Scene s = random_scene(41, 100, {0, 0, 0});
+    for (size_t i = 0; i < rays.size(); ++i) want[i] = brute_force(s, rays[i]);
+    ref = std::make_unique<const Reference>(s);
+  }
+  for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(ref->intersect(rays[i]).prim_id, want[i].prim_id);
+}
+
+}  // namespace
+}  // namespace rp
