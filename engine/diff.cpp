@@ -177,14 +177,20 @@ Image mismatch_image(const DiffResult& d, const RaySet& set, std::span<const Hit
   img.rgb.assign(size_t(set.width) * size_t(set.height) * 3, 0.0f);
   static constexpr float kColour[kDiffClasses][3] = {
       {0.05f, 0.05f, 0.05f}, {1.0f, 0.9f, 0.0f}, {1.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 1.0f}, {1.0f, 0.5f, 0.0f}};
+  // Agreeing hits first, then every other class as a 3x3 mark so a single ray shows.
+  for (size_t i = 0; i < d.per_ray.size(); ++i)
+    if (d.per_ray[i] == DiffClass::agree && hits_a[i].hit())
+      for (int k = 0; k < 3; ++k) img.rgb[size_t(set.pixel[i]) * 3 + size_t(k)] = kColour[0][k];
   for (size_t i = 0; i < d.per_ray.size(); ++i) {
-    const DiffClass c = d.per_ray[i];
-    float* px = &img.rgb[size_t(set.pixel[i]) * 3];
-    if (c == DiffClass::agree && !hits_a[i].hit()) continue;  // both miss: black
-    // A pixel reached by several rays (diffuse) shows its worst class.
-    const float* col = kColour[size_t(c)];
-    if (c != DiffClass::agree || (px[0] == 0.0f && px[1] == 0.0f && px[2] == 0.0f))
-      for (int k = 0; k < 3; ++k) px[k] = col[k];
+    if (d.per_ray[i] == DiffClass::agree) continue;
+    const int x = int(set.pixel[i] % uint32_t(set.width)), y = int(set.pixel[i] / uint32_t(set.width));
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int px = x + dx, py = y + dy;
+        if (px < 0 || py < 0 || px >= set.width || py >= set.height) continue;
+        for (int k = 0; k < 3; ++k)
+          img.rgb[(size_t(py) * size_t(set.width) + size_t(px)) * 3 + size_t(k)] = kColour[size_t(d.per_ray[i])][k];
+      }
   }
   return img;
 }

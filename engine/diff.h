@@ -70,7 +70,8 @@ std::string to_json(const DiffResult& d, const std::string& scene, const std::st
                     const std::string& b, const DiffOptions& options);
 
 /// One pixel per ray of `set` (which must carry pixels), coloured by class: agree dark grey
-/// (black where both miss), tie yellow, hit/miss red, wrong primitive magenta, t error orange.
+/// (black where both miss), tie yellow, hit/miss red, wrong primitive magenta, t error orange;
+/// disagreements drawn 3x3 pixels wide so that one ray is visible.
 Image mismatch_image(const DiffResult& d, const RaySet& set, std::span<const Hit> hits_a);
 
 }  // namespace rp

@@ -11,12 +11,19 @@
 /// - quadrics: intersect_quadric<double> on the converted coefficients, center and clip;
 /// - polygons: intersect_polygon<double> with polygon_plane<double> of the converted vertices;
 /// - planes: intersect_plane<double>.
-/// The answer is the hit of smallest t; among hits at exactly the same t the LARGEST prim_id
-/// wins. Because every primitive is tested against the full interval (not one shortened by
-/// earlier hits), this rule does not depend on the order primitives are visited in: the
-/// result is a function of the scene and the ray alone, whatever the BVH or thread count.
-/// It is also what an ascending-id scan that replaces at `t <= best` gives (oracle.h,
-/// Scene::intersect_planes: a plane takes a tie).
+/// A hit of a bounded primitive counts only when it is plausible (Reference::plausible): its
+/// t lies in the ray's interval through the primitive's box grown by a tiny guard. This
+/// drops phantom hits, which are rounding artefacts: e.g. for a ray lying exactly in a
+/// triangle's plane the watertight test's determinant is rounding noise, and it may report
+/// a "hit" far outside the triangle (seen on rays between points of a 0.25 grid). Every
+/// genuine hit is plausible, so the answer differs from the brute-force loop of
+/// tests/backends/oracle.h only on rays where that loop returns a phantom.
+/// The answer is the plausible hit of smallest t; among hits at exactly the same t the
+/// LARGEST prim_id wins. Because every primitive is tested against the full interval (not
+/// one shortened by earlier hits), this rule does not depend on the order primitives are
+/// visited in: the result is a function of the scene and the ray alone, whatever the BVH or
+/// the thread count. It is also what an ascending-id scan that replaces at `t <= best` gives
+/// (oracle.h; Scene::intersect_planes, where a plane takes a tie).
 ///
 /// How. A binary BVH over the bounded primitives (median split on the longest axis of the
 /// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
@@ -30,6 +37,7 @@
 #include <span>
 #include <vector>
 
+#include "engine/bbox.h"
 #include "engine/geometry/polygon.h"
 #include "engine/geometry/quadric.h"
 #include "engine/math.h"
@@ -58,26 +66,33 @@ class Reference {
   /// kept beside it), in parallel over TBB; the structure is the same for any thread count.
   explicit Reference(const Scene& scene);
 
-  /// Closest hit of `ray` (converted exactly to double) within [tnear, tfar], both ends
-  /// closed; invalid rays (valid_ray() false) miss. See the file comment for the tie rule.
+  /// Closest plausible hit of `ray` (converted exactly to double) within [tnear, tfar], both
+  /// ends closed; invalid rays (valid_ray() false) miss. See the file comment for the rules.
   ///
-  /// Traversal is conservative: a box is culled only when the ray provably misses it, so the
-  /// BVH never changes the brute-force answer. Slab distances are computed in double against
-  /// the box grown by a per-ray guard s = 2^-32 (|org|_inf + M), M the scene's largest
-  /// |coordinate| (in the spirit of Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2), which
-  /// widens the exit distance by 2 gamma_3; the guard is an absolute widening that also
-  /// covers the rounding of each primitive's own t). Hence a ray through a box face, edge or
-  /// vertex, an origin on a face, a zero-thickness box, and a hit at exactly tnear, tfar or
-  /// the current closest t (a tie) are never culled. A +-0 direction component gets the
-  /// finite reciprocal +-2^1020 instead of +-inf, so no product is 0 * inf: slab distances
-  /// are never NaN and plain min/max suffice. Limit: a hit whose own t is wrong by more than
-  /// the guard (a ray within ~1e-6 radians of a triangle's plane, a sphere grazed from
-  /// ~10^6 radii away) may be culled; such answers are ill-conditioned anyway.
+  /// Traversal never changes the answer (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2),
+  /// made exact): slab distances are computed in double against every box grown by a
+  /// per-ray guard s = 2^-32 (|org|_inf + M), M the scene's largest |coordinate|, and a
+  /// primitive's hit is plausible exactly when its t lies in the interval computed the same
+  /// way for the primitive's own box. Node boxes contain their primitives' boxes and the
+  /// computed distances are monotone in the face coordinates, so every node on the way to a
+  /// plausible hit is entered: faces, edges and vertices of boxes, origins on faces,
+  /// zero-thickness boxes and hits at exactly tnear, tfar or the closest t so far (ties) are
+  /// never culled. The guard, 2^21 unit roundoffs of the ray's coordinates, exceeds Ize's
+  /// 2 gamma_3 widening and the rounding of every well-conditioned primitive t, so only
+  /// phantoms fail plausibility. A +-0 direction component gets the finite reciprocal
+  /// +-2^1020 instead of +-inf, so no product is 0 * inf: slab distances are never NaN and
+  /// plain min/max suffice.
   ReferenceHit intersect(const Ray& ray) const noexcept;
 
   /// hits[i] = intersect(rays[i]) for every i, in parallel over TBB (each ray independent,
   /// so the result does not depend on scheduling). Throws rp::Error when the sizes differ.
   void intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const;
+
+  /// True when a hit of primitive prim_id at t is plausible for ray: prim_id is a plane, or
+  /// t lies in the ray's guarded slab interval through the primitive's box (see intersect).
+  /// False for an invalid ray or a prim_id out of range. For diagnostics (`raypack diff`:
+  /// is a backend's hit a phantom?) and for tests that mirror the reference by brute force.
+  bool plausible(const Ray& ray, uint32_t prim_id, double t) const noexcept;
 
   /// Wall-clock seconds the constructor took.
   double build_seconds() const { return build_seconds_; }
@@ -115,11 +130,15 @@ class Reference {
   };
   struct RayBoxes;
 
-  void traverse(const Rayd& r, ReferenceHit& best) const noexcept;
-  void intersect_prim(const Rayd& r, const LeafPrim& p, ReferenceHit& best) const noexcept;
+  void traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) const noexcept;
+  void intersect_prim(const Rayd& r, const RayBoxes& rb, const LeafPrim& p, ReferenceHit& best) const noexcept;
+  /// The BVH box of bounded primitive p (its t-interval decides plausibility).
+  Box3f prim_box(const LeafPrim& p) const noexcept;
 
   std::vector<Node> nodes_;
   std::vector<LeafPrim> prims_;
+  std::vector<uint32_t> leaf_index_;   ///< prim_id -> index in prims_ (bounded primitives)
+  std::vector<Box3f> analytic_boxes_;  ///< boxes of spheres, quadrics, polygons (id - sphere_base_)
   std::vector<SphereD> spheres_;
   std::vector<Quadric<double>> quadrics_;
   std::vector<PolygonD> polygons_;

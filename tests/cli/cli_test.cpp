@@ -125,6 +125,56 @@ TEST_F(Cli, UnwritableOutputIsAnErrorWithStatusOneAndNoFile) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
+  const fs::path rays = dir_ / "rays.csv", hits = dir_ / "hits.csv", bin = dir_ / "hits.bin";
+  // Down the y axis onto the default scene's ground plane (y = 0) from above, and one miss.
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n"
+                      << "5,10,5,0,-1,0,0,inf\n"
+                      << "5,10,5,0,1,0,0,inf\n";
+  Result r = run("trace --rays " + rays.string() + " -o " + hits.string() + " --backend simd");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(hits);
+  std::string header, first, second;
+  std::getline(in, header);
+  std::getline(in, first);
+  std::getline(in, second);
+  EXPECT_EQ(header, "t,prim_id,u,v,ng_x,ng_y,ng_z");
+  EXPECT_EQ(first.rfind("10,", 0), 0u) << first;  // t = 10 on the plane
+  EXPECT_EQ(first.substr(first.size() - 6), ",0,1,0") << first;  // normal +y
+  EXPECT_EQ(second, "inf,-1,0,0,0,0,0");
+  r = run("trace --rays " + rays.string() + " -o " + bin.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(fs::file_size(bin), 16u + 2u * 28u);
+}
+
+TEST_F(Cli, TraceRejectsAMalformedRayFileWithStatusOne) {
+  const fs::path rays = dir_ / "bad.csv";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3\n";
+  const Result r = run("trace --rays " + rays.string() + " -o " + (dir_ / "h.csv").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output, "raypack: " + rays.string() + ": line 2: 3 values, expected 8\n");
+  EXPECT_FALSE(fs::exists(dir_ / "h.csv"));
+}
+
+TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
+  const fs::path json = dir_ / "d.json", image = dir_ / "d.png";
+  Result r = run("diff --rays primary --count 4096 -a embree -b simd --json " + json.string() + " --image " +
+                 image.string() + " --min-agreement 99");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* word : {"agree", "tie", "hit/miss", "wrong primitive", "t error", "reference supports"})
+    EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
+  EXPECT_NE(file_bytes(json).find("\"agreement\""), std::string::npos);
+  EXPECT_EQ(rp::read_image(image.string()).width, 64);
+  // A backend against the reference itself, demanding more agreement than float can give on
+  // a scene with shared edges, must fail with status 3 when it falls short; 0 disagreements
+  // would pass, so check the status matches the printed agreement.
+  r = run("diff --rays random --count 20000 -a simd -b reference --min-agreement 100");
+  const bool perfect = r.output.find("agreement 100.00000%") != std::string::npos;
+  EXPECT_EQ(r.status, perfect ? 0 : 3) << r.output;
+  r = run("diff --rays nowhere.rays");
+  EXPECT_EQ(r.status, 1) << r.output;
+}
+
 TEST_F(Cli, HelpAndVersion) {
   Result r = run("--help");
   EXPECT_EQ(r.status, 0);
