@@ -12,6 +12,7 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -136,6 +137,20 @@ void BM_Build(benchmark::State& state, const Method& m, const std::string& scene
   state.counters["prims"] = double(f.scene.prim_count());
 }
 
+/// BM_Load/<file>: load_scene on a model of ../shared/scenes, with its triangle count and the
+/// file's read rate as counters.
+void BM_Load(benchmark::State& state, const std::string& path) {
+  uint32_t triangles = 0;
+  for (auto _ : state) {
+    const Scene scene = load_scene(path);
+    triangles = scene.triangle_count();
+    benchmark::DoNotOptimize(triangles);
+  }
+  state.counters["triangles"] = double(triangles);
+  state.counters["bytes/s"] = benchmark::Counter(double(std::filesystem::file_size(path)) * double(state.iterations()),
+                                                 benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 }  // namespace rp
 
@@ -168,6 +183,16 @@ int main(int argc, char** argv) {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
     }
+  }
+  if (std::filesystem::is_directory(RP_SHARED_SCENES)) {
+    std::vector<std::filesystem::path> models;
+    for (const auto& e : std::filesystem::directory_iterator(RP_SHARED_SCENES))
+      if (e.path().extension() == ".obj" || e.path().extension() == ".ply") models.push_back(e.path());
+    std::sort(models.begin(), models.end());
+    for (const auto& m : models)
+      benchmark::RegisterBenchmark(("BM_Load/" + m.filename().string()).c_str(), BM_Load, m.string())
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
   }
   int n = int(args.size());
   benchmark::Initialize(&n, args.data());

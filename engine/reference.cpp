@@ -80,10 +80,10 @@ uint32_t count_nodes(size_t n, std::unordered_map<size_t, uint32_t>& memo) {
   return c;
 }
 
-/// Lets the hit h of primitive id replace best when it is closer, or equally close with a
-/// larger prim_id (the order-independent tie rule of reference.h).
-inline void take(const Intersection<double>& h, uint32_t id, ReferenceHit& best) {
-  if (h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id))) best = {h.t, id, h.u, h.v};
+/// True when hit h of primitive id beats best: closer, or equally close with a larger
+/// prim_id (the order-independent tie rule of reference.h).
+inline bool closer(const Intersection<double>& h, uint32_t id, const ReferenceHit& best) {
+  return h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id));
 }
 
 }  // namespace
@@ -101,8 +101,10 @@ struct Reference::RayBoxes {
     // JCGT 2(2), grows the exit distance by 2 gamma_3 instead). s = 2^-32 (|org|_inf + M) is
     // 2^21 unit roundoffs of every coordinate and coordinate difference the ray meets, so it
     // dwarfs the three roundings of a slab distance (gamma_3, relative to |face - org|) and
-    // the error of a primitive's own t: a computed hit t always lies in the computed grown
-    // interval. The 2^-880 floor keeps s > 0, so s * 2^1020 > FLT_MAX >= any finite tfar.
+    // the error of a well-conditioned primitive t: a genuine hit's t lies in the computed
+    // interval of its primitive's box, a phantom's need not (plausibility). The 2^-880 floor
+    // keeps s > 0, so |face - org_near| * 2^1020 > FLT_MAX >= any finite tfar for an origin
+    // inside the slab of a +-0 direction component.
     const double s = 0x1p-32 * (max_abs(r.org) + scene_scale) + 0x1p-880;
     for (int k = 0; k < 3; ++k) {
       const double d = r.dir[k];
@@ -116,20 +118,35 @@ struct Reference::RayBoxes {
     }
   }
 
+  /// Computed entry and exit distances of the ray through the box bounds (lo.xyz, hi.xyz)
+  /// grown by the guard: no clamping to the ray interval, never NaN (the reciprocals are
+  /// finite and non-zero). Monotone: a box containing another gets enter <= and exit >=.
+  void interval(const float* bounds, double& enter, double& exit) const {
+    const double t0x = (double(bounds[near[0]]) - org_near[0]) * inv[0];
+    const double t0y = (double(bounds[near[1]]) - org_near[1]) * inv[1];
+    const double t0z = (double(bounds[near[2]]) - org_near[2]) * inv[2];
+    const double t1x = (double(bounds[far[0]]) - org_far[0]) * inv[0];
+    const double t1y = (double(bounds[far[1]]) - org_far[1]) * inv[1];
+    const double t1z = (double(bounds[far[2]]) - org_far[2]) * inv[2];
+    enter = std::max(std::max(t0x, t0y), t0z);
+    exit = std::min(std::min(t1x, t1y), t1z);
+  }
+
   /// True when the ray may meet the grown box of n within [tnear, tmax]; t_enter is then
-  /// the (grown) entry distance, the key for near-first order and for culling by the
-  /// closest hit. No NaN can arise: the reciprocals are finite and non-zero.
+  /// the entry distance, the key for near-first order and for culling by the closest hit.
   bool hit(const Node& n, double tmax, double& t_enter) const {
-    const double t0x = (double(n.bounds[near[0]]) - org_near[0]) * inv[0];
-    const double t0y = (double(n.bounds[near[1]]) - org_near[1]) * inv[1];
-    const double t0z = (double(n.bounds[near[2]]) - org_near[2]) * inv[2];
-    const double t1x = (double(n.bounds[far[0]]) - org_far[0]) * inv[0];
-    const double t1y = (double(n.bounds[far[1]]) - org_far[1]) * inv[1];
-    const double t1z = (double(n.bounds[far[2]]) - org_far[2]) * inv[2];
-    const double enter = std::max(std::max(t0x, t0y), std::max(t0z, tnear));
-    const double exit = std::min(std::min(t1x, t1y), std::min(t1z, tmax));
-    t_enter = enter;
-    return enter <= exit;
+    double enter, exit;
+    interval(n.bounds, enter, exit);
+    t_enter = std::max(enter, tnear);
+    return t_enter <= std::min(exit, tmax);
+  }
+
+  /// True when t lies in the computed interval through the grown box b (plausibility).
+  bool contains(const Box3f& b, double t) const {
+    const float bounds[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
+    double enter, exit;
+    interval(bounds, enter, exit);
+    return enter <= t && t <= exit;
   }
 };
 
@@ -158,7 +175,8 @@ Reference::Reference(const Scene& scene) {
     // Padded well beyond the rounding of a grazing double hit, then rounded outward.
     const double pad = 0x1p-10 * sd.radius + 0x1p-20 * max_abs(sd.center);
     const Vec3d r(sd.radius);
-    items.push_back(make_item(outward(Box3d(sd.center - r, sd.center + r), pad), sphere_base_ + i));
+    analytic_boxes_.push_back(outward(Box3d(sd.center - r, sd.center + r), pad));
+    items.push_back(make_item(analytic_boxes_.back(), sphere_base_ + i));
   }
   for (uint32_t i = 0; i < scene.quadrics().size(); ++i) {
     const Quadric<float>& q = scene.quadrics()[i].quadric;
@@ -169,6 +187,7 @@ Reference::Reference(const Scene& scene) {
     d.clip = Box3d(Vec3d(q.clip.lo), Vec3d(q.clip.hi));
     quadrics_.push_back(d);
     // A hit point, as computed, lies in the clip box: the float clip box bounds it exactly.
+    analytic_boxes_.push_back(q.clip);
     items.push_back(make_item(q.clip, quadric_base_ + i));
   }
   for (uint32_t i = 0; i < scene.polygons().size(); ++i) {
@@ -193,7 +212,8 @@ Reference::Reference(const Scene& scene) {
       }
     }
     const double pad = 0x1p-10 * max_component(b.extent()) + 0x1p-20 * std::max(max_abs(b.lo), max_abs(b.hi));
-    items.push_back(make_item(outward(b, pad), polygon_base_ + i));
+    analytic_boxes_.push_back(outward(b, pad));
+    items.push_back(make_item(analytic_boxes_.back(), polygon_base_ + i));
   }
   for (const Plane& p : scene.planes()) planes_.push_back({Vec3d(p.normal), double(p.d)});
 
@@ -244,10 +264,12 @@ Reference::Reference(const Scene& scene) {
     build(build, 0, items.size(), 0);
 
     prims_.resize(items.size());
+    leaf_index_.resize(items.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, items.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t i = range.begin(); i < range.end(); ++i) {
         LeafPrim& p = prims_[i];
         p.prim_id = items[i].prim_id;
+        leaf_index_[p.prim_id] = uint32_t(i);
         if (p.prim_id < sphere_base_) {
           const PrimRef ref = scene.locate(p.prim_id);
           for (int c = 0; c < 3; ++c) p.v[c] = scene.meshes()[ref.shape].vertex(ref.local, c);
@@ -265,27 +287,36 @@ Reference::Reference(const Scene& scene) {
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void Reference::intersect_prim(const Rayd& r, const LeafPrim& p, ReferenceHit& best) const noexcept {
-  const uint32_t id = p.prim_id;
-  if (id < sphere_base_) {
-    take(intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2])), id, best);
-  } else if (id < quadric_base_) {
-    const SphereD& s = spheres_[id - sphere_base_];
-    take(intersect_sphere_algebraic(r, s.center, s.radius), id, best);
-  } else if (id < polygon_base_) {
-    take(intersect_quadric(r, quadrics_[id - quadric_base_]), id, best);
-  } else {
-    const PolygonD& pd = polygons_[id - polygon_base_];
-    take(intersect_polygon<double>(r, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count),
-                                   pd.plane, pd.convex),
-         id, best);
-  }
+Box3f Reference::prim_box(const LeafPrim& p) const noexcept {
+  if (p.prim_id >= sphere_base_) return analytic_boxes_[p.prim_id - sphere_base_];
+  Box3f b;  // the same exact float box the build used
+  for (const Vec3f& v : p.v) b.extend(v);
+  return b;
 }
 
-void Reference::traverse(const Rayd& r, ReferenceHit& best) const noexcept {
+void Reference::intersect_prim(const Rayd& r, const RayBoxes& rb, const LeafPrim& p,
+                               ReferenceHit& best) const noexcept {
+  const uint32_t id = p.prim_id;
+  Intersection<double> h;
+  if (id < sphere_base_) {
+    h = intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2]));
+  } else if (id < quadric_base_) {
+    const SphereD& s = spheres_[id - sphere_base_];
+    h = intersect_sphere_algebraic(r, s.center, s.radius);
+  } else if (id < polygon_base_) {
+    h = intersect_quadric(r, quadrics_[id - quadric_base_]);
+  } else {
+    const PolygonD& pd = polygons_[id - polygon_base_];
+    h = intersect_polygon<double>(r, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count),
+                                  pd.plane, pd.convex);
+  }
+  // Plausibility last: it only runs for hits that would win.
+  if (closer(h, id, best) && rb.contains(prim_box(p), h.t)) best = {h.t, id, h.u, h.v};
+}
+
+void Reference::traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) const noexcept {
   // Near-first depth-first traversal; a box is entered when its grown slab interval meets
   // [tnear, min(tfar, best.t)] (closed: a hit at exactly best.t may still win the tie).
-  const RayBoxes rb(r, scene_scale_);
   struct Entry {
     uint32_t node;
     double t;
@@ -319,7 +350,7 @@ void Reference::traverse(const Rayd& r, ReferenceHit& best) const noexcept {
         continue;
       }
     } else {
-      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(r, prims_[k], best);
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(r, rb, prims_[k], best);
     }
     // Next deferred child that may still hold a hit at t <= best.t.
     for (;;) {
@@ -337,10 +368,19 @@ ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
   ReferenceHit best;
   if (!valid_ray(ray)) return best;
   const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  if (!nodes_.empty()) traverse(r, best);
-  for (uint32_t k = 0; k < planes_.size(); ++k)
-    take(intersect_plane(r, planes_[k].normal, planes_[k].d), plane_base_ + k, best);
+  if (!nodes_.empty()) traverse(r, RayBoxes(r, scene_scale_), best);
+  for (uint32_t k = 0; k < planes_.size(); ++k) {
+    const Intersection<double> h = intersect_plane(r, planes_[k].normal, planes_[k].d);
+    if (closer(h, plane_base_ + k, best)) best = {h.t, plane_base_ + k, h.u, h.v};
+  }
   return best;
+}
+
+bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t) const noexcept {
+  if (!valid_ray(ray) || prim_id >= plane_base_ + planes_.size()) return false;
+  if (prim_id >= plane_base_) return true;
+  const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
+  return RayBoxes(r, scene_scale_).contains(prim_box(prims_[leaf_index_[prim_id]]), t);
 }
 
 void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const {
@@ -351,7 +391,8 @@ void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hit
 }
 
 size_t Reference::bytes() const {
-  return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(LeafPrim) + spheres_.size() * sizeof(SphereD) +
+  return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(LeafPrim) + leaf_index_.size() * sizeof(uint32_t) +
+         analytic_boxes_.size() * sizeof(Box3f) + spheres_.size() * sizeof(SphereD) +
          quadrics_.size() * sizeof(Quadric<double>) + polygons_.size() * sizeof(PolygonD) +
          polygon_vertices_.size() * sizeof(Vec3d) + planes_.size() * sizeof(PlaneD);
 }

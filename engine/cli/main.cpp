@@ -289,6 +289,55 @@ int run_diff(const DiffArgs& a) {
   return 0;
 }
 
+struct InfoArgs {
+  std::string scene = "default";
+  bool no_backends = false;
+};
+
+/// Counts, bounds, degenerate triangles and the bytes of the scene and of each backend.
+int run_info(const InfoArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const rp::Scene scene = rp::load_scene(a.scene);
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  size_t vertices = 0, with_normals = 0, with_uvs = 0;
+  for (const rp::TriangleMesh& m : scene.meshes()) {
+    vertices += m.positions.size();
+    with_normals += !m.normals.empty();
+    with_uvs += !m.uvs.empty();
+  }
+  const rp::Box3f b = scene.bounds();
+  std::printf("scene        %s (loaded in %.3f s)\n", a.scene.c_str(), load_s);
+  std::printf("triangles    %u in %zu mesh(es), %zu vertices (%zu meshes with normals, %zu with uvs)\n",
+              scene.triangle_count(), scene.meshes().size(), vertices, with_normals, with_uvs);
+  std::printf("analytic     %zu spheres, %zu quadrics, %zu polygons, %zu planes\n", scene.spheres().size(),
+              scene.quadrics().size(), scene.polygons().size(), scene.planes().size());
+  std::printf("primitives   %u\n", scene.prim_count());
+  std::printf("degenerate   %zu zero-area triangles\n", scene.degenerate_triangle_count());
+  if (b.empty()) std::printf("bounds       empty\n");
+  else
+    std::printf("bounds       (%g, %g, %g) - (%g, %g, %g)\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+  std::printf("materials    %zu; lights: %zu point, %zu directional; camera: %s\n", scene.materials().size(),
+              scene.point_lights().size(), scene.directional_lights().size(),
+              scene.camera() ? "from the scene" : "derived from the bounds");
+  const double prims = std::max(1.0, double(scene.prim_count()));
+  std::printf("scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
+  if (a.no_backends) return 0;
+  std::printf("\n%-8s %-8s %10s %14s %12s\n", "backend", "variant", "build s", "bytes", "bytes/prim");
+  for (const rp::BackendEntry& e : rp::list_backends()) {
+    if (!e.available) {
+      std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
+      continue;
+    }
+    const auto backend = rp::make_backend(e.name, scene);
+    const rp::BackendInfo& i = backend->info();
+    std::printf("%-8s %-8s %10.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
+                double(i.bytes) / prims);
+    for (const auto& [key, value] : i.stats) std::printf("  %s=%g", key.c_str(), value);
+    std::printf("\n");
+  }
+  return 0;
+}
+
 int run_backends() {
   for (const rp::BackendEntry& e : rp::list_backends()) {
     std::string variants;
@@ -362,6 +411,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 100.0));
   diff->add_option("-t,--threads", da.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
 
+  InfoArgs ia;
+  CLI::App* info = app.add_subcommand("info", "Counts, bounds and bytes of a scene and of each backend's structure");
+  info->add_option("scene,--scene", ia.scene, "Scene: 'default' or a scene file")->capture_default_str();
+  info->add_flag("--no-backends", ia.no_backends, "Skip building the backends");
+
   app.add_subcommand("backends", "List the backends, their variants and availability");
 
   try {
@@ -380,6 +434,7 @@ int main(int argc, char** argv) {
     if (*render) return run_render(ra);
     if (*trace) return run_trace(ta);
     if (*diff) return run_diff(da);
+    if (*info) return run_info(ia);
     return run_backends();
   } catch (const UsageError& e) {
     std::cerr << "raypack: " << e.what() << '\n';

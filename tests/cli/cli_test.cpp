@@ -175,6 +175,19 @@ TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
   EXPECT_EQ(r.status, 1) << r.output;
 }
 
+TEST_F(Cli, InfoCountsTheScene) {
+  const fs::path scene = dir_ / "two.obj";
+  // A quad (2 triangles), a degenerate triangle, and an unreferenced vertex.
+  std::ofstream(scene) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nf 1 2 3 4\nf 1 2 2\n";
+  const Result r = run("info " + scene.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("triangles    3 in 1 mesh(es), 4 vertices"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("degenerate   1 zero-area triangles"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bounds       (0, 0, 0) - (1, 1, 0)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\nembree "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\nsimd "), std::string::npos) << r.output;
+}
+
 TEST_F(Cli, HelpAndVersion) {
   Result r = run("--help");
   EXPECT_EQ(r.status, 0);
