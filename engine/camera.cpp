@@ -6,7 +6,7 @@
 
 namespace rp {
 
-PinholeCamera::PinholeCamera(const CameraDesc& d, int width, int height) : width_(width), height_(height) {
+Camera::Camera(const CameraDesc& d, int width, int height) : model_(d.model), width_(width), height_(height) {
   RP_CHECK(width > 0 && height > 0, "camera: resolution ", width, "x", height, " must be positive");
   RP_CHECK(d.vfov_degrees > 0.0f && d.vfov_degrees < 180.0f, "camera: vertical fov ", d.vfov_degrees,
            " degrees must be in (0, 180)");
@@ -21,6 +21,91 @@ PinholeCamera::PinholeCamera(const CameraDesc& d, int width, int height) : width
   eye_ = d.eye;
   ym_ = std::tan(d.vfov_degrees * float(kPi) / 360.0f);
   xm_ = float(width) / float(height) * ym_;
+  if (model_ == CameraModel::fisheye) {
+    RP_CHECK(d.fisheye_fov_degrees > 0.0f && d.fisheye_fov_degrees <= 360.0f, "camera: fisheye fov ",
+             d.fisheye_fov_degrees, " degrees must be in (0, 360]");
+    fisheye_half_ = d.fisheye_fov_degrees * float(kPi) / 360.0f;
+  }
+  if (model_ == CameraModel::thin_lens) {
+    RP_CHECK(d.aperture >= 0.0f && std::isfinite(d.aperture), "camera: aperture ", d.aperture, " must be >= 0");
+    RP_CHECK(d.focus_distance >= 0.0f && std::isfinite(d.focus_distance), "camera: focus distance ",
+             d.focus_distance, " must be >= 0");
+    aperture_ = d.aperture;
+    focus_ = d.focus_distance > 0.0f ? d.focus_distance : length(view);
+  }
+}
+
+Ray Camera::generate(float px, float py, Vec2f lens) const {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  const float sx = px / float(width_) * 2.0f - 1.0f, sy = 1.0f - py / float(height_) * 2.0f;  // [-1, 1], y up
+  switch (model_) {
+    case CameraModel::pinhole:
+      return {eye_, 0.0f, normalize(w_ + u_ * (sx * xm_) + v_ * (sy * ym_)), inf};
+    case CameraModel::panoramic: {
+      const float phi = sx * float(kPi);
+      return {eye_, 0.0f, normalize(w_ * std::cos(phi) + u_ * std::sin(phi) + v_ * (sy * ym_)), inf};
+    }
+    case CameraModel::fisheye: {
+      const float circle = 0.5f * float(std::min(width_, height_));
+      const float x = (px - 0.5f * float(width_)) / circle, y = (0.5f * float(height_) - py) / circle;
+      const float r = std::sqrt(x * x + y * y);
+      if (r > 1.0f) return {eye_, 1.0f, w_, 0.0f};  // outside the image circle: no ray
+      const float theta = r * fisheye_half_, psi = std::atan2(y, x);
+      const Vec3f d = w_ * std::cos(theta) + (u_ * std::cos(psi) + v_ * std::sin(psi)) * std::sin(theta);
+      return {eye_, 0.0f, normalize(d), inf};
+    }
+    case CameraModel::thin_lens: {
+      const Vec3f d = normalize(w_ + u_ * (sx * xm_) + v_ * (sy * ym_));
+      if (aperture_ == 0.0f) return {eye_, 0.0f, d, inf};
+      const Vec3f focus_point = eye_ + d * (focus_ / dot(d, w_));
+      // Concentric square-to-disk mapping (Shirley and Chiu 1997).
+      const float a = 2.0f * lens.x - 1.0f, b = 2.0f * lens.y - 1.0f;
+      float r = 0.0f, t = 0.0f;
+      if (a != 0.0f || b != 0.0f) {
+        if (std::abs(a) > std::abs(b)) {
+          r = a;
+          t = float(kPi) / 4.0f * (b / a);
+        } else {
+          r = b;
+          t = float(kPi) / 2.0f - float(kPi) / 4.0f * (a / b);
+        }
+      }
+      const Vec3f origin = eye_ + (u_ * std::cos(t) + v_ * std::sin(t)) * (r * aperture_);
+      return {origin, 0.0f, normalize(focus_point - origin), inf};
+    }
+  }
+  return {eye_, 0.0f, w_, inf};
+}
+
+std::optional<Vec2f> Camera::project(const Vec3f& direction) const {
+  const Vec3f d = normalize(direction);
+  const float dw = dot(d, w_), du = dot(d, u_), dv = dot(d, v_);
+  float sx = 0.0f, sy = 0.0f;
+  switch (model_) {
+    case CameraModel::pinhole:
+    case CameraModel::thin_lens:
+      if (!(dw > 0.0f)) return std::nullopt;
+      sx = du / dw / xm_;
+      sy = dv / dw / ym_;
+      if (std::abs(sx) > 1.0f || std::abs(sy) > 1.0f) return std::nullopt;
+      break;
+    case CameraModel::panoramic: {
+      const float horizontal = std::sqrt(dw * dw + du * du);
+      if (!(horizontal > 0.0f)) return std::nullopt;
+      sx = std::atan2(du, dw) / float(kPi);
+      sy = dv / horizontal / ym_;
+      if (std::abs(sy) > 1.0f) return std::nullopt;
+      break;
+    }
+    case CameraModel::fisheye: {
+      const float theta = std::atan2(std::sqrt(du * du + dv * dv), dw);
+      const float r = theta / fisheye_half_;
+      if (r > 1.0f) return std::nullopt;
+      const float psi = std::atan2(dv, du), circle = 0.5f * float(std::min(width_, height_));
+      return Vec2f{0.5f * float(width_) + r * std::cos(psi) * circle, 0.5f * float(height_) - r * std::sin(psi) * circle};
+    }
+  }
+  return Vec2f{(sx + 1.0f) * 0.5f * float(width_), (1.0f - sy) * 0.5f * float(height_)};
 }
 
 CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees) {

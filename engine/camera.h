@@ -1,42 +1,61 @@
 #pragma once
-/// Cameras that turn image positions into primary rays.
+/// Cameras that turn image positions into primary rays: the seeds' pinhole, a cylindrical
+/// panorama, an equidistant fisheye and a thin lens for depth of field.
+
+#include <optional>
 
 #include "engine/ray.h"
 #include "engine/scene.h"
 
 namespace rp {
 
-/// Pinhole camera with the seeds' pixel mapping (lecture "Ray Tracing Basics", eye rays):
-/// camera frame w = normalize(look_at - eye), u = normalize(w x up), v = u x w; for pixel
-/// (i, j) with j counted from the bottom row,
-///   x = ((i + 0.5) / nx * 2 - 1) * aspect * tan(fov / 2),  y = ((j + 0.5) / ny * 2 - 1) * tan(fov / 2),
+/// All four models share the camera frame of the seeds (lecture "Ray Tracing Basics", eye
+/// rays): w = normalize(look_at - eye), u = normalize(w x up), v = u x w.
+///
+/// - pinhole: for pixel (i, j), j counted from the bottom row,
+///   x = ((i + 0.5) / nx * 2 - 1) * aspect * tan(fov / 2), y = ((j + 0.5) / ny * 2 - 1) * tan(fov / 2),
 ///   d = normalize(w + x u + y v), origin = eye.
-class PinholeCamera {
+/// - panoramic (cylindrical, 360 degrees): the image's x covers the angle phi in [-pi, pi)
+///   around v (phi = 0 straight ahead, growing towards u); its y is the height on the unit
+///   cylinder, y in [-tan(fov/2), tan(fov/2)]: d = normalize(cos(phi) w + sin(phi) u + y v).
+/// - fisheye (equidistant): the image circle of diameter min(nx, ny) pixels, centred; a
+///   point at radius r (1 at the circle) and angle psi from u sees the direction at angle
+///   theta = r * fisheye_fov / 2 from w: d = cos(theta) w + sin(theta) (cos(psi) u + sin(psi) v).
+///   Outside the circle there is no ray (an invalid ray, traced as a miss).
+/// - thin lens: the pinhole direction d meets the plane in focus (distance f along w) at
+///   P = eye + d f / (d . w); the ray starts at a point L of the lens disk (radius
+///   `aperture`, concentric mapping of the lens sample) and points at P (Pharr, Jakob,
+///   Humphreys, PBRT 4th ed., 5.2.3). aperture 0 is the pinhole.
+class Camera {
  public:
   /// Throws rp::Error for a degenerate placement (eye == look_at, up parallel to the view
-  /// direction) or a field of view outside (0, 180) degrees.
-  PinholeCamera(const CameraDesc& desc, int width, int height);
+  /// direction), a field of view out of range, a negative aperture or focus distance.
+  Camera(const CameraDesc& desc, int width, int height);
 
-  /// Ray through image position (px, py) in pixels: (0, 0) is the top-left corner of the
-  /// image, pixel (i, r) in row r from the top has its centre at (i + 0.5, r + 0.5).
-  /// The direction is unit length; tnear = 0, tfar = +inf.
-  Ray generate(float px, float py) const {
-    const float x = (px / float(width_) * 2.0f - 1.0f) * xm_;
-    const float y = (1.0f - py / float(height_) * 2.0f) * ym_;
-    return {eye_, 0.0f, normalize(w_ + u_ * x + v_ * y), std::numeric_limits<float>::infinity()};
-  }
+  /// Ray through image position (px, py) in pixels: (0, 0) is the top-left corner, pixel (i,
+  /// r) in row r from the top has its centre at (i + 0.5, r + 0.5). `lens` in [0, 1)^2 picks
+  /// the point on the lens (thin lens only). Directions are unit length; tnear = 0, tfar = +inf.
+  Ray generate(float px, float py, Vec2f lens = {0.5f, 0.5f}) const;
+
+  /// The image position whose ray has direction `dir` (pinhole, panoramic, fisheye), or
+  /// nothing when no pixel sees it: the inverse of generate(), used to test the mappings.
+  std::optional<Vec2f> project(const Vec3f& dir) const;
 
   int width() const { return width_; }
   int height() const { return height_; }
+  CameraModel model() const { return model_; }
 
  private:
   Vec3f eye_, u_, v_, w_;
   float xm_, ym_;  ///< half extents of the image window at distance 1: aspect*tan(fov/2), tan(fov/2)
+  float fisheye_half_ = 0.0f;  ///< fisheye: half the field of view, radians
+  float aperture_ = 0.0f, focus_ = 0.0f;
+  CameraModel model_;
   int width_, height_;
 };
 
-/// A camera that frames `bounds` from the front-above (+z, +y) with the given fov, used
-/// when a scene has none.
+/// A pinhole camera that frames `bounds` from the front-above (+z, +y) with the given fov,
+/// used when a scene has none.
 CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees = 40.0f);
 
 }  // namespace rp

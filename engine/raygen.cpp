@@ -12,7 +12,7 @@
 namespace rp {
 
 RaySet primary_rays(const Scene& scene, int width, int height) {
-  const PinholeCamera cam(scene.camera().value_or(frame_bounds(scene.bounds())), width, height);
+  const Camera cam(scene.camera().value_or(frame_bounds(scene.bounds())), width, height);
   RaySet rs;
   rs.width = width;
   rs.height = height;

@@ -15,9 +15,10 @@
 /// t lies in the ray's interval through the primitive's box grown by a tiny guard. This
 /// drops phantom hits, which are rounding artefacts: e.g. for a ray lying exactly in a
 /// triangle's plane the watertight test's determinant is rounding noise, and it may report
-/// a "hit" far outside the triangle (seen on rays between points of a 0.25 grid). Every
-/// genuine hit is plausible, so the answer differs from the brute-force loop of
-/// tests/backends/oracle.h only on rays where that loop returns a phantom.
+/// a "hit" far outside the triangle (seen on rays between points of a 0.25 grid). The guard
+/// is 2^21 unit roundoffs, so every well-conditioned hit is plausible and the answer differs
+/// from the brute-force loop of tests/backends/oracle.h only where that loop returns a
+/// phantom (or, at exactly equal t, picks the other primitive of a tie).
 /// The answer is the plausible hit of smallest t; among hits at exactly the same t the
 /// LARGEST prim_id wins. Because every primitive is tested against the full interval (not
 /// one shortened by earlier hits), this rule does not depend on the order primitives are

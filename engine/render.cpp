@@ -58,7 +58,12 @@ Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp) {
   return {(float(sample % m) + jx) / float(m), (float(sample / m) + jy) / float(m)};
 }
 
-RenderResult render(const Scene& scene, const Backend& backend, const PinholeCamera& camera,
+Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) {
+  const uint64_t h = mix(mix(mix(seed ^ 0x5851f42d4c957f2dull) ^ pixel) ^ uint64_t(sample));
+  return {to_unit(h), to_unit(mix(h))};
+}
+
+RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
                     const RenderSettings& st) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
@@ -92,10 +97,13 @@ RenderResult render(const Scene& scene, const Backend& backend, const PinholeCam
               w.paths.push_back({kInvalidId, {}});
               continue;
             }
-            const Vec2f j = pixel_sample(st.seed, uint64_t(y) * st.width + x, s, st.spp);
-            w.rays.push_back(camera.generate(float(x) + j.x, float(y) + j.y));
-            w.paths.push_back({uint32_t(ly * kTile + lx), Vec3f{1.0f}});
-            ++primary;
+            const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
+            const Vec2f j = pixel_sample(st.seed, pixel, s, st.spp);
+            const Ray r = camera.generate(float(x) + j.x, float(y) + j.y, lens_sample(st.seed, pixel, s));
+            w.rays.push_back(r);
+            // No ray (outside a fisheye's image circle): the pixel stays black.
+            w.paths.push_back({valid_ray(r) ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}});
+            primary += valid_ray(r);
           }
       for (int depth = 0; !w.rays.empty(); ++depth) {
         const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;

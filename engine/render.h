@@ -38,12 +38,16 @@ struct RenderResult {
 
 /// Renders `scene` as seen by `camera` (camera.width()/height() must equal settings'),
 /// tracing with `backend`. The result depends only on the inputs, never on thread count.
-RenderResult render(const Scene& scene, const Backend& backend, const PinholeCamera& camera,
+RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
                     const RenderSettings& settings);
 
 /// Sample position in [0, 1)^2 for sample s of a pixel: stratified jitter on the largest
 /// m x m grid with m*m <= spp (samples s >= m*m are uniform random), from a counter-based
 /// hash of (seed, pixel, sample) so every pixel's stream is independent of scheduling.
 Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp);
+
+/// Lens position in [0, 1)^2 for sample s of a pixel (thin-lens cameras), from a stream
+/// independent of pixel_sample's.
+Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample);
 
 }  // namespace rp

@@ -87,12 +87,25 @@ struct PolygonShape {
   uint32_t material = 0;
 };
 
-/// A pinhole camera placement: eye, look-at point, up vector, vertical field of view.
+/// How a camera maps image positions to rays (engine/camera.h).
+enum class CameraModel : uint8_t {
+  pinhole,    ///< the seeds' planar projection
+  panoramic,  ///< cylindrical, 360 degrees around the up axis
+  fisheye,    ///< equidistant: angle from the view axis proportional to image radius
+  thin_lens,  ///< pinhole placement with a lens of radius `aperture` focused at `focus_distance`
+};
+
+/// Camera placement and model: eye, look-at point, up vector, vertical field of view, and
+/// the parameters of the non-pinhole models.
 struct CameraDesc {
   Vec3f eye{0.0f, 0.0f, 5.0f};
   Vec3f look_at{0.0f};
   Vec3f up{0.0f, 1.0f, 0.0f};
-  float vfov_degrees = 45.0f;  ///< in (0, 180)
+  float vfov_degrees = 45.0f;  ///< in (0, 180); the panoramic camera's vertical extent too
+  CameraModel model = CameraModel::pinhole;
+  float fisheye_fov_degrees = 180.0f;  ///< fisheye: field of view across the image circle, (0, 360]
+  float aperture = 0.0f;               ///< thin lens: lens radius in world units, >= 0
+  float focus_distance = 0.0f;         ///< thin lens: distance of the plane in focus; 0 = |look_at - eye|
 };
 
 enum class PrimKind : uint8_t { triangle, sphere, quadric, polygon, plane };

@@ -96,7 +96,64 @@ void write_text_file(const std::string& path, const std::string& text) {
   }
 }
 
+/// "x,y,z" as a vector, or a usage error naming the flag.
+rp::Vec3f parse_vec3(const std::string& flag, const std::string& text) {
+  static const std::regex re(R"(^\s*([^,\s]+)\s*,\s*([^,\s]+)\s*,\s*([^,\s]+)\s*$)");
+  std::smatch m;
+  rp::Vec3f v;
+  bool ok = std::regex_match(text, m, re);
+  for (int k = 0; ok && k < 3; ++k) {
+    try {
+      size_t used = 0;
+      v[k] = std::stof(m[k + 1].str(), &used);
+      ok = used == size_t(m[k + 1].length()) && std::isfinite(v[k]);
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  }
+  if (!ok) throw UsageError(rp::cat(flag, ": '", text, "' is not three finite numbers x,y,z"));
+  return v;
+}
+
+/// Camera overrides on the command line; each one replaces the scene's value.
+struct CameraArgs {
+  std::string model, eye, look_at, up;
+  float fov = 0, fisheye_fov = 0, aperture = -1, focus_distance = -1;
+
+  rp::CameraDesc apply(rp::CameraDesc c) const {
+    if (!model.empty()) {
+      if (model == "pinhole") c.model = rp::CameraModel::pinhole;
+      else if (model == "panoramic") c.model = rp::CameraModel::panoramic;
+      else if (model == "fisheye") c.model = rp::CameraModel::fisheye;
+      else if (model == "thin-lens") c.model = rp::CameraModel::thin_lens;
+      else throw UsageError(rp::cat("--camera: '", model, "' is not pinhole, panoramic, fisheye or thin-lens"));
+    }
+    if (!eye.empty()) c.eye = parse_vec3("--eye", eye);
+    if (!look_at.empty()) c.look_at = parse_vec3("--look-at", look_at);
+    if (!up.empty()) c.up = parse_vec3("--up", up);
+    if (fov > 0) c.vfov_degrees = fov;
+    if (fisheye_fov > 0) c.fisheye_fov_degrees = fisheye_fov;
+    if (aperture >= 0) c.aperture = aperture;
+    if (focus_distance >= 0) c.focus_distance = focus_distance;
+    return c;
+  }
+
+  void add_to(CLI::App* app) {
+    app->add_option("--camera", model, "pinhole, panoramic, fisheye or thin-lens (default: the scene's)");
+    app->add_option("--eye", eye, "Camera position x,y,z");
+    app->add_option("--look-at", look_at, "Point the camera looks at x,y,z");
+    app->add_option("--up", up, "Up vector x,y,z");
+    app->add_option("--fov", fov, "Vertical field of view, degrees")->check(CLI::Range(0.001, 179.999));
+    app->add_option("--fisheye-fov", fisheye_fov, "Fisheye field of view across the image circle, degrees")
+        ->check(CLI::Range(0.001, 360.0));
+    app->add_option("--aperture", aperture, "Thin lens radius, world units")->check(CLI::Range(0.0, 1e30));
+    app->add_option("--focus-distance", focus_distance, "Distance in focus (0: the look-at point)")
+        ->check(CLI::Range(0.0, 1e30));
+  }
+};
+
 struct RenderArgs {
+  CameraArgs camera;
   std::string scene = "default";
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
@@ -116,9 +173,16 @@ int run_render(const RenderArgs& a) {
 
   check_backend(a.backend, a.variant);
   const rp::Scene scene = rp::load_scene(a.scene);
+  const rp::CameraDesc desc = a.camera.apply(scene.camera().value_or(rp::frame_bounds(scene.bounds())));
   const std::unique_ptr<rp::Backend> backend =
       rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
-  const rp::PinholeCamera camera(scene.camera().value_or(rp::frame_bounds(scene.bounds())), res.width, res.height);
+  std::optional<rp::Camera> camera_or;
+  try {
+    camera_or.emplace(desc, res.width, res.height);
+  } catch (const rp::Error& e) {  // a placement the camera flags made impossible
+    throw UsageError(e.what());
+  }
+  const rp::Camera& camera = *camera_or;
   rp::RenderSettings settings{res.width, res.height, a.spp, a.seed, a.max_depth};
   const rp::RenderResult r = rp::render(scene, *backend, camera, settings);
   rp::write_image(a.output, r.image);
@@ -373,6 +437,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 64))
       ->capture_default_str();
   render->add_flag("-q,--quiet", ra.quiet, "Print nothing on success");
+  ra.camera.add_to(render);
 
   TraceArgs ta;
   CLI::App* trace = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");

@@ -37,14 +37,17 @@ Scene load_scene(const std::string& path) {
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
 
   Scene scene;
-  if (lower == ".obj")
-    load_obj(path, scene);
-  else if (lower == ".ply")
-    load_ply(path, scene);
-  else
-    throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply)"));
-
-  RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
+  if (lower == ".json") {
+    load_json_scene(path, scene);  // needs at least one object, of any kind
+  } else {
+    if (lower == ".obj")
+      load_obj(path, scene);
+    else if (lower == ".ply")
+      load_ply(path, scene);
+    else
+      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply)"));
+    RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
+  }
   if (scene.point_lights().empty() && scene.directional_lights().empty()) add_default_lights(scene);
   return scene;
 }

@@ -7,7 +7,7 @@
 
 namespace rp {
 
-/// Loads `path` by its extension (.obj, .ply, case-insensitive), or the embedded default
+/// Loads `path` by its extension (.obj, .ply, .json, case-insensitive), or the embedded default
 /// scene for the name "default". The scene has no camera unless the file gives one; lights
 /// are added when the file has none (a key light above the front and a directional fill) so
 /// that a render shows the model. Throws rp::Error with the file and line (or byte offset)
@@ -19,5 +19,11 @@ void load_obj(const std::string& path, Scene& scene);
 
 /// Appends the triangles of a PLY file to `scene`.
 void load_ply(const std::string& path, Scene& scene);
+
+/// Appends the materials, lights and objects of a JSON scene file to `scene` and sets its
+/// camera when the file has one (the format: the top of engine/loaders/json_scene.cpp). Adds
+/// no default lights (load_scene does). Throws rp::Error naming the file, the JSON path and
+/// the value of the first problem.
+void load_json_scene(const std::string& path, Scene& scene);
 
 }  // namespace rp

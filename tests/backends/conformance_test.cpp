@@ -220,7 +220,7 @@ TEST_P(Conformance, AxisParallelRaysWithSignedZerosMatchOracle) {
 
 TEST_P(Conformance, DefaultSceneMatchesOracle) {
   const Scene scene = make_default_scene();
-  const PinholeCamera cam(*scene.camera(), 48, 32);
+  const Camera cam(*scene.camera(), 48, 32);
   std::vector<Ray> rays;
   for (int y = 0; y < 32; y += 2)
     for (int x = 0; x < 48; x += 4)
@@ -302,7 +302,7 @@ TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
   auto backend = make_backend(GetParam(), scene);
-  const PinholeCamera cam(*scene.camera(), 67, 45);  // odd sizes: partial tiles and packets
+  const Camera cam(*scene.camera(), 67, 45);  // odd sizes: partial tiles and packets
   const RenderSettings st{67, 45, 4, 1234, 3};
   std::vector<float> one, two;
   {

@@ -1,0 +1,698 @@
+/// JSON scene files: camera, materials, lights and objects (spheres, planes, polygons,
+/// quadrics, meshes from OBJ/PLY files) in one document, parsed by nlohmann-json 3.11
+/// (Debian 12's nlohmann-json3-dev). Everything is checked before it reaches the Scene; the
+/// first problem throws one line, "<file>: <JSON path>: <what>", e.g.
+///   scene.json: $.objects[2].radus: unknown key (expected one of: type, center, radius, material)
+///
+/// The format, exactly as read here:
+///
+///   {
+///     "camera":    {...},            optional (without one the CLI frames the scene)
+///     "materials": {"name": {...}},  optional; objects refer to materials by name
+///     "lights":    [{...}, ...],     optional; none (absent or []) = load_scene's default lights
+///     "objects":   [{...}, ...]      required, at least one
+///   }
+///
+/// Unknown keys are errors everywhere. Every key is optional unless marked (required); the
+/// default follows "=". A repeated key keeps its last value (nlohmann's parser). Comments are
+/// not JSON and are refused. Numbers are read as 32-bit floats and must fit in one. A
+/// "vector" is an array of exactly 3 numbers; a "colour" is a vector of components >= 0; a
+/// "direction" is a vector of non-zero length, normalised on reading.
+///
+/// camera: "eye" vector = [0,0,5]; "look_at" vector = [0,0,0] (must differ from eye);
+///   "up" vector = [0,1,0] (must not be parallel to look_at - eye); "fov" number = 45, the
+///   vertical field of view in degrees, in (0, 180).
+///
+/// materials: an object whose keys are the names ("material": "<name>" in objects). Ids are
+///   given in file order after those already in the scene; an object without "material"
+///   uses material 0, the scene's default grey. Keys (see rp::Material):
+///   "diffuse" colour = [0.8,0.8,0.8]; "specular" colour = [0,0,0]; "shininess" number = 32,
+///   >= 0 (Blinn-Phong exponent); "emission" colour = [0,0,0]; "mirror" number = 0, in
+///   [0, 1]; "ior" number = 1, >= 1; "opacity" number = 1, in [0, 1].
+///
+/// lights: an array of objects, each with "type" (required):
+///   "point":       "position" vector (required); "intensity" colour = [1,1,1] (irradiance
+///                  at distance r is intensity / r^2).
+///   "directional": "direction" direction = [0,-1,0], from the light into the scene;
+///                  "irradiance" colour = [1,1,1].
+///
+/// objects: an array of objects, each with "type" (required) and "material" (a name
+///   defined in "materials"; default: material 0):
+///   "sphere":  "center" vector = [0,0,0]; "radius" number = 1, > 0.
+///   "plane":   "normal" direction = [0,1,0]; "offset" number = 0: the plane of the points P
+///              with dot(normal, P) = offset (its signed distance from the origin along the
+///              normalised normal), seen from both sides.
+///   "polygon": "vertices" (required) an array of >= 3 vectors, in order around the
+///              boundary, not collinear, coplanar within 1e-4 of the diagonal of their box.
+///   "quadric": exactly one of "shape" (a named shape) or "coefficients" (a general quadric).
+///     Named shapes (rp::Quadric's constructors; all lengths are numbers > 0, default 1;
+///     "center" vector = [0,0,0]; "axis" = "y", one of "x", "y", "z": the symmetry axis):
+///       "ellipsoid":    "center", "radii" vector = [1,1,1], every component > 0.
+///       "cylinder":     "center", "radius_a", "radius_b", "half_height", "axis" (open tube).
+///       "cone":         "center" (the apex), "a", "b" (slopes), "half_height", "axis".
+///       "hyperboloid1": "center", "a", "b", "c", "half_height", "axis" (one sheet).
+///       "hyperboloid2": "center", "a", "b", "c", "half_height", "axis" (two sheets);
+///                       half_height must be > c (default 2c).
+///       "paraboloid":   "center" (the vertex), "a", "b", "height", "axis".
+///     The radial lengths a, b (radius_a, radius_b) go with the two other axes in x, y, z
+///     order: axis "y" puts a along x and b along z.
+///     General: "coefficients" an object with any of "A".."J" (numbers, default 0, at least
+///     one of A..I non-zero): A x^2 + B y^2 + C z^2 + D xy + E yz + F xz + G x + H y + I z +
+///     J = 0 in (x, y, z) = P - center; "center" vector = [0,0,0]; "clip" (required) an
+///     object with "min" and "max" (required vectors, min <= max per axis): the world-space
+///     box that keeps the part of the surface inside it.
+///   "mesh":    "file" (required) a .obj or .ply file (extension case-insensitive), relative to
+///              the directory of the scene file unless absolute; "transform" an object of
+///              "scale" = 1 (a number > 0 or a vector of components > 0), "rotate" (an object
+///              of "axis" direction = [0,1,0] and "degrees" number = 0, counter-clockwise
+///              seen from the axis tip) and "translate" vector = [0,0,0], applied to positions
+///              in the order scale, rotate, translate whatever the key order, and to normals
+///              as the inverse transpose, renormalised. Without "material", the file's
+///              materials are appended to the scene and its meshes keep them; with it, every
+///              triangle takes that material and the file's materials are not added.
+///
+/// Error messages (path in JSONPath notation; values printed compactly, cut to 40 characters
+/// with "..."):
+///   <file>: line L, column C: <nlohmann's reason>                       (JSON syntax)
+///   <file>: <path>.<key>: unknown key (expected one of: <keys>)
+///   <file>: <path>: missing key "<key>"
+///   <file>: <path>: expected a number, got "wide"     (an object, an array, a string, ...)
+///   <file>: <path>: expected 3 numbers, got [1,2]
+///   <file>: <path>: -1 is out of range (must be > 0)
+///   <file>: <path>.material: unknown material "blue" (materials: red, white)
+///   <file>: <path>.type: unknown object type "cube" (expected one of: ...)
+///   <file>: <path>.file: <the mesh loader's message>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <initializer_list>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "engine/error.h"
+#include "engine/loaders/load.h"
+
+namespace rp {
+namespace {
+
+/// ordered_json keeps the file's key order: material ids follow the file, and the first
+/// unknown key reported is the first one in the file.
+using Json = nlohmann::ordered_json;
+
+constexpr size_t kShownChars = 40;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// The whole file; "<path>: cannot open: <strerror>" when it can't be read (a directory too).
+std::string read_text(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
+  struct stat st {};
+  int err = ::fstat(fd, &st) != 0 ? errno : (S_ISDIR(st.st_mode) ? EISDIR : 0);
+  std::string text;
+  char buffer[1 << 16];
+  while (err == 0) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n > 0)
+      text.append(buffer, size_t(n));
+    else if (n == 0)
+      break;
+    else if (errno != EINTR)
+      err = errno;
+  }
+  ::close(fd);
+  if (err != 0) throw Error(cat(path, ": cannot open: ", std::strerror(err)));
+  return text;
+}
+
+/// 1-based line and column of the character nlohmann's parse_error::byte points at (byte is
+/// 1-based; byte = size + 1 is the end of input). Columns count bytes.
+struct TextPosition {
+  size_t line, column;
+};
+TextPosition position_of(const std::string& text, size_t byte) {
+  const size_t at = std::min(byte == 0 ? 0 : byte - 1, text.size());
+  const size_t line = 1 + size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(at), '\n'));
+  const size_t nl = at == 0 ? std::string::npos : text.rfind('\n', at - 1);
+  const size_t line_start = nl == std::string::npos ? 0 : nl + 1;
+  return {line, at - line_start + 1};
+}
+
+/// nlohmann's message without "[json.exception.<kind>.<id>] " and "parse error at ...: ".
+std::string reason_of(const std::string& what) {
+  std::string s = what;
+  if (!s.empty() && s[0] == '[') {
+    const size_t close = s.find("] ");
+    if (close != std::string::npos) s.erase(0, close + 2);
+  }
+  if (s.rfind("parse error", 0) == 0) {
+    const size_t colon = s.find(": ");
+    if (colon != std::string::npos) s.erase(0, colon + 2);
+  }
+  return s;
+}
+
+/// A value as the file has it, compact, at most kShownChars characters (cut with "...",
+/// never inside a UTF-8 sequence).
+std::string show(const Json& v) {
+  std::string s = v.dump(-1, ' ', false, Json::error_handler_t::replace);
+  if (s.size() <= kShownChars) return s;
+  size_t n = kShownChars - 3;
+  while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;
+  return s.substr(0, n) + "...";
+}
+
+/// JSONPath of member `key` of `path`: $.a.b, or $.a["my key"] when key is not an identifier.
+std::string member(const std::string& path, std::string_view key) {
+  const bool identifier =
+      !key.empty() && !std::isdigit(static_cast<unsigned char>(key[0])) &&
+      std::all_of(key.begin(), key.end(), [](unsigned char c) { return std::isalnum(c) != 0 || c == '_'; });
+  if (identifier) return cat(path, ".", key);
+  return cat(path, "[", show(Json(std::string(key))), "]");
+}
+
+std::string element(const std::string& path, size_t i) { return cat(path, "[", i, "]"); }
+
+std::string join(std::span<const std::string_view> names) {
+  std::string out;
+  for (std::string_view n : names) {
+    if (!out.empty()) out += ", ";
+    out += n;
+  }
+  return out;
+}
+
+/// A closed, open or half-open interval of accepted numbers, described as "> 0", ">= 1",
+/// "in [0, 1]", "in (0, 180)".
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool open_lo = false, open_hi = false;
+
+  bool contains(double x) const {
+    return (open_lo ? x > lo : x >= lo) && (open_hi ? x < hi : x <= hi);
+  }
+  std::string describe() const {
+    if (lo > -kInf && hi < kInf) return cat("in ", open_lo ? "(" : "[", lo, ", ", hi, open_hi ? ")" : "]");
+    if (lo > -kInf) return cat(open_lo ? "> " : ">= ", lo);
+    return cat(open_hi ? "< " : "<= ", hi);
+  }
+};
+constexpr Range kAnyNumber{};
+constexpr Range kPositive{0.0, kInf, true, false};
+constexpr Range kNonNegative{0.0, kInf, false, false};
+constexpr Range kFraction{0.0, 1.0, false, false};
+constexpr Range kFov{0.0, 180.0, true, true};
+constexpr Range kIor{1.0, kInf, false, false};
+
+constexpr std::string_view kTopKeys[] = {"camera", "materials", "lights", "objects"};
+constexpr std::string_view kCameraKeys[] = {"eye", "look_at", "up", "fov"};
+constexpr std::string_view kMaterialKeys[] = {"diffuse", "specular", "shininess", "emission",
+                                              "mirror",  "ior",      "opacity"};
+constexpr std::string_view kLightTypes[] = {"point", "directional"};
+constexpr std::string_view kPointLightKeys[] = {"type", "position", "intensity"};
+constexpr std::string_view kDirectionalLightKeys[] = {"type", "direction", "irradiance"};
+constexpr std::string_view kObjectTypes[] = {"sphere", "plane", "polygon", "quadric", "mesh"};
+constexpr std::string_view kSphereKeys[] = {"type", "center", "radius", "material"};
+constexpr std::string_view kPlaneKeys[] = {"type", "normal", "offset", "material"};
+constexpr std::string_view kPolygonKeys[] = {"type", "vertices", "material"};
+constexpr std::string_view kShapes[] = {"ellipsoid",    "cylinder",     "cone",
+                                        "hyperboloid1", "hyperboloid2", "paraboloid"};
+constexpr std::string_view kEllipsoidKeys[] = {"type", "shape", "center", "radii", "material"};
+constexpr std::string_view kCylinderKeys[] = {"type",        "shape", "center",  "radius_a",
+                                              "radius_b", "half_height", "axis", "material"};
+constexpr std::string_view kConeKeys[] = {"type", "shape", "center", "a", "b", "half_height", "axis", "material"};
+constexpr std::string_view kHyperboloidKeys[] = {"type", "shape",       "center", "a",       "b",
+                                                 "c",    "half_height", "axis",   "material"};
+constexpr std::string_view kParaboloidKeys[] = {"type", "shape", "center", "a", "b", "height", "axis", "material"};
+constexpr std::string_view kGeneralQuadricKeys[] = {"type", "coefficients", "center", "clip", "material"};
+constexpr std::string_view kCoefficientKeys[] = {"A", "B", "C", "D", "E", "F", "G", "H", "I", "J"};
+constexpr std::string_view kClipKeys[] = {"min", "max"};
+constexpr std::string_view kAxes[] = {"x", "y", "z"};
+constexpr std::string_view kMeshKeys[] = {"type", "file", "transform", "material"};
+constexpr std::string_view kTransformKeys[] = {"scale", "rotate", "translate"};
+constexpr std::string_view kRotateKeys[] = {"axis", "degrees"};
+
+/// p -> rotation (scale * p) + translation, in double.
+struct MeshTransform {
+  Vec3d scale{1.0};
+  std::array<Vec3d, 3> rotation{Vec3d(1, 0, 0), Vec3d(0, 1, 0), Vec3d(0, 0, 1)};  ///< rows
+  Vec3d translation{0.0};
+
+  Vec3d rotate(const Vec3d& v) const { return {dot(rotation[0], v), dot(rotation[1], v), dot(rotation[2], v)}; }
+  Vec3f point(const Vec3f& p) const { return Vec3f(rotate(mul(Vec3d(p), scale)) + translation); }
+  /// The inverse transpose of rotation * diag(scale) is rotation * diag(1 / scale).
+  Vec3f normal(const Vec3f& n) const {
+    const Vec3d s = Vec3d(n);
+    return Vec3f(normalize(rotate({s.x / scale.x, s.y / scale.y, s.z / scale.z})));
+  }
+};
+
+/// Rotation by `degrees` about unit `axis`, counter-clockwise seen from its tip (Rodrigues):
+/// R = cos(a) I + sin(a) [axis]x + (1 - cos(a)) axis axis^T.
+std::array<Vec3d, 3> rotation_matrix(const Vec3d& k, double degrees) {
+  const double a = degrees * kPi / 180.0, c = std::cos(a), s = std::sin(a), t = 1.0 - c;
+  return {Vec3d(c + t * k.x * k.x, t * k.x * k.y - s * k.z, t * k.x * k.z + s * k.y),
+          Vec3d(t * k.x * k.y + s * k.z, c + t * k.y * k.y, t * k.y * k.z - s * k.x),
+          Vec3d(t * k.x * k.z - s * k.y, t * k.y * k.z + s * k.x, c + t * k.z * k.z)};
+}
+
+/// Lower-case extension of the file name in `path` (after the last '.' of the last component).
+std::string extension(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string ext = path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+  return ext;
+}
+
+/// Reads one parsed document into a Scene; every check names file_ and the JSON path.
+class SceneReader {
+ public:
+  SceneReader(const std::string& file, Scene& scene) : file_(file), scene_(scene) {
+    const size_t slash = file.find_last_of('/');
+    dir_ = slash == std::string::npos ? std::string() : file.substr(0, slash + 1);
+  }
+
+  void read(const Json& root) {
+    const std::string path = "$";
+    object(root, path);
+    check_keys(root, path, kTopKeys);
+    if (const Json* m = find(root, "materials")) read_materials(*m, member(path, "materials"));
+    if (const Json* c = find(root, "camera")) read_camera(*c, member(path, "camera"));
+    if (const Json* l = find(root, "lights")) {
+      const std::string lp = member(path, "lights");
+      array(*l, lp);
+      for (size_t i = 0; i < l->size(); ++i) read_light((*l)[i], element(lp, i));
+    }
+    const std::string op = member(path, "objects");
+    const Json& objects = array(require(root, path, "objects"), op);
+    if (objects.empty()) fail(op, cat("expected at least one object, got ", show(objects)));
+    for (size_t i = 0; i < objects.size(); ++i) read_object(objects[i], element(op, i));
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw Error(cat(file_, ": ", path, ": ", what));
+  }
+
+  /// Runs a Scene call, prefixing any error it throws with the file and `path`.
+  template <typename F>
+  void add(const std::string& path, F&& f) const {
+    try {
+      f();
+    } catch (const Error& e) {
+      fail(path, e.what());
+    }
+  }
+
+  static const Json* find(const Json& obj, std::string_view key) {
+    const auto it = obj.find(std::string(key));
+    return it == obj.end() ? nullptr : &*it;
+  }
+
+  void check_keys(const Json& obj, const std::string& path, std::span<const std::string_view> keys) const {
+    for (const auto& [key, value] : obj.items())
+      if (std::find(keys.begin(), keys.end(), key) == keys.end())
+        fail(member(path, key), cat("unknown key (expected one of: ", join(keys), ")"));
+  }
+
+  const Json& require(const Json& obj, const std::string& path, std::string_view key) const {
+    const Json* v = find(obj, key);
+    if (v == nullptr) fail(path, cat("missing key \"", key, "\""));
+    return *v;
+  }
+
+  const Json& object(const Json& v, const std::string& path) const {
+    if (!v.is_object()) fail(path, cat("expected an object, got ", show(v)));
+    return v;
+  }
+
+  const Json& array(const Json& v, const std::string& path) const {
+    if (!v.is_array()) fail(path, cat("expected an array, got ", show(v)));
+    return v;
+  }
+
+  std::string string(const Json& v, const std::string& path) const {
+    if (!v.is_string()) fail(path, cat("expected a string, got ", show(v)));
+    return v.get<std::string>();
+  }
+
+  /// A number that fits in a float, checked against `range` as a float.
+  float number(const Json& v, const std::string& path, const Range& range) const {
+    if (!v.is_number()) fail(path, cat("expected a number, got ", show(v)));
+    const float f = float(v.get<double>());
+    if (!std::isfinite(f)) fail(path, cat(show(v), " is out of range (must fit in a 32-bit float)"));
+    if (!range.contains(f)) fail(path, cat(show(v), " is out of range (must be ", range.describe(), ")"));
+    return f;
+  }
+
+  float number(const Json& obj, const std::string& path, std::string_view key, float fallback,
+               const Range& range) const {
+    const Json* v = find(obj, key);
+    return v == nullptr ? fallback : number(*v, member(path, key), range);
+  }
+
+  /// Exactly 3 numbers, each a float in `range`.
+  Vec3f vector(const Json& v, const std::string& path, const Range& range = kAnyNumber) const {
+    if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), [](const Json& x) { return x.is_number(); }))
+      fail(path, cat("expected 3 numbers, got ", show(v)));
+    return {number(v[0], element(path, 0), range), number(v[1], element(path, 1), range),
+            number(v[2], element(path, 2), range)};
+  }
+
+  Vec3f vector(const Json& obj, const std::string& path, std::string_view key, const Vec3f& fallback,
+               const Range& range = kAnyNumber) const {
+    const Json* v = find(obj, key);
+    return v == nullptr ? fallback : vector(*v, member(path, key), range);
+  }
+
+  Vec3f colour(const Json& obj, const std::string& path, std::string_view key, const Vec3f& fallback) const {
+    return vector(obj, path, key, fallback, kNonNegative);
+  }
+
+  /// A vector of non-zero length, normalised (in double).
+  Vec3d direction(const Json& obj, const std::string& path, std::string_view key, const Vec3d& fallback) const {
+    const Json* v = find(obj, key);
+    if (v == nullptr) return fallback;
+    const std::string vp = member(path, key);
+    const Vec3d d(vector(*v, vp));
+    const double len = length(d);
+    if (!(len > 0.0)) fail(vp, cat(show(*v), " is out of range (must have a non-zero length)"));
+    return d / len;
+  }
+
+  /// Looks `v` (a string) up in `names`; fails with "unknown <what> "<v>" (expected one of: ...)".
+  size_t choice(const Json& v, const std::string& path, std::string_view what,
+                std::span<const std::string_view> names) const {
+    const std::string s = string(v, path);
+    const auto it = std::find(names.begin(), names.end(), s);
+    if (it == names.end()) fail(path, cat("unknown ", what, " ", show(v), " (expected one of: ", join(names), ")"));
+    return size_t(it - names.begin());
+  }
+
+  void read_materials(const Json& v, const std::string& path) {
+    object(v, path);
+    for (const auto& [name, value] : v.items()) {
+      const std::string mp = member(path, name);
+      object(value, mp);
+      check_keys(value, mp, kMaterialKeys);
+      Material m;
+      m.name = name;
+      m.diffuse = colour(value, mp, "diffuse", m.diffuse);
+      m.specular = colour(value, mp, "specular", m.specular);
+      m.shininess = number(value, mp, "shininess", m.shininess, kNonNegative);
+      m.emission = colour(value, mp, "emission", m.emission);
+      m.mirror = number(value, mp, "mirror", m.mirror, kFraction);
+      m.ior = number(value, mp, "ior", m.ior, kIor);
+      m.opacity = number(value, mp, "opacity", m.opacity, kFraction);
+      uint32_t id = 0;
+      add(mp, [&] { id = scene_.add_material(std::move(m)); });
+      materials_.emplace_back(name, id);
+    }
+  }
+
+  /// The material named by obj["material"], or material 0 when there is none.
+  uint32_t material(const Json& obj, const std::string& path) const {
+    const Json* v = find(obj, "material");
+    if (v == nullptr) return 0;
+    const std::string mp = member(path, "material");
+    const std::string name = string(*v, mp);
+    for (const auto& [n, id] : materials_)
+      if (n == name) return id;
+    std::vector<std::string_view> names;
+    for (const auto& entry : materials_) names.push_back(entry.first);
+    fail(mp, cat("unknown material ", show(*v), " (",
+                 names.empty() ? std::string("no materials are defined") : "materials: " + join(names), ")"));
+  }
+
+  void read_camera(const Json& v, const std::string& path) {
+    object(v, path);
+    check_keys(v, path, kCameraKeys);
+    CameraDesc c;
+    c.eye = vector(v, path, "eye", c.eye);
+    c.look_at = vector(v, path, "look_at", c.look_at);
+    c.up = vector(v, path, "up", c.up);
+    c.vfov_degrees = number(v, path, "fov", c.vfov_degrees, kFov);
+    // The checks of PinholeCamera's constructor, in the same float arithmetic.
+    const Vec3f view = c.look_at - c.eye;
+    if (!(length(view) > 0.0f)) {
+      const bool at = find(v, "look_at") != nullptr;
+      const Json* shown = find(v, at ? "look_at" : "eye");
+      fail(member(path, at ? "look_at" : "eye"),
+           cat(shown != nullptr ? show(*shown) : std::string("[0,0,0]"), " is out of range (must differ from ",
+               at ? "eye" : "look_at", ")"));
+    }
+    if (!(length(cross(normalize(view), c.up)) > 1e-6f * length(c.up))) {
+      const Json* up = find(v, "up");
+      fail(member(path, "up"), cat(up != nullptr ? show(*up) : std::string("[0,1,0]"),
+                                   " is out of range (must not be parallel to look_at - eye)"));
+    }
+    scene_.set_camera(c);
+  }
+
+  void read_light(const Json& v, const std::string& path) {
+    object(v, path);
+    const size_t type = choice(require(v, path, "type"), member(path, "type"), "light type", kLightTypes);
+    if (type == 0) {
+      check_keys(v, path, kPointLightKeys);
+      PointLight l;
+      l.position = vector(require(v, path, "position"), member(path, "position"));
+      l.intensity = colour(v, path, "intensity", l.intensity);
+      scene_.add_light(l);
+    } else {
+      check_keys(v, path, kDirectionalLightKeys);
+      DirectionalLight l;
+      l.direction = Vec3f(direction(v, path, "direction", Vec3d(l.direction)));
+      l.irradiance = colour(v, path, "irradiance", l.irradiance);
+      scene_.add_light(l);
+    }
+  }
+
+  void read_object(const Json& v, const std::string& path) {
+    object(v, path);
+    switch (choice(require(v, path, "type"), member(path, "type"), "object type", kObjectTypes)) {
+      case 0: read_sphere(v, path); break;
+      case 1: read_plane(v, path); break;
+      case 2: read_polygon(v, path); break;
+      case 3: read_quadric(v, path); break;
+      default: read_mesh(v, path); break;
+    }
+  }
+
+  void read_sphere(const Json& v, const std::string& path) {
+    check_keys(v, path, kSphereKeys);
+    Sphere s;
+    s.center = vector(v, path, "center", Vec3f(0.0f));
+    s.radius = number(v, path, "radius", 1.0f, kPositive);
+    s.material = material(v, path);
+    add(path, [&] { scene_.add_sphere(s); });
+  }
+
+  void read_plane(const Json& v, const std::string& path) {
+    check_keys(v, path, kPlaneKeys);
+    Plane p;
+    p.normal = Vec3f(direction(v, path, "normal", Vec3d(0.0, 1.0, 0.0)));
+    p.d = -number(v, path, "offset", 0.0f, kAnyNumber);
+    p.material = material(v, path);
+    add(path, [&] { scene_.add_plane(p); });
+  }
+
+  void read_polygon(const Json& v, const std::string& path) {
+    check_keys(v, path, kPolygonKeys);
+    const std::string vp = member(path, "vertices");
+    const Json& list = require(v, path, "vertices");
+    if (!list.is_array() || list.size() < 3) fail(vp, cat("expected an array of at least 3 vertices, got ", show(list)));
+    std::vector<Vec3f> vertices;
+    for (size_t i = 0; i < list.size(); ++i) vertices.push_back(vector(list[i], element(vp, i)));
+    // Scene::add_polygon's own test for a zero-area polygon, in float.
+    if (!(length(polygon_plane<float>(vertices).n) > 0.0f))
+      fail(vp, cat(show(list), " has zero area (the vertices are collinear)"));
+    // Coplanarity, in double: every vertex within 1e-4 of the box diagonal from the plane.
+    std::vector<Vec3d> dv(vertices.begin(), vertices.end());
+    const PolygonPlane<double> plane = polygon_plane<double>(dv);
+    const double n = length(plane.n);
+    Box3d box;
+    for (const Vec3d& p : dv) box.extend(p);
+    const double tolerance = 1e-4 * length(box.extent());
+    for (size_t i = 0; i < dv.size(); ++i) {
+      const double distance = std::abs(dot(plane.n, dv[i]) + plane.d) / n;
+      if (!(distance <= tolerance))
+        fail(element(vp, i),
+             cat(show(list[i]), " is ", distance, " off the polygon's plane (the vertices must be coplanar)"));
+    }
+    const uint32_t m = material(v, path);
+    add(path, [&] { scene_.add_polygon(vertices, m); });
+  }
+
+  void read_quadric(const Json& v, const std::string& path) {
+    const Json* shape = find(v, "shape");
+    const Json* coefficients = find(v, "coefficients");
+    if (shape != nullptr && coefficients != nullptr)
+      fail(path, "expected \"shape\" or \"coefficients\", not both");
+    if (shape == nullptr && coefficients == nullptr) fail(path, "missing key \"shape\" (or \"coefficients\")");
+    QuadricShape q;
+    if (coefficients != nullptr) {
+      q.quadric = general_quadric(v, *coefficients, path);
+    } else {
+      q.quadric = named_quadric(v, *shape, path);
+    }
+    q.material = material(v, path);
+    add(path, [&] { scene_.add_quadric(q); });
+  }
+
+  Quadricf general_quadric(const Json& v, const Json& coefficients, const std::string& path) const {
+    check_keys(v, path, kGeneralQuadricKeys);
+    const std::string cp = member(path, "coefficients");
+    object(coefficients, cp);
+    check_keys(coefficients, cp, kCoefficientKeys);
+    Quadricf q;
+    float* terms[] = {&q.A, &q.B, &q.C, &q.D, &q.E, &q.F, &q.G, &q.H, &q.I, &q.J};
+    bool surface = false;
+    for (size_t i = 0; i < 10; ++i) {
+      *terms[i] = number(coefficients, cp, kCoefficientKeys[i], 0.0f, kAnyNumber);
+      surface = surface || (i < 9 && *terms[i] != 0.0f);
+    }
+    if (!surface) fail(cp, cat(show(coefficients), " has no x, y or z term (one of A..I must be non-zero)"));
+    q.center = vector(v, path, "center", Vec3f(0.0f));
+    const std::string clip_path = member(path, "clip");
+    const Json& clip = object(require(v, path, "clip"), clip_path);
+    check_keys(clip, clip_path, kClipKeys);
+    const Json& lo = require(clip, clip_path, "min");
+    const Json& hi = require(clip, clip_path, "max");
+    q.clip.lo = vector(lo, member(clip_path, "min"));
+    q.clip.hi = vector(hi, member(clip_path, "max"));
+    for (int k = 0; k < 3; ++k)
+      if (!(q.clip.hi[k] >= q.clip.lo[k]))
+        fail(element(member(clip_path, "max"), size_t(k)),
+             cat(show(hi[size_t(k)]), " is out of range (must be >= min[", k, "] = ", show(lo[size_t(k)]), ")"));
+    return q;
+  }
+
+  Quadricf named_quadric(const Json& v, const Json& shape, const std::string& path) const {
+    const size_t kind = choice(shape, member(path, "shape"), "quadric shape", kShapes);
+    static constexpr std::span<const std::string_view> kKeys[] = {kEllipsoidKeys,   kCylinderKeys,    kConeKeys,
+                                                                  kHyperboloidKeys, kHyperboloidKeys, kParaboloidKeys};
+    check_keys(v, path, kKeys[kind]);
+    const Vec3f center = vector(v, path, "center", Vec3f(0.0f));
+    int axis = 1;
+    if (const Json* a = find(v, "axis")) axis = int(choice(*a, member(path, "axis"), "axis", kAxes));
+    // Parameters are read in the documented order, so the first bad one is the one reported.
+    auto length_of = [&](std::string_view key) { return number(v, path, key, 1.0f, kPositive); };
+    if (kind == 0) return Quadricf::ellipsoid(center, vector(v, path, "radii", Vec3f(1.0f), kPositive));
+    const float a = length_of(kind == 1 ? "radius_a" : "a");
+    const float b = length_of(kind == 1 ? "radius_b" : "b");
+    if (kind == 1) return Quadricf::cylinder(center, a, b, length_of("half_height"), axis);
+    if (kind == 2) return Quadricf::cone(center, a, b, length_of("half_height"), axis);
+    if (kind == 5) return Quadricf::paraboloid(center, a, b, length_of("height"), axis);
+    const float c = length_of("c");
+    if (kind == 3) return Quadricf::hyperboloid_one_sheet(center, a, b, c, length_of("half_height"), axis);
+    const float half_height = number(v, path, "half_height", 2.0f * c, kPositive);
+    if (!(half_height > c))
+      fail(member(path, "half_height"),
+           cat(show(*find(v, "half_height")), " is out of range (must be > c = ", c, ")"));
+    return Quadricf::hyperboloid_two_sheets(center, a, b, c, half_height, axis);
+  }
+
+  MeshTransform transform(const Json& v, const std::string& path) const {
+    MeshTransform t;
+    object(v, path);
+    check_keys(v, path, kTransformKeys);
+    if (const Json* s = find(v, "scale")) {
+      const std::string sp = member(path, "scale");
+      if (s->is_number())
+        t.scale = Vec3d(number(*s, sp, kPositive));
+      else if (s->is_array() && s->size() == 3)
+        t.scale = Vec3d(vector(*s, sp, kPositive));
+      else
+        fail(sp, cat("expected a number or 3 numbers, got ", show(*s)));
+    }
+    if (const Json* r = find(v, "rotate")) {
+      const std::string rp = member(path, "rotate");
+      object(*r, rp);
+      check_keys(*r, rp, kRotateKeys);
+      t.rotation = rotation_matrix(direction(*r, rp, "axis", Vec3d(0.0, 1.0, 0.0)),
+                                   number(*r, rp, "degrees", 0.0f, kAnyNumber));
+    }
+    t.translation = Vec3d(vector(v, path, "translate", Vec3f(0.0f)));
+    return t;
+  }
+
+  void read_mesh(const Json& v, const std::string& path) {
+    check_keys(v, path, kMeshKeys);
+    const std::string fp = member(path, "file");
+    const Json& file_value = require(v, path, "file");
+    const std::string file = string(file_value, fp);
+    const std::string ext = extension(file);
+    if (ext != ".obj" && ext != ".ply") fail(fp, cat(show(file_value), " is not a mesh file (expected .obj or .ply)"));
+    const Json* transform_value = find(v, "transform");
+    const MeshTransform t =
+        transform_value != nullptr ? transform(*transform_value, member(path, "transform")) : MeshTransform{};
+    const bool override_material = find(v, "material") != nullptr;
+    const uint32_t override_id = material(v, path);
+
+    const std::string resolved = !file.empty() && file[0] == '/' ? file : dir_ + file;
+    Scene loaded;
+    try {
+      if (ext == ".obj")
+        load_obj(resolved, loaded);
+      else
+        load_ply(resolved, loaded);
+    } catch (const Error& e) {
+      fail(fp, e.what());
+    }
+    if (loaded.triangle_count() == 0) fail(fp, cat(resolved, ": the file has no triangles"));
+
+    // The file's materials 1.. follow the scene's; its material 0 is the scene's default too.
+    const uint32_t base = uint32_t(scene_.materials().size()) - 1;
+    if (!override_material)
+      for (size_t i = 1; i < loaded.materials().size(); ++i) add(fp, [&] { scene_.add_material(loaded.materials()[i]); });
+    auto remap = [&](uint32_t id) { return override_material ? override_id : (id == 0 ? 0 : base + id); };
+    for (TriangleMesh mesh : loaded.meshes()) {
+      for (Vec3f& p : mesh.positions) p = t.point(p);
+      for (Vec3f& n : mesh.normals) n = t.normal(n);
+      mesh.material = remap(mesh.material);
+      if (override_material)
+        mesh.face_materials.clear();
+      else
+        for (uint32_t& m : mesh.face_materials) m = remap(m);
+      add(path, [&] { scene_.add_mesh(std::move(mesh)); });
+    }
+  }
+
+  std::string file_, dir_;
+  Scene& scene_;
+  std::vector<std::pair<std::string, uint32_t>> materials_;  ///< name, id; in file order
+};
+
+}  // namespace
+
+void load_json_scene(const std::string& path, Scene& scene) {
+  const std::string text = read_text(path);
+  Json root;
+  try {
+    root = Json::parse(text, nullptr, true, /*ignore_comments=*/false);
+  } catch (const Json::parse_error& e) {
+    const TextPosition at = position_of(text, e.byte);
+    throw Error(cat(path, ": line ", at.line, ", column ", at.column, ": ", reason_of(e.what())));
+  } catch (const Json::exception& e) {
+    // out_of_range.406, a number too large for a double: nlohmann gives no position.
+    throw Error(cat(path, ": ", reason_of(e.what())));
+  }
+  SceneReader(path, scene).read(root);
+}
+
+}  // namespace rp
