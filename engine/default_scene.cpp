@@ -78,7 +78,13 @@ Scene make_default_scene() {
   s.add_mesh(torus_knot({0.0f, 1.75f, -0.5f}, 1.1f, 0.28f, 512, 64, gold));
 
   s.add_sphere({{-2.7f, 0.75f, 0.9f}, 0.75f, mirror});
-  s.add_sphere({{1.2f, 0.35f, 2.0f}, 0.35f, red});
+  const uint32_t glass = s.add_material({.name = "glass",
+                                         .diffuse = {0.0f, 0.0f, 0.0f},
+                                         .specular = {1.0f, 1.0f, 1.0f},
+                                         .shininess = 300.0f,
+                                         .ior = 1.5f,
+                                         .opacity = 0.0f});
+  s.add_sphere({{1.2f, 0.45f, 2.0f}, 0.45f, glass});
 
   using Qf = Quadric<float>;
   s.add_quadric({Qf::cylinder({2.9f, 0.7f, -0.6f}, 0.4f, 0.4f, 0.7f, 1), blue});

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <unordered_map>
 
 #include "engine/error.h"
 #include "engine/offset.h"
@@ -30,30 +31,233 @@ Vec3f sky(const Vec3f& dir) {
   return Vec3f{0.85f, 0.88f, 0.92f} * (1.0f - t) + Vec3f{0.35f, 0.55f, 0.85f} * t;
 }
 
-/// One ray still being followed: the pixel it adds to and the weight it carries.
+/// A ray being followed: the output slot it adds to and the weight it carries.
 struct PathState {
-  uint32_t pixel;  ///< index into the tile's accumulator
+  uint32_t slot;  ///< index into the caller's colour array, kInvalidId for no contribution
   Vec3f weight;
 };
 
-/// Per-tile scratch, allocated once per tile (never per ray).
-struct TileWork {
-  std::vector<Ray> rays, shadow_rays, next_rays;
+struct Counters {
+  uint64_t shadow = 0, reflection = 0, refraction = 0;
+};
+
+/// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
+struct ShadeWork {
+  std::vector<Ray> rays, next_rays, shadow_rays;
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
-  struct Pending { uint32_t pixel; Vec3f contribution; };
+  struct Pending {
+    uint32_t slot;
+    Vec3f contribution;
+  };
   std::vector<Pending> pending;  ///< lit contributions waiting for their shadow ray
-  std::vector<Vec3f> accum;
 };
+
+/// Shades the primary rays in w.rays / w.paths (whose groups of 8 are packets), adding each
+/// path's radiance to out[slot]: Blinn-Phong with shadow rays through occluded(), then
+/// mirror reflection and refraction (Whitted 1980) with the exact dielectric Fresnel term,
+/// up to max_depth bounces, the bounces traced as incoherent batches.
+void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork& w, std::span<Vec3f> out,
+           Counters& n) {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  const auto& materials = scene.materials();
+  for (int depth = 0; !w.rays.empty(); ++depth) {
+    const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
+    w.hits.resize(w.rays.size());
+    backend.intersect(w.rays, w.hits, coherence);
+    w.shadow_rays.clear();
+    w.pending.clear();
+    w.next_rays.clear();
+    w.next_paths.clear();
+    for (size_t i = 0; i < w.rays.size(); ++i) {
+      const PathState& ps = w.paths[i];
+      if (ps.slot == kInvalidId) continue;
+      const Ray& ray = w.rays[i];
+      const Hit& hit = w.hits[i];
+      if (!hit.hit()) {
+        out[ps.slot] += mul(ps.weight, sky(ray.dir));
+        continue;
+      }
+      const SurfacePoint sp = scene.surface(ray, hit);
+      const Material& m = materials[sp.material];
+      // Face-forward both normals towards the viewer.
+      const bool back = dot(sp.geometric_normal, ray.dir) > 0.0f;
+      const Vec3f ng = back ? -sp.geometric_normal : sp.geometric_normal;
+      Vec3f ns = back ? -sp.shading_normal : sp.shading_normal;
+      if (dot(ns, ng) < 0.0f) ns = ng;
+      const Vec3f d = normalize(ray.dir);
+      const Vec3f view = -d;
+      // Secondary rays leave the surface by rp::offset_ray_origin (Wachter and Binder 2019):
+      // to the viewer's side for shadow and reflection rays, to the far side for refraction.
+      const Vec3f origin = offset_ray_origin(sp.position, ng);
+      const float transparency = 1.0f - m.opacity;
+      const float diffuse_weight = (1.0f - m.mirror) * m.opacity;
+      out[ps.slot] += mul(ps.weight, m.emission + m.diffuse * (0.06f * diffuse_weight));
+      auto light = [&](const Vec3f& to_light, float tfar, const Vec3f& irradiance) {
+        const Vec3f l = normalize(to_light);
+        const float ndl = dot(ns, l);
+        if (ndl <= 0.0f || dot(ng, l) <= 0.0f) return;
+        const Vec3f h = normalize(l + view);
+        const float spec = std::pow(std::max(0.0f, dot(ns, h)), m.shininess);
+        const Vec3f c = mul(m.diffuse * (ndl * diffuse_weight) + m.specular * spec, irradiance);
+        w.shadow_rays.push_back({origin, 0.0f, to_light, tfar});
+        w.pending.push_back({ps.slot, mul(ps.weight, c)});
+      };
+      for (const PointLight& pl : scene.point_lights()) {
+        const Vec3f to = pl.position - origin;
+        const float r2 = dot(to, to);
+        if (r2 > 0.0f) light(to, 1.0f - 1e-4f, pl.intensity / r2);
+      }
+      for (const DirectionalLight& dl : scene.directional_lights()) light(-dl.direction, inf, dl.irradiance);
+      if (depth >= max_depth) continue;
+      // Fresnel on the geometric normal: entering when the ray met the front face.
+      const float cos_i = -dot(d, ng);
+      const float n1 = back ? m.ior : 1.0f, n2 = back ? 1.0f : m.ior;
+      const float fresnel = transparency > 0.0f ? fresnel_dielectric(cos_i, n1, n2) : 0.0f;
+      const Vec3f reflect_weight = m.specular * m.mirror + Vec3f(transparency * fresnel);
+      if (max_component(reflect_weight) > 0.0f) {
+        w.next_rays.push_back({origin, 0.0f, d + ng * (2.0f * cos_i), inf});
+        w.next_paths.push_back({ps.slot, mul(ps.weight, reflect_weight)});
+        ++n.reflection;
+      }
+      const float transmit = transparency * (1.0f - fresnel);
+      if (transmit > 0.0f) {
+        const float eta = n1 / n2;
+        const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
+        w.next_rays.push_back({offset_ray_origin(sp.position, -ng), 0.0f, d * eta + ng * (eta * cos_i - cos_t), inf});
+        w.next_paths.push_back({ps.slot, ps.weight * transmit});
+        ++n.refraction;
+      }
+    }
+    if (!w.shadow_rays.empty()) {
+      w.occluded.resize(w.shadow_rays.size());
+      backend.occluded(w.shadow_rays, w.occluded, coherence);
+      n.shadow += w.shadow_rays.size();
+      for (size_t k = 0; k < w.pending.size(); ++k)
+        if (!w.occluded[k]) out[w.pending[k].slot] += w.pending[k].contribution;
+    }
+    std::swap(w.rays, w.next_rays);
+    std::swap(w.paths, w.next_paths);
+  }
+}
+
+/// Renders the tile at (x0, y0) with one of the per-sample samplers into `tile` (kTile^2 colours).
+uint64_t sample_tile(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+                     int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+  uint64_t primary = 0;
+  for (int s = 0; s < st.spp; ++s) {
+    // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
+    w.rays.clear();
+    w.paths.clear();
+    for (int by = 0; by < kTile; by += 2)
+      for (int bx = 0; bx < kTile; bx += 4)
+        for (int lane = 0; lane < 8; ++lane) {
+          const int lx = bx + lane % 4, ly = by + lane / 4, x = x0 + lx, y = y0 + ly;
+          if (x >= st.width || y >= st.height) {
+            w.rays.push_back({{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f});  // invalid: traced as a miss
+            w.paths.push_back({kInvalidId, {}});
+            continue;
+          }
+          const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
+          const Vec2f j = pixel_sample(st.seed, pixel, s, st.spp, st.sampler);
+          const Ray r = camera.generate(float(x) + j.x, float(y) + j.y, lens_sample(st.seed, pixel, s));
+          w.rays.push_back(r);
+          // No ray (outside a fisheye's image circle): the pixel stays black.
+          w.paths.push_back({valid_ray(r) ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}});
+          primary += valid_ray(r);
+        }
+    shade(scene, backend, st.max_depth, w, tile, n);
+  }
+  const float inv = 1.0f / float(st.spp);
+  for (Vec3f& c : tile) c *= inv;
+  return primary;
+}
+
+/// The seeds' adaptive sampling for the tile at (x0, y0): colours at the pixel-grid corners;
+/// a cell whose four corner colours differ by more than the threshold (in any channel) is
+/// split into four, which needs the midpoints of its edges and its centre, down to cells of
+/// 1/2^depth pixel; a pixel is the area-weighted mean of its cells' corner averages. Corner
+/// positions are integers on the finest grid, shared between neighbouring cells through a
+/// cache, so each point is traced once per tile.
+uint64_t adaptive_tile(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+                       int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+  const int scale = 1 << st.adaptive_depth;
+  const int tw = std::min(kTile, st.width - x0), th = std::min(kTile, st.height - y0);
+  auto key = [](int64_t x, int64_t y) { return uint64_t(x) << 32 | uint64_t(uint32_t(y)); };
+  std::unordered_map<uint64_t, Vec3f> colour;
+  std::vector<std::pair<int, int>> wanted;
+  std::vector<Vec3f> shaded;
+  uint64_t primary = 0;
+  auto want = [&](int x, int y) {
+    if (colour.emplace(key(x, y), Vec3f{}).second) wanted.push_back({x, y});
+  };
+  auto trace_wanted = [&] {
+    w.rays.clear();
+    w.paths.clear();
+    for (size_t i = 0; i < wanted.size(); ++i) {
+      const auto [x, y] = wanted[i];
+      const uint64_t id = uint64_t(uint32_t(y)) * (uint64_t(st.width) * uint64_t(scale) + 1) + uint64_t(uint32_t(x));
+      const Ray r = camera.generate(float(x) / float(scale), float(y) / float(scale), lens_sample(st.seed, id, 0));
+      w.rays.push_back(r);
+      w.paths.push_back({valid_ray(r) ? uint32_t(i) : kInvalidId, Vec3f{1.0f}});
+      primary += valid_ray(r);
+    }
+    shaded.assign(wanted.size(), Vec3f{});
+    shade(scene, backend, st.max_depth, w, shaded, n);
+    for (size_t i = 0; i < wanted.size(); ++i) colour[key(wanted[i].first, wanted[i].second)] = shaded[i];
+    wanted.clear();
+  };
+  struct Cell {
+    int pixel;   ///< local pixel index in the tile
+    int x, y;    ///< top-left corner on the finest grid
+    int size;    ///< edge on the finest grid
+  };
+  std::vector<Cell> cells, next;
+  for (int ly = 0; ly < th; ++ly)
+    for (int lx = 0; lx < tw; ++lx) {
+      const int x = (x0 + lx) * scale, y = (y0 + ly) * scale;
+      cells.push_back({ly * kTile + lx, x, y, scale});
+      want(x, y);
+      want(x + scale, y);
+      want(x, y + scale);
+      want(x + scale, y + scale);
+    }
+  trace_wanted();
+  while (!cells.empty()) {
+    next.clear();
+    for (const Cell& c : cells) {
+      const Vec3f a = colour[key(c.x, c.y)], b = colour[key(c.x + c.size, c.y)];
+      const Vec3f d = colour[key(c.x, c.y + c.size)], e = colour[key(c.x + c.size, c.y + c.size)];
+      const Vec3f lo = min(min(a, b), min(d, e)), hi = max(max(a, b), max(d, e));
+      if (c.size > 1 && max_component(hi - lo) > st.adaptive_threshold) {
+        const int h = c.size / 2;
+        want(c.x + h, c.y);
+        want(c.x, c.y + h);
+        want(c.x + h, c.y + h);
+        want(c.x + c.size, c.y + h);
+        want(c.x + h, c.y + c.size);
+        for (int k = 0; k < 4; ++k) next.push_back({c.pixel, c.x + (k % 2) * h, c.y + (k / 2) * h, h});
+      } else {
+        const float area = float(c.size) * float(c.size) / (float(scale) * float(scale));
+        tile[size_t(c.pixel)] += (a + b + d + e) * (0.25f * area);
+      }
+    }
+    trace_wanted();
+    std::swap(cells, next);
+  }
+  return primary;
+}
 
 }  // namespace
 
-Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp) {
+Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp, Sampler sampler) {
   const uint64_t h = mix(mix(mix(seed ^ 0x9e3779b97f4a7c15ull) ^ pixel) ^ uint64_t(sample));
   const float jx = to_unit(h), jy = to_unit(mix(h));
+  if (sampler == Sampler::random) return {jx, jy};
   if (spp == 1) return {0.5f, 0.5f};
   const int m = int(std::sqrt(double(spp)));
+  if (sampler == Sampler::uniform) return {(float(sample % m) + 0.5f) / float(m), (float(sample / m) + 0.5f) / float(m)};
   if (sample >= m * m) return {jx, jy};
   return {(float(sample % m) + jx) / float(m), (float(sample / m) + jy) / float(m)};
 }
@@ -63,130 +267,74 @@ Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) {
   return {to_unit(h), to_unit(mix(h))};
 }
 
-RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
-                    const RenderSettings& st) {
+float fresnel_dielectric(float cos_i, float n1, float n2) {
+  cos_i = std::clamp(cos_i, 0.0f, 1.0f);
+  const float eta = n1 / n2;
+  const float sin2_t = eta * eta * (1.0f - cos_i * cos_i);
+  if (sin2_t >= 1.0f) return 1.0f;  // total internal reflection
+  const float cos_t = std::sqrt(1.0f - sin2_t);
+  const float r_perp = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+  const float r_par = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+  return 0.5f * (r_perp * r_perp + r_par * r_par);
+}
+
+RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
   RP_CHECK(st.spp >= 1, "render: spp ", st.spp, " must be >= 1");
   RP_CHECK(st.max_depth >= 0, "render: max depth ", st.max_depth, " must be >= 0");
+  if (st.sampler == Sampler::uniform) {
+    const int m = int(std::sqrt(double(st.spp)));
+    RP_CHECK(m * m == st.spp, "render: the uniform sampler needs a square spp (1, 4, 9, ...), got ", st.spp);
+  }
+  RP_CHECK(st.adaptive_depth >= 0 && st.adaptive_depth <= 8, "render: adaptive depth ", st.adaptive_depth,
+           " must be in 0..8");
+  RP_CHECK(st.adaptive_threshold >= 0.0f, "render: adaptive threshold ", st.adaptive_threshold, " must be >= 0");
   const auto start = std::chrono::steady_clock::now();
   RenderResult result;
   Image& img = result.image;
   img.width = st.width;
   img.height = st.height;
   img.rgb.assign(size_t(st.width) * st.height * 3, 0.0f);
-  std::atomic<uint64_t> n_primary{0}, n_shadow{0}, n_reflection{0};
-  const auto& materials = scene.materials();
+  std::atomic<uint64_t> n_primary{0}, n_shadow{0}, n_reflection{0}, n_refraction{0};
   const int tiles_x = (st.width + kTile - 1) / kTile, tiles_y = (st.height + kTile - 1) / kTile;
 
-  auto shade_tile = [&](int tx, int ty) {
-    TileWork w;
-    w.accum.assign(kTile * kTile, Vec3f{});
+  auto render_tile = [&](int tx, int ty) {
+    ShadeWork w;
+    std::vector<Vec3f> tile(kTile * kTile, Vec3f{});
+    Counters n;
     const int x0 = tx * kTile, y0 = ty * kTile;
-    uint64_t primary = 0, shadow = 0, reflection = 0;
-    for (int s = 0; s < st.spp; ++s) {
-      // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
-      w.rays.clear();
-      w.paths.clear();
-      for (int by = 0; by < kTile; by += 2)
-        for (int bx = 0; bx < kTile; bx += 4)
-          for (int lane = 0; lane < 8; ++lane) {
-            const int lx = bx + lane % 4, ly = by + lane / 4, x = x0 + lx, y = y0 + ly;
-            if (x >= st.width || y >= st.height) {
-              w.rays.push_back({{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f});  // invalid: traced as a miss
-              w.paths.push_back({kInvalidId, {}});
-              continue;
-            }
-            const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
-            const Vec2f j = pixel_sample(st.seed, pixel, s, st.spp);
-            const Ray r = camera.generate(float(x) + j.x, float(y) + j.y, lens_sample(st.seed, pixel, s));
-            w.rays.push_back(r);
-            // No ray (outside a fisheye's image circle): the pixel stays black.
-            w.paths.push_back({valid_ray(r) ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}});
-            primary += valid_ray(r);
-          }
-      for (int depth = 0; !w.rays.empty(); ++depth) {
-        const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
-        w.hits.resize(w.rays.size());
-        backend.intersect(w.rays, w.hits, coherence);
-        w.shadow_rays.clear();
-        w.pending.clear();
-        w.next_rays.clear();
-        w.next_paths.clear();
-        for (size_t i = 0; i < w.rays.size(); ++i) {
-          const PathState& ps = w.paths[i];
-          if (ps.pixel == kInvalidId) continue;
-          const Ray& ray = w.rays[i];
-          const Hit& hit = w.hits[i];
-          if (!hit.hit()) {
-            w.accum[ps.pixel] += mul(ps.weight, sky(ray.dir));
-            continue;
-          }
-          const SurfacePoint sp = scene.surface(ray, hit);
-          const Material& m = materials[sp.material];
-          // Face-forward both normals towards the viewer.
-          const bool back = dot(sp.geometric_normal, ray.dir) > 0.0f;
-          const Vec3f ng = back ? -sp.geometric_normal : sp.geometric_normal;
-          Vec3f ns = back ? -sp.shading_normal : sp.shading_normal;
-          if (dot(ns, ng) < 0.0f) ns = ng;
-          const Vec3f view = -normalize(ray.dir);
-          const Vec3f origin = offset_ray_origin(sp.position, ng);
-          const float diffuse_weight = 1.0f - m.mirror;
-          w.accum[ps.pixel] += mul(ps.weight, m.emission + m.diffuse * (0.06f * diffuse_weight));
-          auto light = [&](const Vec3f& to_light, float tfar, const Vec3f& irradiance) {
-            const Vec3f l = normalize(to_light);
-            const float ndl = dot(ns, l);
-            if (ndl <= 0.0f || dot(ng, l) <= 0.0f) return;
-            const Vec3f h = normalize(l + view);
-            const float spec = std::pow(std::max(0.0f, dot(ns, h)), m.shininess);
-            const Vec3f c = mul(m.diffuse * (ndl * diffuse_weight) + m.specular * spec, irradiance);
-            w.shadow_rays.push_back({origin, 0.0f, to_light, tfar});
-            w.pending.push_back({ps.pixel, mul(ps.weight, c)});
-          };
-          for (const PointLight& pl : scene.point_lights()) {
-            const Vec3f d = pl.position - origin;
-            const float r2 = dot(d, d);
-            if (r2 > 0.0f) light(d, 1.0f - 1e-4f, pl.intensity / r2);
-          }
-          for (const DirectionalLight& dl : scene.directional_lights())
-            light(-dl.direction, std::numeric_limits<float>::infinity(), dl.irradiance);
-          if (m.mirror > 0.0f && depth < st.max_depth) {
-            const Vec3f d = normalize(ray.dir);
-            const Vec3f r = d - ng * (2.0f * dot(d, ng));
-            w.next_rays.push_back({origin, 0.0f, r, std::numeric_limits<float>::infinity()});
-            w.next_paths.push_back({ps.pixel, mul(ps.weight, m.specular * m.mirror)});
-          }
-        }
-        if (!w.shadow_rays.empty()) {
-          w.occluded.resize(w.shadow_rays.size());
-          backend.occluded(w.shadow_rays, w.occluded, coherence);
-          shadow += w.shadow_rays.size();
-          for (size_t k = 0; k < w.pending.size(); ++k)
-            if (!w.occluded[k]) w.accum[w.pending[k].pixel] += w.pending[k].contribution;
-        }
-        reflection += w.next_rays.size();
-        std::swap(w.rays, w.next_rays);
-        std::swap(w.paths, w.next_paths);
-      }
-    }
-    const float inv = 1.0f / float(st.spp);
+    const uint64_t primary = st.sampler == Sampler::adaptive
+                                 ? adaptive_tile(scene, backend, camera, st, x0, y0, w, tile, n)
+                                 : sample_tile(scene, backend, camera, st, x0, y0, w, tile, n);
     for (int ly = 0; ly < kTile && y0 + ly < st.height; ++ly)
       for (int lx = 0; lx < kTile && x0 + lx < st.width; ++lx) {
-        const Vec3f c = w.accum[ly * kTile + lx] * inv;
-        float* out = &img.rgb[(size_t(y0 + ly) * st.width + (x0 + lx)) * 3];
-        out[0] = c.x; out[1] = c.y; out[2] = c.z;
+        const Vec3f c = tile[size_t(ly * kTile + lx)];
+        float* out = &img.rgb[(size_t(y0 + ly) * size_t(st.width) + size_t(x0 + lx)) * 3];
+        out[0] = c.x;
+        out[1] = c.y;
+        out[2] = c.z;
       }
     n_primary += primary;
-    n_shadow += shadow;
-    n_reflection += reflection;
+    n_shadow += n.shadow;
+    n_reflection += n.reflection;
+    n_refraction += n.refraction;
   };
 
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
-      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) shade_tile(tx, ty);
+      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) render_tile(tx, ty);
   });
-  result.stats = {n_primary.load(), n_shadow.load(), n_reflection.load(),
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+  RenderStats& s = result.stats;
+  s.primary = n_primary;
+  s.shadow = n_shadow;
+  s.reflection = n_reflection;
+  s.refraction = n_refraction;
+  const uint64_t scale = st.sampler == Sampler::adaptive ? (uint64_t(1) << st.adaptive_depth) : 1;
+  s.uniform_primary = st.sampler == Sampler::adaptive
+                          ? (uint64_t(st.width) * scale + 1) * (uint64_t(st.height) * scale + 1)
+                          : uint64_t(st.width) * uint64_t(st.height) * uint64_t(st.spp);
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
-/// The renderer: pinhole primary rays in 4x2-pixel packets, Blinn-Phong shading with shadow
-/// rays and mirror reflection, tiles in parallel (TBB), deterministic for any thread count.
+/// The renderer: primary rays in 4x2-pixel packets, Blinn-Phong shading with shadow rays,
+/// Whitted mirror reflection and refraction with Fresnel, the seeds' pixel samplers
+/// (uniform grid, random, stratified, adaptive), tiles in parallel (TBB), deterministic for
+/// any thread count.
 
 #include <cstdint>
 #include <vector>
@@ -17,18 +19,31 @@ struct Image {
   std::vector<float> rgb;
 };
 
-struct RenderSettings {
-  int width = 1024, height = 768;
-  int spp = 1;             ///< samples per pixel, >= 1; stratified jitter over the largest square grid
-  uint64_t seed = 0;       ///< seeds the per-pixel sample streams
-  int max_depth = 3;       ///< mirror bounces after the primary hit
+/// How a pixel's sample positions are chosen (lecture "Ray Tracing Basics", antialiasing).
+enum class Sampler : uint8_t {
+  uniform,     ///< the centres of an n x n grid (spp must be a square)
+  random,      ///< uniform random positions
+  stratified,  ///< one random position in each cell of the largest m x m grid (m*m <= spp), the rest random
+  adaptive,    ///< rays through the pixel-grid corners, cells subdivided where colours differ
 };
 
-/// Rays traced, by kind, and wall time.
+struct RenderSettings {
+  int width = 1024, height = 768;
+  int spp = 1;  ///< samples per pixel, >= 1 (not used by the adaptive sampler)
+  Sampler sampler = Sampler::stratified;
+  uint64_t seed = 0;       ///< seeds the per-pixel sample streams
+  int max_depth = 3;       ///< reflection and refraction bounces after the primary hit
+  float adaptive_threshold = 0.05f;  ///< adaptive: subdivide when corner colours differ by more (max channel)
+  int adaptive_depth = 3;            ///< adaptive: most subdivisions of a pixel (cells of 1/2^depth pixel)
+};
+
+/// Rays traced, by kind, and wall time. For the adaptive sampler, `uniform_primary` is the
+/// number of corner rays a uniform grid at the finest subdivision would have traced.
 struct RenderStats {
-  uint64_t primary = 0, shadow = 0, reflection = 0;
+  uint64_t primary = 0, shadow = 0, reflection = 0, refraction = 0;
+  uint64_t uniform_primary = 0;
   double seconds = 0;
-  uint64_t rays() const { return primary + shadow + reflection; }
+  uint64_t rays() const { return primary + shadow + reflection + refraction; }
 };
 
 struct RenderResult {
@@ -38,16 +53,23 @@ struct RenderResult {
 
 /// Renders `scene` as seen by `camera` (camera.width()/height() must equal settings'),
 /// tracing with `backend`. The result depends only on the inputs, never on thread count.
+/// Throws rp::Error for settings out of range (spp < 1, a non-square spp for the uniform
+/// sampler, adaptive depth outside 0..8, a negative threshold).
 RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
                     const RenderSettings& settings);
 
-/// Sample position in [0, 1)^2 for sample s of a pixel: stratified jitter on the largest
-/// m x m grid with m*m <= spp (samples s >= m*m are uniform random), from a counter-based
-/// hash of (seed, pixel, sample) so every pixel's stream is independent of scheduling.
-Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp);
+/// Sample position in [0, 1)^2 for sample s of a pixel under `sampler` (uniform, random or
+/// stratified), from a counter-based hash of (seed, pixel, sample) so every pixel's stream
+/// is independent of scheduling. spp == 1 is the pixel centre for every sampler but random.
+Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp, Sampler sampler = Sampler::stratified);
 
 /// Lens position in [0, 1)^2 for sample s of a pixel (thin-lens cameras), from a stream
 /// independent of pixel_sample's.
 Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample);
+
+/// Fresnel reflectance of a smooth dielectric for unpolarised light (exact form), for a
+/// direction whose cosine with the normal is cos_i, from a medium of index n1 into n2; 1 on
+/// total internal reflection.
+float fresnel_dielectric(float cos_i, float n1, float n2);
 
 }  // namespace rp

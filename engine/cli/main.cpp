@@ -154,6 +154,9 @@ struct CameraArgs {
 
 struct RenderArgs {
   CameraArgs camera;
+  std::string sampler = "stratified";
+  float adaptive_threshold = 0.05f;
+  int adaptive_depth = 3;
   std::string scene = "default";
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
@@ -183,18 +186,38 @@ int run_render(const RenderArgs& a) {
     throw UsageError(e.what());
   }
   const rp::Camera& camera = *camera_or;
-  rp::RenderSettings settings{res.width, res.height, a.spp, a.seed, a.max_depth};
+  rp::RenderSettings settings;
+  settings.width = res.width;
+  settings.height = res.height;
+  settings.spp = a.spp;
+  settings.seed = a.seed;
+  settings.max_depth = a.max_depth;
+  settings.adaptive_threshold = a.adaptive_threshold;
+  settings.adaptive_depth = a.adaptive_depth;
+  if (a.sampler == "uniform") settings.sampler = rp::Sampler::uniform;
+  else if (a.sampler == "random") settings.sampler = rp::Sampler::random;
+  else if (a.sampler == "stratified") settings.sampler = rp::Sampler::stratified;
+  else if (a.sampler == "adaptive") settings.sampler = rp::Sampler::adaptive;
+  else throw UsageError(rp::cat("--sampler: '", a.sampler, "' is not uniform, random, stratified or adaptive"));
+  if (settings.sampler == rp::Sampler::uniform && int(std::sqrt(double(a.spp))) * int(std::sqrt(double(a.spp))) != a.spp)
+    throw UsageError(rp::cat("--spp: ", a.spp, " is not a square, which the uniform sampler needs (1, 4, 9, ...)"));
   const rp::RenderResult r = rp::render(scene, *backend, camera, settings);
   rp::write_image(a.output, r.image);
   if (!a.quiet) {
     const rp::BackendInfo& info = backend->info();
     std::fprintf(stderr,
-                 "raypack: wrote %s (%dx%d, %d spp) with %s/%s in %.3f s: %.2f Mrays/s "
-                 "(%llu primary, %llu shadow, %llu reflection); build %.3f s, %.1f MiB\n",
-                 a.output.c_str(), res.width, res.height, a.spp, info.name.c_str(), info.variant.c_str(),
-                 r.stats.seconds, double(r.stats.rays()) / r.stats.seconds * 1e-6,
-                 (unsigned long long)r.stats.primary, (unsigned long long)r.stats.shadow,
-                 (unsigned long long)r.stats.reflection, info.build_seconds, double(info.bytes) / (1 << 20));
+                 "raypack: wrote %s (%dx%d, %s sampler) with %s/%s in %.3f s: %.2f Mrays/s "
+                 "(%llu primary, %llu shadow, %llu reflection, %llu refraction); build %.3f s, %.1f MiB\n",
+                 a.output.c_str(), res.width, res.height,
+                 settings.sampler == rp::Sampler::adaptive ? "adaptive" : (std::to_string(a.spp) + " spp " + a.sampler).c_str(),
+                 info.name.c_str(), info.variant.c_str(), r.stats.seconds,
+                 double(r.stats.rays()) / r.stats.seconds * 1e-6, (unsigned long long)r.stats.primary,
+                 (unsigned long long)r.stats.shadow, (unsigned long long)r.stats.reflection,
+                 (unsigned long long)r.stats.refraction, info.build_seconds, double(info.bytes) / (1 << 20));
+    if (settings.sampler == rp::Sampler::adaptive)
+      std::fprintf(stderr, "raypack: adaptive sampling traced %llu primary rays where a uniform grid at depth %d needs %llu (%.1f%% saved)\n",
+                   (unsigned long long)r.stats.primary, a.adaptive_depth, (unsigned long long)r.stats.uniform_primary,
+                   100.0 * (1.0 - double(r.stats.primary) / double(r.stats.uniform_primary)));
   }
   return 0;
 }
@@ -438,6 +461,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   render->add_flag("-q,--quiet", ra.quiet, "Print nothing on success");
   ra.camera.add_to(render);
+  render->add_option("--sampler", ra.sampler, "uniform, random, stratified or adaptive")->capture_default_str();
+  render->add_option("--adaptive-threshold", ra.adaptive_threshold,
+                     "Adaptive: subdivide where corner colours differ by more (any channel)")
+      ->check(CLI::Range(0.0f, 1e30f))
+      ->capture_default_str();
+  render->add_option("--adaptive-depth", ra.adaptive_depth, "Adaptive: most subdivisions per pixel")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
 
   TraceArgs ta;
   CLI::App* trace = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");

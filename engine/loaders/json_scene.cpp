@@ -447,7 +447,7 @@ class SceneReader {
     c.look_at = vector(v, path, "look_at", c.look_at);
     c.up = vector(v, path, "up", c.up);
     c.vfov_degrees = number(v, path, "fov", c.vfov_degrees, kFov);
-    // The checks of PinholeCamera's constructor, in the same float arithmetic.
+    // The placement checks of Camera's constructor (engine/camera.cpp), in the same float arithmetic.
     const Vec3f view = c.look_at - c.eye;
     if (!(length(view) > 0.0f)) {
       const bool at = find(v, "look_at") != nullptr;

@@ -303,7 +303,11 @@ TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
   auto backend = make_backend(GetParam(), scene);
   const Camera cam(*scene.camera(), 67, 45);  // odd sizes: partial tiles and packets
-  const RenderSettings st{67, 45, 4, 1234, 3};
+  RenderSettings st;
+  st.width = 67;
+  st.height = 45;
+  st.spp = 4;
+  st.seed = 1234;
   std::vector<float> one, two;
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);

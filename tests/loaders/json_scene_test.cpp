@@ -1,0 +1,532 @@
+/// The JSON scene loader: docs/example-scene.json loads as written (counts, camera, materials,
+/// the mesh transform), defaults and mesh materials, and the exact message of every error.
+/// Small files are written to a scratch folder by the tests themselves.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "engine/error.h"
+#include "engine/loaders/load.h"
+
+#ifndef RP_SOURCE_DIR
+#define RP_SOURCE_DIR "/work/main"
+#endif
+
+namespace rp {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kExample = RP_SOURCE_DIR "/docs/example-scene.json";
+
+/// A scratch folder for this process, removed when the tests end.
+const fs::path& scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("raypack_json_scene_test_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+class ScratchCleanup : public testing::Environment {
+ public:
+  void TearDown() override { fs::remove_all(scratch()); }
+};
+testing::Environment* const kCleanup = testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
+/// Writes `text` to scratch()/name (creating folders) and returns the path.
+std::string write_file(const std::string& name, const std::string& text) {
+  const fs::path path = scratch() / name;
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(text.data(), std::streamsize(text.size()));
+  return path.string();
+}
+
+/// what() of the rp::Error that `f` throws with the scratch folder's path removed, or "no error".
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    std::string s = e.what();
+    const std::string dir = scratch().string() + "/";
+    for (size_t at = s.find(dir); at != std::string::npos; at = s.find(dir)) s.erase(at, dir.size());
+    return s;
+  }
+  return "no error";
+}
+
+Scene json_scene(const std::string& text, const std::string& name = "scene.json") {
+  return load_scene(write_file(name, text));
+}
+
+std::string json_error(const std::string& text, const std::string& name = "scene.json") {
+  const std::string path = write_file(name, text);
+  return error_of([&] { load_scene(path); });
+}
+
+/// `{"objects": [<object>]}`, the smallest scene around one object.
+std::string with_object(const std::string& object) { return R"({"objects": [)" + object + "]}"; }
+
+void expect_near(const Vec3f& a, const Vec3f& b, float tolerance, const char* what) {
+  EXPECT_LE(length(Vec3d(a) - Vec3d(b)), tolerance)
+      << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") vs (" << b.x << ", " << b.y << ", " << b.z << ")";
+}
+
+void expect_same_quadric(const Quadricf& a, const Quadricf& b) {
+  EXPECT_EQ(a.A, b.A);
+  EXPECT_EQ(a.B, b.B);
+  EXPECT_EQ(a.C, b.C);
+  EXPECT_EQ(a.D, b.D);
+  EXPECT_EQ(a.E, b.E);
+  EXPECT_EQ(a.F, b.F);
+  EXPECT_EQ(a.G, b.G);
+  EXPECT_EQ(a.H, b.H);
+  EXPECT_EQ(a.I, b.I);
+  EXPECT_EQ(a.J, b.J);
+  EXPECT_EQ(a.center, b.center);
+  EXPECT_EQ(a.clip, b.clip);
+}
+
+uint32_t material_id(const Scene& s, const std::string& name) {
+  for (uint32_t i = 0; i < s.materials().size(); ++i)
+    if (s.materials()[i].name == name) return i;
+  ADD_FAILURE() << "no material " << name;
+  return 0;
+}
+
+// --- The example -------------------------------------------------------------------------------
+
+TEST(JsonSceneExample, LoadsEveryKindOfObjectLightAndTheCamera) {
+  const Scene s = load_scene(kExample);
+  ASSERT_EQ(s.meshes().size(), 1u);
+  EXPECT_EQ(s.meshes()[0].triangle_count(), 8u);
+  EXPECT_EQ(s.meshes()[0].positions.size(), 24u);  // flat normals: 3 corners per face
+  EXPECT_EQ(s.spheres().size(), 1u);
+  EXPECT_EQ(s.quadrics().size(), 7u);
+  ASSERT_EQ(s.polygons().size(), 1u);
+  EXPECT_EQ(s.polygons()[0].count, 10u);
+  EXPECT_FALSE(s.polygons()[0].convex);
+  EXPECT_EQ(s.planes().size(), 1u);
+  EXPECT_EQ(s.prim_count(), 8u + 1u + 7u + 1u + 1u);
+  EXPECT_EQ(s.materials().size(), 8u);  // the default grey and 7 of the file
+
+  ASSERT_EQ(s.point_lights().size(), 1u);
+  EXPECT_EQ(s.point_lights()[0].position, Vec3f(4, 8, 6));
+  EXPECT_EQ(s.point_lights()[0].intensity, Vec3f(90, 88, 80));
+  ASSERT_EQ(s.directional_lights().size(), 1u);
+  expect_near(s.directional_lights()[0].direction, Vec3f(normalize(Vec3d(-0.4, -1, -0.5))), 1e-7f, "light");
+  EXPECT_EQ(s.directional_lights()[0].irradiance, Vec3f(0.3f, 0.3f, 0.35f));
+
+  ASSERT_TRUE(s.camera().has_value());
+  EXPECT_EQ(s.camera()->eye, Vec3f(0, 4.5f, 12));
+  EXPECT_EQ(s.camera()->look_at, Vec3f(0, 1, -0.5f));
+  EXPECT_EQ(s.camera()->up, Vec3f(0, 1, 0));
+  EXPECT_EQ(s.camera()->vfov_degrees, 45.0f);
+}
+
+TEST(JsonSceneExample, MaterialsTakeIdsInFileOrderAndObjectsRefertoThemByName) {
+  const Scene s = load_scene(kExample);
+  const std::vector<std::string> names = {"default", "floor", "red", "chrome", "glass", "gold", "blue", "lamp"};
+  ASSERT_EQ(s.materials().size(), names.size());
+  for (size_t i = 0; i < names.size(); ++i) EXPECT_EQ(s.materials()[i].name, names[i]);
+
+  const Material& red = s.materials()[material_id(s, "red")];
+  EXPECT_EQ(red.diffuse, Vec3f(0.8f, 0.12f, 0.1f));
+  EXPECT_EQ(red.specular, Vec3f(0.4f));
+  EXPECT_EQ(red.shininess, 60.0f);
+  EXPECT_EQ(red.emission, Vec3f(0.0f));
+  EXPECT_EQ(red.mirror, 0.0f);
+  EXPECT_EQ(red.ior, 1.0f);
+  EXPECT_EQ(red.opacity, 1.0f);
+  const Material& glass = s.materials()[material_id(s, "glass")];
+  EXPECT_EQ(glass.ior, 1.5f);
+  EXPECT_EQ(glass.opacity, 0.25f);
+  EXPECT_EQ(glass.emission, Vec3f(0.0f));  // a default
+  EXPECT_EQ(s.materials()[material_id(s, "chrome")].mirror, 0.85f);
+  EXPECT_EQ(s.materials()[material_id(s, "lamp")].emission, Vec3f(0.9f, 0.75f, 0.4f));
+  EXPECT_EQ(s.materials()[material_id(s, "lamp")].shininess, 32.0f);  // a default
+
+  EXPECT_EQ(s.planes()[0].material, material_id(s, "floor"));
+  EXPECT_EQ(s.polygons()[0].material, material_id(s, "gold"));
+  EXPECT_EQ(s.spheres()[0].material, material_id(s, "chrome"));
+  EXPECT_EQ(s.meshes()[0].material, material_id(s, "glass"));
+  EXPECT_TRUE(s.meshes()[0].face_materials.empty());
+  const std::vector<std::string> quadric_materials = {"red", "blue", "gold", "red", "lamp", "blue", "gold"};
+  for (size_t i = 0; i < quadric_materials.size(); ++i)
+    EXPECT_EQ(s.quadrics()[i].material, material_id(s, quadric_materials[i])) << "quadric " << i;
+}
+
+TEST(JsonSceneExample, QuadricsAreTheNamedConstructorsAndTheGeneralForm) {
+  const Scene s = load_scene(kExample);
+  ASSERT_EQ(s.quadrics().size(), 7u);
+  expect_same_quadric(s.quadrics()[0].quadric, Quadricf::ellipsoid({-5, 1, -2}, {0.8f, 1, 0.6f}));
+  expect_same_quadric(s.quadrics()[1].quadric, Quadricf::cylinder({-2.5f, 0.6f, -2}, 0.6f, 0.6f, 0.9f, 2));
+  expect_same_quadric(s.quadrics()[2].quadric, Quadricf::cone({0, 1, -2}, 0.5f, 0.5f, 1, 1));
+  expect_same_quadric(s.quadrics()[3].quadric, Quadricf::hyperboloid_one_sheet({2.5f, 1, -2}, 0.35f, 0.35f, 0.5f, 1, 1));
+  expect_same_quadric(s.quadrics()[4].quadric, Quadricf::hyperboloid_two_sheets({5, 1, -2}, 0.4f, 0.4f, 0.3f, 1, 0));
+  expect_same_quadric(s.quadrics()[5].quadric, Quadricf::paraboloid({-1.5f, 0.05f, 1.5f}, 0.8f, 0.8f, 1.2f, 1));
+  Quadricf saddle;
+  saddle.F = 1;
+  saddle.H = -1;
+  saddle.center = {4.2f, 1, 1.5f};
+  saddle.clip = {{3.4f, 0.3f, 0.7f}, {5, 1.7f, 2.3f}};
+  expect_same_quadric(s.quadrics()[6].quadric, saddle);
+
+  EXPECT_EQ(s.spheres()[0].center, Vec3f(-4, 1, 1.5f));
+  EXPECT_EQ(s.spheres()[0].radius, 1.0f);
+  EXPECT_EQ(s.planes()[0].normal, Vec3f(0, 1, 0));
+  EXPECT_EQ(s.planes()[0].d, 0.0f);
+  EXPECT_EQ(s.polygon_vertices()[0], Vec3f(0, 4.4f, -4));
+  EXPECT_EQ(s.polygon_vertices()[2], Vec3f(-1.141f, 3.571f, -4));
+}
+
+TEST(JsonSceneExample, MeshIsScaledThenRotatedThenTranslatedNormalsByTheInverseTranspose) {
+  const Scene s = load_scene(kExample);
+  const TriangleMesh& m = s.meshes()[0];
+  // scale (0.8, 1.2, 0.8), 30 degrees about +y (x -> (cos, 0, -sin)), translate (1.5, 1.2, 1.5).
+  const double c = std::cos(kPi / 6), sn = std::sin(kPi / 6);
+  auto expected = [&](double x, double y, double z) {
+    x *= 0.8, y *= 1.2, z *= 0.8;
+    return Vec3f(Vec3d(c * x + sn * z + 1.5, y + 1.2, -sn * x + c * z + 1.5));
+  };
+  // The file's vertex 1 = (1, 0, 0) lands at (1.5 + 0.8 cos 30, 1.2, 1.5 - 0.8 sin 30).
+  const Vec3f tip = expected(1, 0, 0);
+  expect_near(tip, Vec3f(2.19282032f, 1.2f, 1.1f), 1e-6f, "tip");
+  EXPECT_TRUE(std::any_of(m.positions.begin(), m.positions.end(),
+                          [&](const Vec3f& p) { return length(Vec3d(p) - Vec3d(tip)) < 1e-6; }));
+  const std::vector<Vec3f> corners = {expected(1, 0, 0), expected(-1, 0, 0), expected(0, 1, 0),
+                                      expected(0, -1, 0), expected(0, 0, 1), expected(0, 0, -1)};
+  for (const Vec3f& p : m.positions)
+    EXPECT_TRUE(std::any_of(corners.begin(), corners.end(), [&](const Vec3f& q) { return length(Vec3d(p) - Vec3d(q)) < 1e-6; }))
+        << p.x << " " << p.y << " " << p.z;
+  // The lowest corner rests on the floor.
+  expect_near(expected(0, -1, 0), Vec3f(1.5f, 0, 1.5f), 1e-6f, "bottom");
+
+  // Flat normals stay perpendicular to their transformed faces only under the inverse transpose.
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+    const Vec3d face = normalize(cross(Vec3d(m.vertex(t, 1)) - Vec3d(m.vertex(t, 0)), Vec3d(m.vertex(t, 2)) - Vec3d(m.vertex(t, 0))));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d n(m.normals[m.indices[3 * t + k]]);
+      EXPECT_NEAR(length(n), 1.0, 1e-6);
+      EXPECT_GT(dot(n, face), 1.0 - 1e-6) << "triangle " << t;
+    }
+  }
+}
+
+// --- Defaults, lights and meshes ---------------------------------------------------------------
+
+TEST(JsonScene, OmittedKeysTakeTheirDocumentedDefaults) {
+  const Scene s = json_scene(R"json({"camera": {}, "materials": {"plain": {}}, "objects": [
+      {"type": "sphere"}, {"type": "plane"}, {"type": "quadric", "shape": "cylinder"},
+      {"type": "quadric", "shape": "hyperboloid2", "c": 0.5}, {"type": "quadric", "shape": "ellipsoid"}]})json");
+  EXPECT_EQ(s.camera()->eye, CameraDesc{}.eye);
+  EXPECT_EQ(s.camera()->look_at, CameraDesc{}.look_at);
+  EXPECT_EQ(s.camera()->up, CameraDesc{}.up);
+  EXPECT_EQ(s.camera()->vfov_degrees, 45.0f);
+  const Material plain = s.materials()[1], standard{};
+  EXPECT_EQ(plain.name, "plain");
+  EXPECT_EQ(plain.diffuse, standard.diffuse);
+  EXPECT_EQ(plain.specular, standard.specular);
+  EXPECT_EQ(plain.shininess, standard.shininess);
+  EXPECT_EQ(plain.emission, standard.emission);
+  EXPECT_EQ(plain.mirror, standard.mirror);
+  EXPECT_EQ(plain.ior, standard.ior);
+  EXPECT_EQ(plain.opacity, standard.opacity);
+  EXPECT_EQ(s.spheres()[0].center, Vec3f(0.0f));
+  EXPECT_EQ(s.spheres()[0].radius, 1.0f);
+  EXPECT_EQ(s.spheres()[0].material, 0u);
+  EXPECT_EQ(s.planes()[0].normal, Vec3f(0, 1, 0));
+  EXPECT_EQ(s.planes()[0].d, 0.0f);
+  expect_same_quadric(s.quadrics()[0].quadric, Quadricf::cylinder(Vec3f(0.0f), 1, 1, 1, 1));
+  expect_same_quadric(s.quadrics()[1].quadric, Quadricf::hyperboloid_two_sheets(Vec3f(0.0f), 1, 1, 0.5f, 1, 1));
+  expect_same_quadric(s.quadrics()[2].quadric, Quadricf::ellipsoid(Vec3f(0.0f), Vec3f(1.0f)));
+}
+
+TEST(JsonScene, PlaneOffsetIsTheSignedDistanceAlongTheNormalisedNormal) {
+  const Scene s = json_scene(with_object(R"({"type": "plane", "normal": [0, 0, -2], "offset": 3})"));
+  EXPECT_EQ(s.planes()[0].normal, Vec3f(0, 0, -1));
+  EXPECT_EQ(s.planes()[0].d, -3.0f);  // n.P + d = 0 holds at P = (0, 0, -3)
+}
+
+TEST(JsonScene, NoLightsGivesTheDefaultLightsOfLoadScene) {
+  for (const char* lights : {"", R"("lights": [], )"}) {
+    const Scene s = json_scene(std::string("{") + lights + R"("objects": [{"type": "sphere", "center": [1, 2, 3]}]})");
+    ASSERT_EQ(s.point_lights().size(), 1u) << lights;
+    ASSERT_EQ(s.directional_lights().size(), 1u);
+    // load.cpp's key light: centre + (0.5, 1.5, 2) r, r = half the bounds' diagonal = sqrt(3).
+    expect_near(s.point_lights()[0].position, Vec3f(1, 2, 3) + Vec3f(0.5f, 1.5f, 2.0f) * std::sqrt(3.0f), 1e-5f, "key");
+  }
+  const Scene lit = json_scene(R"({"lights": [{"type": "point", "position": [0, 5, 0]}], "objects": [{"type": "sphere"}]})");
+  EXPECT_EQ(lit.point_lights().size(), 1u);
+  EXPECT_EQ(lit.point_lights()[0].intensity, Vec3f(1.0f));
+  EXPECT_TRUE(lit.directional_lights().empty());
+  EXPECT_FALSE(lit.camera().has_value());
+}
+
+TEST(JsonScene, ExtensionIsCaseInsensitiveAndLoadJsonSceneAppends) {
+  EXPECT_EQ(json_scene(with_object(R"({"type": "sphere"})"), "upper.JSON").spheres().size(), 1u);
+  Scene s;
+  s.add_sphere({});
+  load_json_scene(write_file("append.json", with_object(R"({"type": "sphere", "radius": 2})")), s);
+  ASSERT_EQ(s.spheres().size(), 2u);
+  EXPECT_EQ(s.spheres()[1].radius, 2.0f);
+  EXPECT_TRUE(s.point_lights().empty());  // default lights are load_scene's
+}
+
+TEST(JsonScene, MeshMaterialsAreAppendedAndRemappedUnlessOverridden) {
+  write_file("meshes/two.mtl", "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 1 0\n");
+  write_file("meshes/two.obj",
+             "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 2 4 3\n");
+  const std::string scene = R"json({"materials": {"mine": {}}, "objects": [
+      {"type": "mesh", "file": "meshes/two.obj", "transform": {"scale": 2}},
+      {"type": "mesh", "file": "meshes/two.obj", "material": "mine"}]})json";
+  const Scene s = json_scene(scene, "scene.json");
+  // default, mine, then the file's a and b, added once (the second mesh overrides).
+  ASSERT_EQ(s.materials().size(), 4u);
+  EXPECT_EQ(s.materials()[2].name, "a");
+  EXPECT_EQ(s.materials()[3].name, "b");
+  ASSERT_EQ(s.meshes().size(), 2u);
+  EXPECT_EQ(s.meshes()[0].face_materials, (std::vector<uint32_t>{2, 3}));
+  EXPECT_EQ(s.meshes()[0].positions[1], Vec3f(2, 0, 0));  // scale as one number
+  EXPECT_EQ(s.meshes()[1].material, 1u);
+  EXPECT_TRUE(s.meshes()[1].face_materials.empty());
+  EXPECT_EQ(s.meshes()[1].positions[1], Vec3f(1, 0, 0));
+}
+
+TEST(JsonScene, MeshPathsResolveAgainstTheSceneFolderOrAreAbsolute) {
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string absolute = write_file("tri.ply", ply);
+  write_file("sub/tri.ply", ply);
+  const Scene s = json_scene(R"({"objects": [{"type": "mesh", "file": "tri.ply", "transform": {"translate": [0, 0, 1]}},
+                                             {"type": "mesh", "file": ")" + absolute + R"("}]})",
+                             "sub/scene.json");
+  ASSERT_EQ(s.meshes().size(), 2u);
+  EXPECT_EQ(s.meshes()[0].positions[2], Vec3f(0, 1, 1));
+  EXPECT_EQ(s.meshes()[1].positions[2], Vec3f(0, 1, 0));
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "mesh", "file": "sub/tri.ply"}]})", "sub/scene.json"),
+            "sub/scene.json: $.objects[0].file: sub/sub/tri.ply: cannot open: No such file or directory");
+}
+
+// --- Errors ------------------------------------------------------------------------------------
+
+TEST(JsonSceneErrors, SyntaxErrorsGiveLineAndColumn) {
+  EXPECT_EQ(json_error("{\n  \"objects\": [],\n  }\n"),
+            "scene.json: line 3, column 3: syntax error while parsing object key - unexpected '}'; "
+            "expected string literal");
+  EXPECT_EQ(json_error("{\"objects\": [\n"),
+            "scene.json: line 2, column 1: syntax error while parsing value - unexpected end of input; "
+            "expected '[', '{', or a literal");
+  EXPECT_EQ(json_error("{\"objects\": [] // no comments\n}"),
+            "scene.json: line 1, column 16: syntax error while parsing object - invalid literal; last read: "
+            "'\"objects\": [] /'; expected '}'");
+  EXPECT_EQ(json_error(""), "scene.json: line 1, column 1: syntax error while parsing value - unexpected end of input; "
+                            "expected '[', '{', or a literal");
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere", "radius": 1e999}]})"),
+            "scene.json: number overflow parsing '1e999'");
+  EXPECT_EQ(error_of([] { load_scene((scratch() / "absent.json").string()); }),
+            "absent.json: cannot open: No such file or directory");
+}
+
+TEST(JsonSceneErrors, UnknownKeysListTheExpectedOnes) {
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere"}, {"type": "sphere"},
+                                      {"type": "sphere", "center": [0, 0, 0], "radus": 2}]})"),
+            "scene.json: $.objects[2].radus: unknown key (expected one of: type, center, radius, material)");
+  EXPECT_EQ(json_error(R"({"object": []})"),
+            "scene.json: $.object: unknown key (expected one of: camera, materials, lights, objects)");
+  EXPECT_EQ(json_error(R"({"camera": {"fov_y": 40}, "objects": []})"),
+            "scene.json: $.camera.fov_y: unknown key (expected one of: eye, look_at, up, fov)");
+  EXPECT_EQ(json_error(R"({"materials": {"my red": {"colour": [1, 0, 0]}}, "objects": []})"),
+            "scene.json: $.materials[\"my red\"].colour: unknown key (expected one of: diffuse, specular, shininess, "
+            "emission, mirror, ior, opacity)");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "directional", "position": [0, 1, 0]}], "objects": []})"),
+            "scene.json: $.lights[0].position: unknown key (expected one of: type, direction, irradiance)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "cone", "radius_a": 1})")),
+            "scene.json: $.objects[0].radius_a: unknown key (expected one of: type, shape, center, a, b, half_height, "
+            "axis, material)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"K": 1}, "clip": {}})")),
+            "scene.json: $.objects[0].coefficients.K: unknown key (expected one of: A, B, C, D, E, F, G, H, I, J)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"A": 1}, "clip": {"lo": [0, 0, 0]}})")),
+            "scene.json: $.objects[0].clip.lo: unknown key (expected one of: min, max)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"rotation": {}}})")),
+            "scene.json: $.objects[0].transform.rotation: unknown key (expected one of: scale, rotate, translate)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"rotate": {"angle": 3}}})")),
+            "scene.json: $.objects[0].transform.rotate.angle: unknown key (expected one of: axis, degrees)");
+}
+
+TEST(JsonSceneErrors, WrongTypesShowTheValueCompactly) {
+  EXPECT_EQ(json_error(R"({"camera": {"fov": "wide"}, "objects": []})"),
+            "scene.json: $.camera.fov: expected a number, got \"wide\"");
+  EXPECT_EQ(json_error(R"([{"type": "sphere"}])"), "scene.json: $: expected an object, got [{\"type\":\"sphere\"}]");
+  EXPECT_EQ(json_error(R"({"objects": {"type": "sphere"}})"),
+            "scene.json: $.objects: expected an array, got {\"type\":\"sphere\"}");
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere"}, 7]})"), "scene.json: $.objects[1]: expected an object, got 7");
+  EXPECT_EQ(json_error(with_object(R"({"type": 3})")), "scene.json: $.objects[0].type: expected a string, got 3");
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "material": ["red"]})")),
+            "scene.json: $.objects[0].material: expected a string, got [\"red\"]");
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": true})")),
+            "scene.json: $.objects[0].radius: expected a number, got true");
+  EXPECT_EQ(json_error(R"({"materials": [], "objects": []})"), "scene.json: $.materials: expected an object, got []");
+  EXPECT_EQ(json_error(R"({"materials": {"red": 1}, "objects": []})"),
+            "scene.json: $.materials.red: expected an object, got 1");
+  EXPECT_EQ(json_error(R"({"lights": {}, "objects": []})"), "scene.json: $.lights: expected an array, got {}");
+  // Values longer than 40 characters are cut to 37 and "...".
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": "this radius is described in words, not as a number"})")),
+            "scene.json: $.objects[0].radius: expected a number, got \"this radius is described in words, n...");
+  // ... never inside a UTF-8 sequence.
+  std::string accents;
+  for (int i = 0; i < 30; ++i) accents += "\u00e9";
+  std::string cut;
+  for (int i = 0; i < 17; ++i) cut += "\u00e9";
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": "x)" + accents + R"("})")),
+            "scene.json: $.objects[0].radius: expected a number, got \"x" + cut + "...");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"scale": "big"}})")),
+            "scene.json: $.objects[0].transform.scale: expected a number or 3 numbers, got \"big\"");
+}
+
+TEST(JsonSceneErrors, VectorsNeedThreeFiniteFloats) {
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [1, 2]}, "objects": []})"),
+            "scene.json: $.camera.eye: expected 3 numbers, got [1,2]");
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [1, "2", 3]}, "objects": []})"),
+            "scene.json: $.camera.eye: expected 3 numbers, got [1,\"2\",3]");
+  EXPECT_EQ(json_error(R"({"camera": {"up": 1}, "objects": []})"), "scene.json: $.camera.up: expected 3 numbers, got 1");
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [1, 2, 1e39]}, "objects": []})"),
+            "scene.json: $.camera.eye[2]: 1e+39 is out of range (must fit in a 32-bit float)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1]]})")),
+            "scene.json: $.objects[0].vertices[2]: expected 3 numbers, got [0,1]");
+}
+
+TEST(JsonSceneErrors, OutOfRangeValuesNameTheRange) {
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": -1})")),
+            "scene.json: $.objects[0].radius: -1 is out of range (must be > 0)");
+  EXPECT_EQ(json_error(R"({"camera": {"fov": 180}, "objects": []})"),
+            "scene.json: $.camera.fov: 180 is out of range (must be in (0, 180))");
+  EXPECT_EQ(json_error(R"({"camera": {"fov": 0}, "objects": []})"),
+            "scene.json: $.camera.fov: 0 is out of range (must be in (0, 180))");
+  EXPECT_EQ(json_error(R"({"materials": {"m": {"diffuse": [0.5, -0.1, 0]}}, "objects": []})"),
+            "scene.json: $.materials.m.diffuse[1]: -0.1 is out of range (must be >= 0)");
+  EXPECT_EQ(json_error(R"({"materials": {"m": {"shininess": -2}}, "objects": []})"),
+            "scene.json: $.materials.m.shininess: -2 is out of range (must be >= 0)");
+  EXPECT_EQ(json_error(R"({"materials": {"m": {"ior": 0.5}}, "objects": []})"),
+            "scene.json: $.materials.m.ior: 0.5 is out of range (must be >= 1)");
+  EXPECT_EQ(json_error(R"({"materials": {"m": {"opacity": 1.5}}, "objects": []})"),
+            "scene.json: $.materials.m.opacity: 1.5 is out of range (must be in [0, 1])");
+  EXPECT_EQ(json_error(R"({"materials": {"m": {"mirror": -0.25}}, "objects": []})"),
+            "scene.json: $.materials.m.mirror: -0.25 is out of range (must be in [0, 1])");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "point", "position": [0, 1, 0], "intensity": [1, 1, -1]}], "objects": []})"),
+            "scene.json: $.lights[0].intensity[2]: -1 is out of range (must be >= 0)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "ellipsoid", "radii": [1, 0, 1]})")),
+            "scene.json: $.objects[0].radii[1]: 0 is out of range (must be > 0)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "paraboloid", "height": -0.5})")),
+            "scene.json: $.objects[0].height: -0.5 is out of range (must be > 0)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "hyperboloid2", "c": 2, "half_height": 1.5})")),
+            "scene.json: $.objects[0].half_height: 1.5 is out of range (must be > c = 2)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"scale": [1, 0, 1]}})")),
+            "scene.json: $.objects[0].transform.scale[1]: 0 is out of range (must be > 0)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"A": 1, "J": -1},
+                                       "clip": {"min": [-1, 2, -1], "max": [1, 1, 1]}})")),
+            "scene.json: $.objects[0].clip.max[1]: 1 is out of range (must be >= min[1] = 2)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"J": -1}, "clip": {}})")),
+            "scene.json: $.objects[0].coefficients: {\"J\":-1} has no x, y or z term (one of A..I must be non-zero)");
+}
+
+TEST(JsonSceneErrors, ZeroLengthDirectionsAndDegenerateCamerasAreRefused) {
+  EXPECT_EQ(json_error(with_object(R"({"type": "plane", "normal": [0, 0, 0]})")),
+            "scene.json: $.objects[0].normal: [0,0,0] is out of range (must have a non-zero length)");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "directional", "direction": [0, 0.0, 0]}], "objects": []})"),
+            "scene.json: $.lights[0].direction: [0,0.0,0] is out of range (must have a non-zero length)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"rotate": {"axis": [0, 0, 0]}}})")),
+            "scene.json: $.objects[0].transform.rotate.axis: [0,0,0] is out of range (must have a non-zero length)");
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 3, 8], "look_at": [0, 3, 8]}, "objects": []})"),
+            "scene.json: $.camera.look_at: [0,3,8] is out of range (must differ from eye)");
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 0, 0]}, "objects": []})"),
+            "scene.json: $.camera.eye: [0,0,0] is out of range (must differ from look_at)");
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 5, 0]}, "objects": []})"),
+            "scene.json: $.camera.up: [0,1,0] is out of range (must not be parallel to look_at - eye)");
+  EXPECT_EQ(json_error(R"({"camera": {"up": [0, 0, -2]}, "objects": []})"),
+            "scene.json: $.camera.up: [0,0,-2] is out of range (must not be parallel to look_at - eye)");
+}
+
+TEST(JsonSceneErrors, PolygonsNeedThreeCoplanarVerticesAndArea) {
+  EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [1, 0, 0]]})")),
+            "scene.json: $.objects[0].vertices: expected an array of at least 3 vertices, got [[0,0,0],[1,0,0]]");
+  EXPECT_EQ(json_error(with_object(R"({"type": "polygon"})")), "scene.json: $.objects[0]: missing key \"vertices\"");
+  EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [1, 0, 0], [2, 0, 0]]})")),
+            "scene.json: $.objects[0].vertices: [[0,0,0],[1,0,0],[2,0,0]] has zero area (the vertices are collinear)");
+  // The first vertex farther than 1e-4 of the box diagonal from the (Newell) plane of them all.
+  EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 1]]})")),
+            "scene.json: $.objects[0].vertices[0]: [0,0,0] is 0.235702 off the polygon's plane (the vertices must be "
+            "coplanar)");
+  EXPECT_EQ(json_scene(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 1e-4]]})"))
+                .polygons()
+                .size(),
+            1u);
+}
+
+TEST(JsonSceneErrors, UnknownNamesListTheKnownOnes) {
+  EXPECT_EQ(json_error(R"({"materials": {"red": {}}, "objects": [{"type": "sphere", "material": "red"},
+                                                                 {"type": "sphere", "material": "blue"}]})"),
+            "scene.json: $.objects[1].material: unknown material \"blue\" (materials: red)");
+  EXPECT_EQ(json_error(R"({"materials": {"red": {}, "white": {}}, "objects": [{"type": "plane", "material": "Red"}]})"),
+            "scene.json: $.objects[0].material: unknown material \"Red\" (materials: red, white)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "material": "red"})")),
+            "scene.json: $.objects[0].material: unknown material \"red\" (no materials are defined)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "cube"})")),
+            "scene.json: $.objects[0].type: unknown object type \"cube\" (expected one of: sphere, plane, polygon, "
+            "quadric, mesh)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "torus"})")),
+            "scene.json: $.objects[0].shape: unknown quadric shape \"torus\" (expected one of: ellipsoid, cylinder, "
+            "cone, hyperboloid1, hyperboloid2, paraboloid)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "cylinder", "axis": "w"})")),
+            "scene.json: $.objects[0].axis: unknown axis \"w\" (expected one of: x, y, z)");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "spot"}], "objects": []})"),
+            "scene.json: $.lights[0].type: unknown light type \"spot\" (expected one of: point, directional)");
+}
+
+TEST(JsonSceneErrors, MissingRequiredKeysAndEmptyScenes) {
+  EXPECT_EQ(json_error(R"({"camera": {}})"), "scene.json: $: missing key \"objects\"");
+  EXPECT_EQ(json_error(R"({"objects": []})"), "scene.json: $.objects: expected at least one object, got []");
+  EXPECT_EQ(json_error(with_object(R"({"radius": 1})")), "scene.json: $.objects[0]: missing key \"type\"");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "point"}], "objects": []})"),
+            "scene.json: $.lights[0]: missing key \"position\"");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh"})")), "scene.json: $.objects[0]: missing key \"file\"");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric"})")),
+            "scene.json: $.objects[0]: missing key \"shape\" (or \"coefficients\")");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "cone", "coefficients": {}})")),
+            "scene.json: $.objects[0]: expected \"shape\" or \"coefficients\", not both");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"A": 1}})")),
+            "scene.json: $.objects[0]: missing key \"clip\"");
+  EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "coefficients": {"A": 1}, "clip": {"min": [0, 0, 0]}})")),
+            "scene.json: $.objects[0].clip: missing key \"max\"");
+}
+
+TEST(JsonSceneErrors, MeshFileProblemsCarryTheLoadersMessage) {
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere"}, {"type": "sphere"}, {"type": "sphere"}, {"type": "sphere"},
+                                      {"type": "mesh", "file": "missing.obj"}]})"),
+            "scene.json: $.objects[4].file: missing.obj: cannot open: No such file or directory");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "model.stl"})")),
+            "scene.json: $.objects[0].file: \"model.stl\" is not a mesh file (expected .obj or .ply)");
+  write_file("empty.obj", "v 0 0 0\n");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "empty.obj"})")),
+            "scene.json: $.objects[0].file: empty.obj: the file has no triangles");
+  write_file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "bad.obj"})")),
+            "scene.json: $.objects[0].file: bad.obj: face 1 uses vertex 9 of 3");
+}
+
+}  // namespace
+}  // namespace rp
