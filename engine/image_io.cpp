@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
 #include <unistd.h>
@@ -56,6 +57,57 @@ void write_image(const std::string& path, const Image& image) {
     fs::remove(tmp, ec);
     throw Error(cat("cannot write '", path, "': ", ec.message()));
   }
+}
+
+namespace {
+
+/// Moves a finished temporary file onto `target`, or removes it and throws.
+void commit_file(const std::filesystem::path& tmp, const std::string& target) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, target, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(cat("cannot write '", target, "': ", ec.message()));
+  }
+}
+
+}  // namespace
+
+void write_aovs(const std::string& path, const Aovs& a) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  std::string ext = target.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  RP_CHECK(ext == ".exr", "cannot write AOVs to '", path, "': AOVs are written as OpenEXR (.exr)");
+  const size_t n = size_t(a.width) * size_t(a.height);
+  RP_CHECK(n > 0 && a.depth.size() == n, "write_aovs: no pixels for '", path, "'");
+  constexpr int kChannels = 10;
+  OIIO::ImageSpec spec(a.width, a.height, kChannels, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"Z", "Ng.X", "Ng.Y", "Ng.Z", "N.X", "N.Y", "N.Z", "u", "v", "primId"};
+  spec.channelformats.assign(kChannels, OIIO::TypeDesc::FLOAT);
+  spec.channelformats[9] = OIIO::TypeDesc::UINT;
+  spec.z_channel = 0;
+  spec.attribute("DateTime", "");
+  // Interleaved pixels: 9 floats then one uint32, 40 bytes each.
+  std::vector<unsigned char> pixels(n * 40);
+  for (size_t p = 0; p < n; ++p) {
+    float f[9] = {a.depth[p], a.normal[3 * p], a.normal[3 * p + 1], a.normal[3 * p + 2], a.shading_normal[3 * p],
+                  a.shading_normal[3 * p + 1], a.shading_normal[3 * p + 2], a.uv[2 * p], a.uv[2 * p + 1]};
+    std::memcpy(&pixels[p * 40], f, sizeof f);
+    std::memcpy(&pixels[p * 40 + 36], &a.prim_id[p], 4);
+  }
+  const fs::path tmp = target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + target.filename().string());
+  auto out = OIIO::ImageOutput::create(tmp.string());
+  RP_CHECK(out, "cannot write '", path, "': no OpenEXR writer");
+  const bool ok = out->open(tmp.string(), spec) &&
+                  out->write_image(OIIO::TypeDesc::UNKNOWN, pixels.data(), 40) && out->close();
+  if (!ok) {
+    const std::string err = out->geterror();
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw Error(cat("cannot write '", path, "': ", err.empty() ? "write failed" : err));
+  }
+  commit_file(tmp, path);
 }
 
 Image read_image(const std::string& path) {

@@ -14,6 +14,11 @@ namespace rp {
 /// renamed, so `path` is never left half-written. Throws rp::Error naming the path.
 void write_image(const std::string& path, const Image& image);
 
+/// Writes `aovs` as one multi-channel OpenEXR file (the extension must be .exr): channels
+/// Z (depth), Ng.X/Y/Z (geometric normal), N.X/Y/Z (shading normal), u, v (float) and
+/// primId (uint32, 0xffffffff where the ray missed). Written through a temporary name.
+void write_aovs(const std::string& path, const Aovs& aovs);
+
 /// Reads an image as linear-as-stored float RGB (the first three channels; grey is
 /// replicated). Throws rp::Error naming the path.
 Image read_image(const std::string& path);

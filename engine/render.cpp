@@ -278,7 +278,8 @@ float fresnel_dielectric(float cos_i, float n1, float n2) {
   return 0.5f * (r_perp * r_perp + r_par * r_par);
 }
 
-RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st) {
+RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+                    const ProgressFn& progress) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
   RP_CHECK(st.spp >= 1, "render: spp ", st.spp, " must be >= 1");
@@ -297,6 +298,7 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
   img.height = st.height;
   img.rgb.assign(size_t(st.width) * st.height * 3, 0.0f);
   std::atomic<uint64_t> n_primary{0}, n_shadow{0}, n_reflection{0}, n_refraction{0};
+  std::atomic<int> tiles_done{0};
   const int tiles_x = (st.width + kTile - 1) / kTile, tiles_y = (st.height + kTile - 1) / kTile;
 
   auto render_tile = [&](int tx, int ty) {
@@ -319,6 +321,8 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
     n_shadow += n.shadow;
     n_reflection += n.reflection;
     n_refraction += n.refraction;
+    const int done = ++tiles_done;
+    if (progress) progress(double(done) / double(tiles_x * tiles_y));
   };
 
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
@@ -336,6 +340,58 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
                           : uint64_t(st.width) * uint64_t(st.height) * uint64_t(st.spp);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camera) {
+  const int w = camera.width(), h = camera.height();
+  Aovs a;
+  a.width = w;
+  a.height = h;
+  const size_t n = size_t(w) * size_t(h);
+  a.depth.assign(n, std::numeric_limits<float>::infinity());
+  a.normal.assign(3 * n, 0.0f);
+  a.shading_normal.assign(3 * n, 0.0f);
+  a.uv.assign(2 * n, 0.0f);
+  a.prim_id.assign(n, kInvalidId);
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
+    std::vector<Ray> rays;
+    std::vector<uint32_t> pixel;
+    std::vector<Hit> hits;
+    for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
+        rays.clear();
+        pixel.clear();
+        for (int by = 0; by < kTile; by += 2)
+          for (int bx = 0; bx < kTile; bx += 4)
+            for (int lane = 0; lane < 8; ++lane) {
+              const int x = tx * kTile + bx + lane % 4, y = ty * kTile + by + lane / 4;
+              const bool inside = x < w && y < h;
+              rays.push_back(inside ? camera.generate(float(x) + 0.5f, float(y) + 0.5f)
+                                    : Ray{{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f});
+              pixel.push_back(inside ? uint32_t(y) * uint32_t(w) + uint32_t(x) : kInvalidId);
+            }
+        hits.resize(rays.size());
+        backend.intersect(rays, hits, Coherence::coherent);
+        for (size_t i = 0; i < rays.size(); ++i) {
+          if (pixel[i] == kInvalidId || !hits[i].hit()) continue;
+          const size_t p = pixel[i];
+          const SurfacePoint sp = scene.surface(rays[i], hits[i]);
+          const bool back = dot(sp.geometric_normal, rays[i].dir) > 0.0f;
+          const Vec3f ng = back ? -sp.geometric_normal : sp.geometric_normal;
+          const Vec3f ns = back ? -sp.shading_normal : sp.shading_normal;
+          a.depth[p] = hits[i].t * length(rays[i].dir);
+          for (int c = 0; c < 3; ++c) {
+            a.normal[3 * p + size_t(c)] = ng[c];
+            a.shading_normal[3 * p + size_t(c)] = ns[c];
+          }
+          a.uv[2 * p] = hits[i].u;
+          a.uv[2 * p + 1] = hits[i].v;
+          a.prim_id[p] = hits[i].prim_id;
+        }
+      }
+  });
+  return a;
 }
 
 }  // namespace rp

@@ -5,6 +5,7 @@
 /// any thread count.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "engine/backend.h"
@@ -55,8 +56,26 @@ struct RenderResult {
 /// tracing with `backend`. The result depends only on the inputs, never on thread count.
 /// Throws rp::Error for settings out of range (spp < 1, a non-square spp for the uniform
 /// sampler, adaptive depth outside 0..8, a negative threshold).
+/// Called from worker threads with the fraction of tiles done, in (0, 1]; must be thread-safe.
+using ProgressFn = std::function<void(double fraction)>;
+
 RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
-                    const RenderSettings& settings);
+                    const RenderSettings& settings, const ProgressFn& progress = {});
+
+/// Arbitrary output variables of the primary hit through each pixel centre, row-major from
+/// the top row. A pixel whose ray misses has depth +inf, zero normals and barycentrics, and
+/// prim_id kInvalidId.
+struct Aovs {
+  int width = 0, height = 0;
+  std::vector<float> depth;           ///< hit distance along the (unit) camera ray
+  std::vector<float> normal;          ///< geometric normal, unit, face-forwarded; 3 per pixel
+  std::vector<float> shading_normal;  ///< interpolated normal where the mesh has them; 3 per pixel
+  std::vector<float> uv;              ///< barycentrics (u, v); 2 per pixel
+  std::vector<uint32_t> prim_id;
+};
+
+/// The AOVs of `scene` through `camera`, traced in 4x2 packets with all threads.
+Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camera);
 
 /// Sample position in [0, 1)^2 for sample s of a pixel under `sampler` (uniform, random or
 /// stratified), from a counter-based hash of (seed, pixel, sample) so every pixel's stream

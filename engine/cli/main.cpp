@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <mutex>
 #include <regex>
 
 #include "backends/registry.h"
@@ -154,6 +155,7 @@ struct CameraArgs {
 
 struct RenderArgs {
   CameraArgs camera;
+  std::string aov;
   std::string sampler = "stratified";
   float adaptive_threshold = 0.05f;
   int adaptive_depth = 3;
@@ -169,23 +171,7 @@ struct RenderArgs {
   bool quiet = false;
 };
 
-int run_render(const RenderArgs& a) {
-  const Resolution res = parse_resolution(a.resolution);
-  std::optional<tbb::global_control> limit;
-  if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
-
-  check_backend(a.backend, a.variant);
-  const rp::Scene scene = rp::load_scene(a.scene);
-  const rp::CameraDesc desc = a.camera.apply(scene.camera().value_or(rp::frame_bounds(scene.bounds())));
-  const std::unique_ptr<rp::Backend> backend =
-      rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
-  std::optional<rp::Camera> camera_or;
-  try {
-    camera_or.emplace(desc, res.width, res.height);
-  } catch (const rp::Error& e) {  // a placement the camera flags made impossible
-    throw UsageError(e.what());
-  }
-  const rp::Camera& camera = *camera_or;
+rp::RenderSettings render_settings(const RenderArgs& a, const Resolution& res) {
   rp::RenderSettings settings;
   settings.width = res.width;
   settings.height = res.height;
@@ -199,25 +185,88 @@ int run_render(const RenderArgs& a) {
   else if (a.sampler == "stratified") settings.sampler = rp::Sampler::stratified;
   else if (a.sampler == "adaptive") settings.sampler = rp::Sampler::adaptive;
   else throw UsageError(rp::cat("--sampler: '", a.sampler, "' is not uniform, random, stratified or adaptive"));
-  if (settings.sampler == rp::Sampler::uniform && int(std::sqrt(double(a.spp))) * int(std::sqrt(double(a.spp))) != a.spp)
+  const int m = int(std::sqrt(double(a.spp)));
+  if (settings.sampler == rp::Sampler::uniform && m * m != a.spp)
     throw UsageError(rp::cat("--spp: ", a.spp, " is not a square, which the uniform sampler needs (1, 4, 9, ...)"));
-  const rp::RenderResult r = rp::render(scene, *backend, camera, settings);
+  return settings;
+}
+
+/// A progress bar with the time left on stderr, for renders that last more than a second
+/// and only when stderr is a terminal; redrawn at most 10 times a second.
+class ProgressBar {
+ public:
+  ProgressBar() : start_(std::chrono::steady_clock::now()) {}
+  void operator()(double fraction) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (elapsed < 1.0 || !::isatty(STDERR_FILENO)) return;
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock || (elapsed - last_ < 0.1 && fraction < 1.0)) return;
+    last_ = elapsed;
+    const int width = 40, filled = int(fraction * width);
+    const double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
+    std::fprintf(stderr, "\r[%s%s] %5.1f%%  %.1f s left ", std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), '.').c_str(), 100.0 * fraction, eta);
+    drawn_ = true;
+  }
+  void finish() {
+    if (drawn_) std::fprintf(stderr, "\r%80s\r", "");
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+  std::mutex mutex_;
+  double last_ = -1.0;
+  bool drawn_ = false;
+};
+
+int run_render(const RenderArgs& a) {
+  using clock = std::chrono::steady_clock;
+  auto seconds_since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
+  const Resolution res = parse_resolution(a.resolution);
+  rp::RenderSettings settings = render_settings(a, res);
+  std::optional<tbb::global_control> limit;
+  if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
+  check_backend(a.backend, a.variant);
+
+  auto t = clock::now();
+  const rp::Scene scene = rp::load_scene(a.scene);
+  const double load_s = seconds_since(t);
+  const rp::CameraDesc desc = a.camera.apply(scene.camera().value_or(rp::frame_bounds(scene.bounds())));
+  std::optional<rp::Camera> camera_or;
+  try {
+    camera_or.emplace(desc, res.width, res.height);
+  } catch (const rp::Error& e) {  // a placement the camera flags made impossible
+    throw UsageError(e.what());
+  }
+  const rp::Camera& camera = *camera_or;
+  const std::unique_ptr<rp::Backend> backend =
+      rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
+
+  ProgressBar bar;
+  const rp::RenderResult r =
+      rp::render(scene, *backend, camera, settings, a.quiet ? rp::ProgressFn{} : rp::ProgressFn(std::ref(bar)));
+  bar.finish();
+  t = clock::now();
   rp::write_image(a.output, r.image);
+  if (!a.aov.empty()) rp::write_aovs(a.aov, rp::render_aovs(scene, *backend, camera));
+  const double write_s = seconds_since(t);
   if (!a.quiet) {
     const rp::BackendInfo& info = backend->info();
-    std::fprintf(stderr,
-                 "raypack: wrote %s (%dx%d, %s sampler) with %s/%s in %.3f s: %.2f Mrays/s "
-                 "(%llu primary, %llu shadow, %llu reflection, %llu refraction); build %.3f s, %.1f MiB\n",
-                 a.output.c_str(), res.width, res.height,
-                 settings.sampler == rp::Sampler::adaptive ? "adaptive" : (std::to_string(a.spp) + " spp " + a.sampler).c_str(),
-                 info.name.c_str(), info.variant.c_str(), r.stats.seconds,
-                 double(r.stats.rays()) / r.stats.seconds * 1e-6, (unsigned long long)r.stats.primary,
-                 (unsigned long long)r.stats.shadow, (unsigned long long)r.stats.reflection,
-                 (unsigned long long)r.stats.refraction, info.build_seconds, double(info.bytes) / (1 << 20));
+    const rp::RenderStats& s = r.stats;
+    const std::string sampling =
+        settings.sampler == rp::Sampler::adaptive ? "adaptive" : std::to_string(a.spp) + " spp " + a.sampler;
+    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s\n", a.output.c_str(), res.width, res.height,
+                 sampling.c_str(), info.name.c_str(), info.variant.c_str(), a.aov.empty() ? "" : " and AOVs to ",
+                 a.aov.c_str());
+    std::fprintf(stderr, "raypack: %.2f Mrays/s: %llu primary, %llu shadow, %llu reflection, %llu refraction rays\n",
+                 double(s.rays()) / s.seconds * 1e-6, (unsigned long long)s.primary, (unsigned long long)s.shadow,
+                 (unsigned long long)s.reflection, (unsigned long long)s.refraction);
+    std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB), render %.3f s, write %.3f s\n", load_s,
+                 info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
     if (settings.sampler == rp::Sampler::adaptive)
       std::fprintf(stderr, "raypack: adaptive sampling traced %llu primary rays where a uniform grid at depth %d needs %llu (%.1f%% saved)\n",
-                   (unsigned long long)r.stats.primary, a.adaptive_depth, (unsigned long long)r.stats.uniform_primary,
-                   100.0 * (1.0 - double(r.stats.primary) / double(r.stats.uniform_primary)));
+                   (unsigned long long)s.primary, a.adaptive_depth, (unsigned long long)s.uniform_primary,
+                   100.0 * (1.0 - double(s.primary) / double(s.uniform_primary)));
   }
   return 0;
 }
@@ -461,6 +510,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   render->add_flag("-q,--quiet", ra.quiet, "Print nothing on success");
   ra.camera.add_to(render);
+  render->add_option("--aov", ra.aov, "Also write depth, normals, uv and primitive id as a multi-channel .exr");
   render->add_option("--sampler", ra.sampler, "uniform, random, stratified or adaptive")->capture_default_str();
   render->add_option("--adaptive-threshold", ra.adaptive_threshold,
                      "Adaptive: subdivide where corner colours differ by more (any channel)")

@@ -21,7 +21,9 @@
 ///
 /// camera: "eye" vector = [0,0,5]; "look_at" vector = [0,0,0] (must differ from eye);
 ///   "up" vector = [0,1,0] (must not be parallel to look_at - eye); "fov" number = 45, the
-///   vertical field of view in degrees, in (0, 180).
+///   vertical field of view in degrees, in (0, 180); "model" = "pinhole" (or "panoramic",
+///   "fisheye", "thin_lens"); "fisheye_fov" number = 180, in (0, 360]; "aperture" number = 0,
+///   the thin lens radius, >= 0; "focus_distance" number = 0 (0: the look-at distance), >= 0.
 ///
 /// materials: an object whose keys are the names ("material": "<name>" in objects). Ids are
 ///   given in file order after those already in the scene; an object without "material"
@@ -63,31 +65,45 @@
 ///     box that keeps the part of the surface inside it.
 ///   "mesh":    "file" (required) a .obj or .ply file (extension case-insensitive), relative to
 ///              the directory of the scene file unless absolute; "transform" an object of
-///              "scale" = 1 (a number > 0 or a vector of components > 0), "rotate" (an object
-///              of "axis" direction = [0,1,0] and "degrees" number = 0, counter-clockwise
-///              seen from the axis tip) and "translate" vector = [0,0,0], applied to positions
+///              "scale" = 1 (a number > 0 or a vector of components > 0; a mirroring scale
+///              would set the winding against the normals), "rotate" (an object of "axis"
+///              direction = [0,1,0] and "degrees" number = 0, counter-clockwise seen from the
+///              axis tip) and "translate" vector = [0,0,0], applied to positions
 ///              in the order scale, rotate, translate whatever the key order, and to normals
 ///              as the inverse transpose, renormalised. Without "material", the file's
 ///              materials are appended to the scene and its meshes keep them; with it, every
 ///              triangle takes that material and the file's materials are not added.
 ///
-/// Error messages (path in JSONPath notation; values printed compactly, cut to 40 characters
+/// Error messages, every one "<file>: " and then (the path in JSONPath notation, $ the root,
+/// $.a["not an identifier"]; values as the file has them, compact, cut to 40 characters
 /// with "..."):
-///   <file>: line L, column C: <nlohmann's reason>                       (JSON syntax)
-///   <file>: <path>.<key>: unknown key (expected one of: <keys>)
-///   <file>: <path>: missing key "<key>"
-///   <file>: <path>: expected a number, got "wide"     (an object, an array, a string, ...)
-///   <file>: <path>: expected 3 numbers, got [1,2]
-///   <file>: <path>: -1 is out of range (must be > 0)
-///   <file>: <path>.material: unknown material "blue" (materials: red, white)
-///   <file>: <path>.type: unknown object type "cube" (expected one of: ...)
-///   <file>: <path>.file: <the mesh loader's message>
+///   line L, column C: <nlohmann's reason>                          JSON syntax (columns in bytes)
+///   number overflow parsing '1e999'                                a number beyond double
+///   <path>.<key>: unknown key (expected one of: <keys>)
+///   <path>: missing key "<key>"
+///   <path>: expected a number, got "wide"        also: a string, an object, an array, 3 numbers,
+///                                                a number or 3 numbers, at least one object, an
+///                                                array of at least 3 vertices
+///   <path>: -1 is out of range (must be > 0)     also: >= 0, >= 1, in [0, 1], in (0, 180),
+///                                                > c = 1, >= min[k] = 2, fit in a 32-bit float,
+///                                                have a non-zero length, differ from eye (look_at),
+///                                                not be parallel to look_at - eye
+///   <path>.type: unknown object type "cube" (expected one of: sphere, plane, polygon, quadric, mesh)
+///                likewise: unknown light type, unknown quadric shape, unknown axis
+///   <path>.material: unknown material "blue" (materials: red, white | no materials are defined)
+///   <path>: expected "shape" or "coefficients", not both
+///   <path>: missing key "shape" (or "coefficients")
+///   <path>.coefficients: {"J":-1} has no x, y or z term (one of A..I must be non-zero)
+///   <path>.vertices: [[0,0,0],[1,0,0],[2,0,0]] has zero area (the vertices are collinear)
+///   <path>.vertices[i]: [0,0,0] is 0.235702 off the polygon's plane (the vertices must be coplanar)
+///   <path>.file: "model.stl" is not a mesh file (expected .obj or .ply)
+///   <path>.file: <resolved path>: <the OBJ/PLY loader's message>   e.g. cannot open: No such file...
+///   <path>.file: <resolved path>: the file has no triangles
+///   <path>: <a Scene check's message>                              (kept as a safety net)
 
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
@@ -95,8 +111,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <initializer_list>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string>
 #include <string_view>
@@ -201,9 +217,7 @@ struct Range {
   double lo = -kInf, hi = kInf;
   bool open_lo = false, open_hi = false;
 
-  bool contains(double x) const {
-    return (open_lo ? x > lo : x >= lo) && (open_hi ? x < hi : x <= hi);
-  }
+  bool contains(double x) const { return (open_lo ? x > lo : x >= lo) && (open_hi ? x < hi : x <= hi); }
   std::string describe() const {
     if (lo > -kInf && hi < kInf) return cat("in ", open_lo ? "(" : "[", lo, ", ", hi, open_hi ? ")" : "]");
     if (lo > -kInf) return cat(open_lo ? "> " : ">= ", lo);
@@ -218,7 +232,10 @@ constexpr Range kFov{0.0, 180.0, true, true};
 constexpr Range kIor{1.0, kInf, false, false};
 
 constexpr std::string_view kTopKeys[] = {"camera", "materials", "lights", "objects"};
-constexpr std::string_view kCameraKeys[] = {"eye", "look_at", "up", "fov"};
+constexpr std::string_view kCameraKeys[] = {"eye",         "look_at",  "up",           "fov", "model",
+                                            "fisheye_fov", "aperture", "focus_distance"};
+constexpr std::string_view kCameraModels[] = {"pinhole", "panoramic", "fisheye", "thin_lens"};
+constexpr Range kFisheyeFov{0.0, 360.0, true, false};
 constexpr std::string_view kMaterialKeys[] = {"diffuse", "specular", "shininess", "emission",
                                               "mirror",  "ior",      "opacity"};
 constexpr std::string_view kLightTypes[] = {"point", "directional"};
@@ -228,11 +245,10 @@ constexpr std::string_view kObjectTypes[] = {"sphere", "plane", "polygon", "quad
 constexpr std::string_view kSphereKeys[] = {"type", "center", "radius", "material"};
 constexpr std::string_view kPlaneKeys[] = {"type", "normal", "offset", "material"};
 constexpr std::string_view kPolygonKeys[] = {"type", "vertices", "material"};
-constexpr std::string_view kShapes[] = {"ellipsoid",    "cylinder",     "cone",
-                                        "hyperboloid1", "hyperboloid2", "paraboloid"};
+constexpr std::string_view kShapes[] = {"ellipsoid", "cylinder", "cone", "hyperboloid1", "hyperboloid2", "paraboloid"};
 constexpr std::string_view kEllipsoidKeys[] = {"type", "shape", "center", "radii", "material"};
-constexpr std::string_view kCylinderKeys[] = {"type",        "shape", "center",  "radius_a",
-                                              "radius_b", "half_height", "axis", "material"};
+constexpr std::string_view kCylinderKeys[] = {"type",     "shape",       "center", "radius_a",
+                                              "radius_b", "half_height", "axis",   "material"};
 constexpr std::string_view kConeKeys[] = {"type", "shape", "center", "a", "b", "half_height", "axis", "material"};
 constexpr std::string_view kHyperboloidKeys[] = {"type", "shape",       "center", "a",       "b",
                                                  "c",    "half_height", "axis",   "material"};
@@ -447,6 +463,11 @@ class SceneReader {
     c.look_at = vector(v, path, "look_at", c.look_at);
     c.up = vector(v, path, "up", c.up);
     c.vfov_degrees = number(v, path, "fov", c.vfov_degrees, kFov);
+    if (const Json* m = find(v, "model"))
+      c.model = CameraModel(choice(*m, member(path, "model"), "camera model", kCameraModels));
+    c.fisheye_fov_degrees = number(v, path, "fisheye_fov", c.fisheye_fov_degrees, kFisheyeFov);
+    c.aperture = number(v, path, "aperture", c.aperture, kNonNegative);
+    c.focus_distance = number(v, path, "focus_distance", c.focus_distance, kNonNegative);
     // The placement checks of Camera's constructor (engine/camera.cpp), in the same float arithmetic.
     const Vec3f view = c.look_at - c.eye;
     if (!(length(view) > 0.0f)) {
@@ -515,7 +536,8 @@ class SceneReader {
     check_keys(v, path, kPolygonKeys);
     const std::string vp = member(path, "vertices");
     const Json& list = require(v, path, "vertices");
-    if (!list.is_array() || list.size() < 3) fail(vp, cat("expected an array of at least 3 vertices, got ", show(list)));
+    if (!list.is_array() || list.size() < 3)
+      fail(vp, cat("expected an array of at least 3 vertices, got ", show(list)));
     std::vector<Vec3f> vertices;
     for (size_t i = 0; i < list.size(); ++i) vertices.push_back(vector(list[i], element(vp, i)));
     // Scene::add_polygon's own test for a zero-area polygon, in float.
@@ -541,8 +563,7 @@ class SceneReader {
   void read_quadric(const Json& v, const std::string& path) {
     const Json* shape = find(v, "shape");
     const Json* coefficients = find(v, "coefficients");
-    if (shape != nullptr && coefficients != nullptr)
-      fail(path, "expected \"shape\" or \"coefficients\", not both");
+    if (shape != nullptr && coefficients != nullptr) fail(path, "expected \"shape\" or \"coefficients\", not both");
     if (shape == nullptr && coefficients == nullptr) fail(path, "missing key \"shape\" (or \"coefficients\")");
     QuadricShape q;
     if (coefficients != nullptr) {
@@ -602,8 +623,7 @@ class SceneReader {
     if (kind == 3) return Quadricf::hyperboloid_one_sheet(center, a, b, c, length_of("half_height"), axis);
     const float half_height = number(v, path, "half_height", 2.0f * c, kPositive);
     if (!(half_height > c))
-      fail(member(path, "half_height"),
-           cat(show(*find(v, "half_height")), " is out of range (must be > c = ", c, ")"));
+      fail(member(path, "half_height"), cat(show(*find(v, "half_height")), " is out of range (must be > c = ", c, ")"));
     return Quadricf::hyperboloid_two_sheets(center, a, b, c, half_height, axis);
   }
 
@@ -624,8 +644,8 @@ class SceneReader {
       const std::string rp = member(path, "rotate");
       object(*r, rp);
       check_keys(*r, rp, kRotateKeys);
-      t.rotation = rotation_matrix(direction(*r, rp, "axis", Vec3d(0.0, 1.0, 0.0)),
-                                   number(*r, rp, "degrees", 0.0f, kAnyNumber));
+      t.rotation =
+          rotation_matrix(direction(*r, rp, "axis", Vec3d(0.0, 1.0, 0.0)), number(*r, rp, "degrees", 0.0f, kAnyNumber));
     }
     t.translation = Vec3d(vector(v, path, "translate", Vec3f(0.0f)));
     return t;
@@ -659,7 +679,8 @@ class SceneReader {
     // The file's materials 1.. follow the scene's; its material 0 is the scene's default too.
     const uint32_t base = uint32_t(scene_.materials().size()) - 1;
     if (!override_material)
-      for (size_t i = 1; i < loaded.materials().size(); ++i) add(fp, [&] { scene_.add_material(loaded.materials()[i]); });
+      for (size_t i = 1; i < loaded.materials().size(); ++i)
+        add(fp, [&] { scene_.add_material(loaded.materials()[i]); });
     auto remap = [&](uint32_t id) { return override_material ? override_id : (id == 0 ? 0 : base + id); };
     for (TriangleMesh mesh : loaded.meshes()) {
       for (Vec3f& p : mesh.positions) p = t.point(p);

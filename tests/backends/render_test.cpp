@@ -80,6 +80,25 @@ TEST(Render, TheTwoBackendsImagesDifferVisiblyOnlyAtAFewEdgePixels) {
   EXPECT_LE(visible, size_t(w * h) / 1000) << visible << " of " << w * h << " pixels differ visibly";
 }
 
+TEST(Aovs, DepthNormalAndPrimitiveOfAKnownScene) {
+  // Looking straight down -z at the plane z = -3 with a sphere of radius 1 at the centre.
+  Scene s;
+  s.add_plane({{0, 0, 1}, 3, 0});
+  s.add_sphere({{0, 0, -1}, 1, 0});
+  const Camera cam({{0, 0, 2}, {0, 0, 0}, {0, 1, 0}, 60.0f}, 9, 9);
+  for (const std::string& name : available_backends()) {
+    const Aovs a = render_aovs(s, *make_backend(name, s), cam);
+    const size_t centre = 4 * 9 + 4, corner = 0;
+    EXPECT_NEAR(a.depth[centre], 2.0f, 1e-5f) << name;  // eye z = 2 to the sphere top z = 0
+    EXPECT_EQ(a.prim_id[centre], s.sphere_base()) << name;
+    EXPECT_NEAR(a.normal[3 * centre + 2], 1.0f, 1e-5f) << name;
+    EXPECT_EQ(a.prim_id[corner], s.plane_base()) << name;
+    const Ray r = cam.generate(0.5f, 0.5f);
+    EXPECT_NEAR(a.depth[corner], 5.0f / -r.dir.z, 1e-4f) << name;  // to z = -3 along a unit ray
+    EXPECT_NEAR(a.shading_normal[3 * corner + 2], 1.0f, 1e-6f) << name;
+  }
+}
+
 TEST(Fresnel, MatchesTheClosedForms) {
   EXPECT_NEAR(fresnel_dielectric(1.0f, 1.0f, 1.5f), 0.04f, 1e-6f);  // ((n1-n2)/(n1+n2))^2
   EXPECT_NEAR(fresnel_dielectric(1.0f, 1.5f, 1.0f), 0.04f, 1e-6f);

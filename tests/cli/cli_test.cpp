@@ -188,6 +188,34 @@ TEST_F(Cli, InfoCountsTheScene) {
   EXPECT_NE(r.output.find("\nsimd "), std::string::npos) << r.output;
 }
 
+TEST_F(Cli, RenderWritesAovsAsOneExr) {
+  const fs::path out = dir_ / "b.png", aov = dir_ / "aov.exr";
+  Result r = run("render --resolution 24x16 -q -o " + out.string() + " --aov " + aov.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_GT(fs::file_size(aov), 100u);
+  r = run("render --resolution 24x16 -q -o " + out.string() + " --aov " + (dir_ / "aov.png").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("AOVs are written as OpenEXR"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, EveryCameraAndSamplerRenders) {
+  for (const std::string args : {"--camera panoramic", "--camera fisheye --fisheye-fov 200",
+                                 "--camera thin-lens --aperture 0.2 --focus-distance 8 --spp 4",
+                                 "--sampler uniform --spp 4", "--sampler random --spp 2", "--sampler adaptive",
+                                 "--eye 0,2,9 --look-at 0,1,0 --up 0,1,0 --fov 50"}) {
+    const fs::path out = dir_ / "c.png";
+    const Result r = run("render --resolution 32x24 -o " + out.string() + " " + args);
+    EXPECT_EQ(r.status, 0) << args << ": " << r.output;
+    EXPECT_EQ(rp::read_image(out.string()).width, 32) << args;
+  }
+  for (const std::string args : {"--camera orthographic", "--sampler uniform --spp 3", "--eye 1,2", "--fov 200",
+                                 "--eye 0,1,0 --look-at 0,1,0"}) {
+    const Result r = run("render --resolution 32x24 -o " + (dir_ / "d.png").string() + " " + args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+}
+
 TEST_F(Cli, HelpAndVersion) {
   Result r = run("--help");
   EXPECT_EQ(r.status, 0);

@@ -174,7 +174,8 @@ TEST(JsonSceneExample, QuadricsAreTheNamedConstructorsAndTheGeneralForm) {
   expect_same_quadric(s.quadrics()[0].quadric, Quadricf::ellipsoid({-5, 1, -2}, {0.8f, 1, 0.6f}));
   expect_same_quadric(s.quadrics()[1].quadric, Quadricf::cylinder({-2.5f, 0.6f, -2}, 0.6f, 0.6f, 0.9f, 2));
   expect_same_quadric(s.quadrics()[2].quadric, Quadricf::cone({0, 1, -2}, 0.5f, 0.5f, 1, 1));
-  expect_same_quadric(s.quadrics()[3].quadric, Quadricf::hyperboloid_one_sheet({2.5f, 1, -2}, 0.35f, 0.35f, 0.5f, 1, 1));
+  expect_same_quadric(s.quadrics()[3].quadric,
+                      Quadricf::hyperboloid_one_sheet({2.5f, 1, -2}, 0.35f, 0.35f, 0.5f, 1, 1));
   expect_same_quadric(s.quadrics()[4].quadric, Quadricf::hyperboloid_two_sheets({5, 1, -2}, 0.4f, 0.4f, 0.3f, 1, 0));
   expect_same_quadric(s.quadrics()[5].quadric, Quadricf::paraboloid({-1.5f, 0.05f, 1.5f}, 0.8f, 0.8f, 1.2f, 1));
   Quadricf saddle;
@@ -206,10 +207,11 @@ TEST(JsonSceneExample, MeshIsScaledThenRotatedThenTranslatedNormalsByTheInverseT
   expect_near(tip, Vec3f(2.19282032f, 1.2f, 1.1f), 1e-6f, "tip");
   EXPECT_TRUE(std::any_of(m.positions.begin(), m.positions.end(),
                           [&](const Vec3f& p) { return length(Vec3d(p) - Vec3d(tip)) < 1e-6; }));
-  const std::vector<Vec3f> corners = {expected(1, 0, 0), expected(-1, 0, 0), expected(0, 1, 0),
-                                      expected(0, -1, 0), expected(0, 0, 1), expected(0, 0, -1)};
+  const std::vector<Vec3f> corners = {expected(1, 0, 0),  expected(-1, 0, 0), expected(0, 1, 0),
+                                      expected(0, -1, 0), expected(0, 0, 1),  expected(0, 0, -1)};
   for (const Vec3f& p : m.positions)
-    EXPECT_TRUE(std::any_of(corners.begin(), corners.end(), [&](const Vec3f& q) { return length(Vec3d(p) - Vec3d(q)) < 1e-6; }))
+    EXPECT_TRUE(
+        std::any_of(corners.begin(), corners.end(), [&](const Vec3f& q) { return length(Vec3d(p) - Vec3d(q)) < 1e-6; }))
         << p.x << " " << p.y << " " << p.z;
   // The lowest corner rests on the floor.
   expect_near(expected(0, -1, 0), Vec3f(1.5f, 0, 1.5f), 1e-6f, "bottom");
@@ -217,7 +219,8 @@ TEST(JsonSceneExample, MeshIsScaledThenRotatedThenTranslatedNormalsByTheInverseT
   // Flat normals stay perpendicular to their transformed faces only under the inverse transpose.
   ASSERT_EQ(m.normals.size(), m.positions.size());
   for (uint32_t t = 0; t < m.triangle_count(); ++t) {
-    const Vec3d face = normalize(cross(Vec3d(m.vertex(t, 1)) - Vec3d(m.vertex(t, 0)), Vec3d(m.vertex(t, 2)) - Vec3d(m.vertex(t, 0))));
+    const Vec3d face =
+        normalize(cross(Vec3d(m.vertex(t, 1)) - Vec3d(m.vertex(t, 0)), Vec3d(m.vertex(t, 2)) - Vec3d(m.vertex(t, 0))));
     for (int k = 0; k < 3; ++k) {
       const Vec3d n(m.normals[m.indices[3 * t + k]]);
       EXPECT_NEAR(length(n), 1.0, 1e-6);
@@ -269,7 +272,8 @@ TEST(JsonScene, NoLightsGivesTheDefaultLightsOfLoadScene) {
     // load.cpp's key light: centre + (0.5, 1.5, 2) r, r = half the bounds' diagonal = sqrt(3).
     expect_near(s.point_lights()[0].position, Vec3f(1, 2, 3) + Vec3f(0.5f, 1.5f, 2.0f) * std::sqrt(3.0f), 1e-5f, "key");
   }
-  const Scene lit = json_scene(R"({"lights": [{"type": "point", "position": [0, 5, 0]}], "objects": [{"type": "sphere"}]})");
+  const Scene lit =
+      json_scene(R"({"lights": [{"type": "point", "position": [0, 5, 0]}], "objects": [{"type": "sphere"}]})");
   EXPECT_EQ(lit.point_lights().size(), 1u);
   EXPECT_EQ(lit.point_lights()[0].intensity, Vec3f(1.0f));
   EXPECT_TRUE(lit.directional_lights().empty());
@@ -307,13 +311,14 @@ TEST(JsonScene, MeshMaterialsAreAppendedAndRemappedUnlessOverridden) {
 }
 
 TEST(JsonScene, MeshPathsResolveAgainstTheSceneFolderOrAreAbsolute) {
-  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                          "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   const std::string absolute = write_file("tri.ply", ply);
   write_file("sub/tri.ply", ply);
-  const Scene s = json_scene(R"({"objects": [{"type": "mesh", "file": "tri.ply", "transform": {"translate": [0, 0, 1]}},
-                                             {"type": "mesh", "file": ")" + absolute + R"("}]})",
+  const std::string relative = R"({"type": "mesh", "file": "tri.ply", "transform": {"translate": [0, 0, 1]}})";
+  const Scene s = json_scene(R"({"objects": [)" + relative + R"(, {"type": "mesh", "file": ")" + absolute + R"("}]})",
                              "sub/scene.json");
   ASSERT_EQ(s.meshes().size(), 2u);
   EXPECT_EQ(s.meshes()[0].positions[2], Vec3f(0, 1, 1));
@@ -334,12 +339,28 @@ TEST(JsonSceneErrors, SyntaxErrorsGiveLineAndColumn) {
   EXPECT_EQ(json_error("{\"objects\": [] // no comments\n}"),
             "scene.json: line 1, column 16: syntax error while parsing object - invalid literal; last read: "
             "'\"objects\": [] /'; expected '}'");
-  EXPECT_EQ(json_error(""), "scene.json: line 1, column 1: syntax error while parsing value - unexpected end of input; "
-                            "expected '[', '{', or a literal");
+  EXPECT_EQ(json_error(""),
+            "scene.json: line 1, column 1: syntax error while parsing value - unexpected end of input; "
+            "expected '[', '{', or a literal");
   EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere", "radius": 1e999}]})"),
             "scene.json: number overflow parsing '1e999'");
   EXPECT_EQ(error_of([] { load_scene((scratch() / "absent.json").string()); }),
             "absent.json: cannot open: No such file or directory");
+}
+
+TEST(JsonScene, CameraModelsAndLensKeys) {
+  const Scene s = json_scene(R"({"camera": {"model": "thin_lens", "aperture": 0.25, "focus_distance": 7,
+                                            "fisheye_fov": 200}, "objects": [{"type": "sphere"}]})");
+  ASSERT_TRUE(s.camera().has_value());
+  EXPECT_EQ(s.camera()->model, CameraModel::thin_lens);
+  EXPECT_EQ(s.camera()->aperture, 0.25f);
+  EXPECT_EQ(s.camera()->focus_distance, 7.0f);
+  EXPECT_EQ(s.camera()->fisheye_fov_degrees, 200.0f);
+  EXPECT_EQ(json_error(R"({"camera": {"model": "orthographic"}, "objects": [{"type": "sphere"}]})"),
+            "scene.json: $.camera.model: unknown camera model \"orthographic\" (expected one of: pinhole, panoramic, "
+            "fisheye, thin_lens)");
+  EXPECT_EQ(json_error(R"({"camera": {"aperture": -1}, "objects": [{"type": "sphere"}]})"),
+            "scene.json: $.camera.aperture: -1 is out of range (must be >= 0)");
 }
 
 TEST(JsonSceneErrors, UnknownKeysListTheExpectedOnes) {
@@ -349,7 +370,8 @@ TEST(JsonSceneErrors, UnknownKeysListTheExpectedOnes) {
   EXPECT_EQ(json_error(R"({"object": []})"),
             "scene.json: $.object: unknown key (expected one of: camera, materials, lights, objects)");
   EXPECT_EQ(json_error(R"({"camera": {"fov_y": 40}, "objects": []})"),
-            "scene.json: $.camera.fov_y: unknown key (expected one of: eye, look_at, up, fov)");
+            "scene.json: $.camera.fov_y: unknown key (expected one of: eye, look_at, up, fov, model, fisheye_fov, "
+            "aperture, focus_distance)");
   EXPECT_EQ(json_error(R"({"materials": {"my red": {"colour": [1, 0, 0]}}, "objects": []})"),
             "scene.json: $.materials[\"my red\"].colour: unknown key (expected one of: diffuse, specular, shininess, "
             "emission, mirror, ior, opacity)");
@@ -374,7 +396,8 @@ TEST(JsonSceneErrors, WrongTypesShowTheValueCompactly) {
   EXPECT_EQ(json_error(R"([{"type": "sphere"}])"), "scene.json: $: expected an object, got [{\"type\":\"sphere\"}]");
   EXPECT_EQ(json_error(R"({"objects": {"type": "sphere"}})"),
             "scene.json: $.objects: expected an array, got {\"type\":\"sphere\"}");
-  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere"}, 7]})"), "scene.json: $.objects[1]: expected an object, got 7");
+  EXPECT_EQ(json_error(R"({"objects": [{"type": "sphere"}, 7]})"),
+            "scene.json: $.objects[1]: expected an object, got 7");
   EXPECT_EQ(json_error(with_object(R"({"type": 3})")), "scene.json: $.objects[0].type: expected a string, got 3");
   EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "material": ["red"]})")),
             "scene.json: $.objects[0].material: expected a string, got [\"red\"]");
@@ -385,8 +408,9 @@ TEST(JsonSceneErrors, WrongTypesShowTheValueCompactly) {
             "scene.json: $.materials.red: expected an object, got 1");
   EXPECT_EQ(json_error(R"({"lights": {}, "objects": []})"), "scene.json: $.lights: expected an array, got {}");
   // Values longer than 40 characters are cut to 37 and "...".
-  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": "this radius is described in words, not as a number"})")),
-            "scene.json: $.objects[0].radius: expected a number, got \"this radius is described in words, n...");
+  EXPECT_EQ(
+      json_error(with_object(R"({"type": "sphere", "radius": "this radius is described in words, not as a number"})")),
+      "scene.json: $.objects[0].radius: expected a number, got \"this radius is described in words, n...");
   // ... never inside a UTF-8 sequence.
   std::string accents;
   for (int i = 0; i < 30; ++i) accents += "\u00e9";
@@ -403,7 +427,8 @@ TEST(JsonSceneErrors, VectorsNeedThreeFiniteFloats) {
             "scene.json: $.camera.eye: expected 3 numbers, got [1,2]");
   EXPECT_EQ(json_error(R"({"camera": {"eye": [1, "2", 3]}, "objects": []})"),
             "scene.json: $.camera.eye: expected 3 numbers, got [1,\"2\",3]");
-  EXPECT_EQ(json_error(R"({"camera": {"up": 1}, "objects": []})"), "scene.json: $.camera.up: expected 3 numbers, got 1");
+  EXPECT_EQ(json_error(R"({"camera": {"up": 1}, "objects": []})"),
+            "scene.json: $.camera.up: expected 3 numbers, got 1");
   EXPECT_EQ(json_error(R"({"camera": {"eye": [1, 2, 1e39]}, "objects": []})"),
             "scene.json: $.camera.eye[2]: 1e+39 is out of range (must fit in a 32-bit float)");
   EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1]]})")),
@@ -427,8 +452,9 @@ TEST(JsonSceneErrors, OutOfRangeValuesNameTheRange) {
             "scene.json: $.materials.m.opacity: 1.5 is out of range (must be in [0, 1])");
   EXPECT_EQ(json_error(R"({"materials": {"m": {"mirror": -0.25}}, "objects": []})"),
             "scene.json: $.materials.m.mirror: -0.25 is out of range (must be in [0, 1])");
-  EXPECT_EQ(json_error(R"({"lights": [{"type": "point", "position": [0, 1, 0], "intensity": [1, 1, -1]}], "objects": []})"),
-            "scene.json: $.lights[0].intensity[2]: -1 is out of range (must be >= 0)");
+  EXPECT_EQ(
+      json_error(R"({"lights": [{"type": "point", "position": [0, 1, 0], "intensity": [1, 1, -1]}], "objects": []})"),
+      "scene.json: $.lights[0].intensity[2]: -1 is out of range (must be >= 0)");
   EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "ellipsoid", "radii": [1, 0, 1]})")),
             "scene.json: $.objects[0].radii[1]: 0 is out of range (must be > 0)");
   EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "paraboloid", "height": -0.5})")),
@@ -449,8 +475,9 @@ TEST(JsonSceneErrors, ZeroLengthDirectionsAndDegenerateCamerasAreRefused) {
             "scene.json: $.objects[0].normal: [0,0,0] is out of range (must have a non-zero length)");
   EXPECT_EQ(json_error(R"({"lights": [{"type": "directional", "direction": [0, 0.0, 0]}], "objects": []})"),
             "scene.json: $.lights[0].direction: [0,0.0,0] is out of range (must have a non-zero length)");
-  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"rotate": {"axis": [0, 0, 0]}}})")),
-            "scene.json: $.objects[0].transform.rotate.axis: [0,0,0] is out of range (must have a non-zero length)");
+  EXPECT_EQ(
+      json_error(with_object(R"({"type": "mesh", "file": "m.obj", "transform": {"rotate": {"axis": [0, 0, 0]}}})")),
+      "scene.json: $.objects[0].transform.rotate.axis: [0,0,0] is out of range (must have a non-zero length)");
   EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 3, 8], "look_at": [0, 3, 8]}, "objects": []})"),
             "scene.json: $.camera.look_at: [0,3,8] is out of range (must differ from eye)");
   EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 0, 0]}, "objects": []})"),
@@ -471,10 +498,11 @@ TEST(JsonSceneErrors, PolygonsNeedThreeCoplanarVerticesAndArea) {
   EXPECT_EQ(json_error(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 1]]})")),
             "scene.json: $.objects[0].vertices[0]: [0,0,0] is 0.235702 off the polygon's plane (the vertices must be "
             "coplanar)");
-  EXPECT_EQ(json_scene(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 1e-4]]})"))
-                .polygons()
-                .size(),
-            1u);
+  EXPECT_EQ(
+      json_scene(with_object(R"({"type": "polygon", "vertices": [[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 1e-4]]})"))
+          .polygons()
+          .size(),
+      1u);
 }
 
 TEST(JsonSceneErrors, UnknownNamesListTheKnownOnes) {
@@ -523,6 +551,10 @@ TEST(JsonSceneErrors, MeshFileProblemsCarryTheLoadersMessage) {
   write_file("empty.obj", "v 0 0 0\n");
   EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "empty.obj"})")),
             "scene.json: $.objects[0].file: empty.obj: the file has no triangles");
+  // What the Scene itself refuses comes back with the object's path.
+  write_file("tri.obj", "v 0 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "tri.obj", "transform": {"scale": [3e38, 1, 1]}})")),
+            "scene.json: $.objects[0]: mesh 'tri': vertex 1 has a non-finite coordinate");
   write_file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "bad.obj"})")),
             "scene.json: $.objects[0].file: bad.obj: face 1 uses vertex 9 of 3");
