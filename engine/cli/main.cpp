@@ -155,6 +155,7 @@ struct CameraArgs {
 
 struct RenderArgs {
   CameraArgs camera;
+  std::vector<std::string> lights;
   std::string aov;
   std::string sampler = "stratified";
   float adaptive_threshold = 0.05f;
@@ -229,7 +230,24 @@ int run_render(const RenderArgs& a) {
   check_backend(a.backend, a.variant);
 
   auto t = clock::now();
-  const rp::Scene scene = rp::load_scene(a.scene);
+  rp::Scene scene = rp::load_scene(a.scene);
+  for (const std::string& l : a.lights) {
+    static const std::regex re(R"(^(.*),([^,]+)$)");
+    std::smatch m;
+    float intensity = 0.0f;
+    bool ok = std::regex_match(l, m, re);
+    if (ok) {
+      try {
+        size_t used = 0;
+        intensity = std::stof(m[2].str(), &used);
+        ok = used == size_t(m[2].length()) && std::isfinite(intensity) && intensity > 0.0f;
+      } catch (const std::exception&) {
+        ok = false;
+      }
+    }
+    if (!ok) throw UsageError(rp::cat("--light: '", l, "' is not x,y,z,intensity with intensity > 0"));
+    scene.add_light(rp::PointLight{parse_vec3("--light", m[1].str()), rp::Vec3f(intensity)});
+  }
   const double load_s = seconds_since(t);
   const rp::CameraDesc desc = a.camera.apply(scene.camera().value_or(rp::frame_bounds(scene.bounds())));
   std::optional<rp::Camera> camera_or;
@@ -510,6 +528,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   render->add_flag("-q,--quiet", ra.quiet, "Print nothing on success");
   ra.camera.add_to(render);
+  render->add_option("--light", ra.lights, "Add a white point light x,y,z,intensity (repeatable)");
   render->add_option("--aov", ra.aov, "Also write depth, normals, uv and primitive id as a multi-channel .exr");
   render->add_option("--sampler", ra.sampler, "uniform, random, stratified or adaptive")->capture_default_str();
   render->add_option("--adaptive-threshold", ra.adaptive_threshold,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 
 #include "engine/error.h"
 
@@ -45,10 +46,14 @@ Scene load_scene(const std::string& path) {
     else if (lower == ".ply")
       load_ply(path, scene);
     else
-      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply)"));
+      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply, .json)"));
     RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
   }
   if (scene.point_lights().empty() && scene.directional_lights().empty()) add_default_lights(scene);
+  // Zero-area triangles are kept (the numbering stays the file's) but can never be hit.
+  if (const size_t degenerate = scene.degenerate_triangle_count(); degenerate > 0)
+    std::fprintf(stderr, "raypack: warning: %s: %zu zero-area triangle%s kept; no ray can hit %s\n", path.c_str(),
+                 degenerate, degenerate == 1 ? "" : "s", degenerate == 1 ? "it" : "them");
   return scene;
 }
 

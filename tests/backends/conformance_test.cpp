@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <tuple>
 
 #include "backends/registry.h"
 #include "engine/camera.h"
@@ -302,24 +303,32 @@ TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
   auto backend = make_backend(GetParam(), scene);
-  const Camera cam(*scene.camera(), 67, 45);  // odd sizes: partial tiles and packets
-  RenderSettings st;
-  st.width = 67;
-  st.height = 45;
-  st.spp = 4;
-  st.seed = 1234;
-  std::vector<float> one, two;
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-    one = render(scene, *backend, cam, st).image.rgb;
+  CameraDesc lens = *scene.camera();
+  lens.model = CameraModel::thin_lens;
+  lens.aperture = 0.2f;
+  for (const auto& [desc, sampler, spp] : {std::tuple{*scene.camera(), Sampler::stratified, 4},
+                                           std::tuple{lens, Sampler::random, 3},
+                                           std::tuple{*scene.camera(), Sampler::adaptive, 1}}) {
+    const Camera cam(desc, 67, 45);  // odd sizes: partial tiles and packets
+    RenderSettings st;
+    st.width = 67;
+    st.height = 45;
+    st.spp = spp;
+    st.sampler = sampler;
+    st.seed = 1234;
+    std::vector<float> one, two;
+    {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+      one = render(scene, *backend, cam, st).image.rgb;
+    }
+    {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+      two = render(scene, *backend, cam, st).image.rgb;
+    }
+    ASSERT_EQ(one.size(), two.size());
+    EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float))) << int(sampler);
+    EXPECT_EQ(one, render(scene, *backend, cam, st).image.rgb) << int(sampler);  // and across runs
   }
-  {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-    two = render(scene, *backend, cam, st).image.rgb;
-  }
-  ASSERT_EQ(one.size(), two.size());
-  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
-  EXPECT_EQ(one, render(scene, *backend, cam, st).image.rgb);  // and across runs
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(available_backends()),

@@ -716,9 +716,9 @@ TEST(LoadScene, ExtensionPicksTheLoaderIgnoringCase) {
 }
 
 TEST(LoadScene, UnknownFormatsAreRefused) {
-  EXPECT_EQ(error_of([] { load_scene("model.stl"); }), "model.stl: unknown scene format '.stl' (.obj, .ply)");
-  EXPECT_EQ(error_of([] { load_scene("model"); }), "model: unknown scene format '' (.obj, .ply)");
-  EXPECT_EQ(error_of([] { load_scene("scenes.d/model"); }), "scenes.d/model: unknown scene format '' (.obj, .ply)");
+  EXPECT_EQ(error_of([] { load_scene("model.stl"); }), "model.stl: unknown scene format '.stl' (.obj, .ply, .json)");
+  EXPECT_EQ(error_of([] { load_scene("model"); }), "model: unknown scene format '' (.obj, .ply, .json)");
+  EXPECT_EQ(error_of([] { load_scene("scenes.d/model"); }), "scenes.d/model: unknown scene format '' (.obj, .ply, .json)");
   EXPECT_EQ(error_of([] { load_scene(path_of("absent.ply")); }),
             path_of("absent.ply") + ": cannot open: No such file or directory");
 }
