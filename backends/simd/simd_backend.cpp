@@ -136,7 +136,9 @@ class SimdBackend final : public Backend {
           const Mt8 h = moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, float8(tfar));
           const uint32_t bits = movemask(h.hit) & in_leaf;
           if (bits) {
-            const float tmin = simd::reduce_min(xsimd::select(h.hit, h.t, float8(std::numeric_limits<float>::infinity())));
+            // The minimum over this leaf's lanes only: the block may hold other leaves too.
+            const float tmin = simd::reduce_min(
+                xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
             const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
             const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
             alignas(32) float u[8], v[8];
