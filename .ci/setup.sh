@@ -11,7 +11,7 @@ packages=(
   libxsimd-dev xtl-dev
   libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev nlohmann-json3-dev libfmt-dev
+  libcli11-dev nlohmann-json3-dev
   libtinyobjloader-dev
 )
 
