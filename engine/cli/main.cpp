@@ -22,6 +22,7 @@
 #include "engine/camera.h"
 #include "engine/error.h"
 #include "engine/image_io.h"
+#include "engine/cli/bench_cmd.h"
 #include "engine/diff.h"
 #include "engine/loaders/load.h"
 #include "engine/rayfile.h"
@@ -576,6 +577,25 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 100.0));
   diff->add_option("-t,--threads", da.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
 
+  rp::cli::BenchArgs ba;
+  int bench_threads = 0;
+  CLI::App* bench = app.add_subcommand("bench", "Every backend method on identical rays: speed beside accuracy");
+  bench->add_option("--scene", ba.scenes, "Scene: 'default' or a file (repeatable)")->capture_default_str();
+  bench->add_option("--size", ba.size, "Primary rays: SIZE x SIZE pixels")->check(CLI::Range(8, 8192))->capture_default_str();
+  bench->add_option("--min-runs", ba.min_runs, "Runs over which the spread is judged")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  bench->add_option("--max-runs", ba.max_runs, "Most runs per measurement")->check(CLI::Range(1, 1000))->capture_default_str();
+  bench->add_option("--json", ba.json, "Write the results as JSON");
+  bench->add_option("--chart", ba.chart, "Also draw the charts (PNG and SVG, with gnuplot)");
+  bench->add_option("-t,--threads", bench_threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+
+  std::string chart_json, chart_out = "chart.png";
+  CLI::App* chart = app.add_subcommand("chart", "Redraw the charts of a saved `raypack bench --json` file");
+  chart->add_option("json", chart_json, "The bench JSON")->required();
+  chart->add_option("-o,--output", chart_out, "Chart (PNG; an SVG and a -scaling chart are written beside it)")
+      ->capture_default_str();
+
   InfoArgs ia;
   CLI::App* info = app.add_subcommand("info", "Counts, bounds and bytes of a scene and of each backend's structure");
   info->add_option("scene,--scene", ia.scene, "Scene: 'default' or a scene file")->capture_default_str();
@@ -600,6 +620,17 @@ int main(int argc, char** argv) {
     if (*trace) return run_trace(ta);
     if (*diff) return run_diff(da);
     if (*info) return run_info(ia);
+    if (*bench) {
+      if (ba.max_runs < ba.min_runs) throw UsageError(rp::cat("--max-runs: ", ba.max_runs, " is below --min-runs ", ba.min_runs));
+      std::optional<tbb::global_control> limit;
+      if (bench_threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(bench_threads));
+      return rp::cli::run_bench(ba);
+    }
+    if (*chart) {
+      rp::cli::draw_charts(chart_json, chart_out);
+      std::fprintf(stderr, "raypack: wrote %s\n", chart_out.c_str());
+      return 0;
+    }
     return run_backends();
   } catch (const UsageError& e) {
     std::cerr << "raypack: " << e.what() << '\n';

@@ -219,6 +219,29 @@ TEST_F(Cli, EveryCameraAndSamplerRenders) {
   }
 }
 
+TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
+  const fs::path json = dir_ / "b.json", chart = dir_ / "c.png", again = dir_ / "again.png";
+  Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* word : {"simd packet", "simd single", "embree rtcIntersect8", "embree rtcIntersect1", "embree robust 1",
+                           "bytes/prim", "primary", "shadow", "diffuse"})
+    EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
+  const std::string text = file_bytes(json);
+  for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
+                          "\"build_seconds\""})
+    EXPECT_NE(text.find(key), std::string::npos) << key;
+  for (const fs::path& p : {chart, dir_ / "c.svg", dir_ / "c-scaling.png", dir_ / "c-scaling.svg"})
+    EXPECT_GT(fs::exists(p) ? fs::file_size(p) : 0u, 1000u) << p;
+  EXPECT_EQ(rp::read_image(chart.string()).width, 1500);
+  r = run("chart " + json.string() + " -o " + again.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(again));
+  std::ofstream(dir_ / "bad.json") << "{\"not\": 1}";
+  r = run("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("not a raypack bench file"), std::string::npos) << r.output;
+}
+
 TEST_F(Cli, HelpAndVersion) {
   Result r = run("--help");
   EXPECT_EQ(r.status, 0);
