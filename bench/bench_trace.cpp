@@ -23,6 +23,7 @@
 #include "backends/registry.h"
 #include "engine/loaders/load.h"
 #include "engine/raygen.h"
+#include "engine/reference.h"
 #include "engine/scene.h"
 
 #ifndef RP_SHARED_SCENES
@@ -62,6 +63,8 @@ struct SceneFixture {
   Scene scene;
   std::map<std::string, std::unique_ptr<Backend>> backends;
   RaySets rays;
+  std::unique_ptr<Reference> reference;
+  std::map<std::string, std::vector<ReferenceHit>> reference_hits;  ///< by ray kind
 };
 
 std::map<std::string, std::string>& scene_files() {
@@ -77,6 +80,13 @@ SceneFixture& fixture(const std::string& scene_name) {
     f->scene = load_scene(scene_files().at(scene_name));
     for (const Method& m : methods()) f->backends[m.label] = make_backend(m.name, f->scene, m.options);
     f->rays = make_rays(f->scene, *f->backends.at("embree"));
+    f->reference = std::make_unique<Reference>(f->scene);
+    for (const auto& [kind, rays] : {std::pair{"primary", &f->rays.primary}, std::pair{"shadow", &f->rays.shadow},
+                                     std::pair{"diffuse", &f->rays.diffuse}}) {
+      std::vector<ReferenceHit>& r = f->reference_hits[kind];
+      r.resize(rays->size());
+      f->reference->intersect(*rays, r);
+    }
   }
   return *f;
 }
@@ -109,9 +119,23 @@ void BM_Trace(benchmark::State& state, const std::string& label, const std::stri
     if (hits[i].hit() && ref_hits[i].hit() && std::abs(hits[i].t - ref_hits[i].t) <= 1e-6f * ref_hits[i].t) ++ties;
     else ++mismatch;
   }
+  // Accuracy against the double-precision reference on the same rays, beside Rays/s.
+  const std::vector<ReferenceHit>& r = f.reference_hits.at(kind);
+  size_t wrong = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (shadow) {
+      wrong += bool(occ[i]) != r[i].hit();
+      continue;
+    }
+    if (hits[i].hit() != r[i].hit()) ++wrong;
+    else if (hits[i].hit() && hits[i].prim_id != r[i].prim_id &&
+             std::abs(double(hits[i].t) - r[i].t) > 1e-6 * r[i].t)
+      ++wrong;
+  }
   state.counters["rays"] = double(rays.size());
   state.counters["mismatch"] = double(mismatch);
   state.counters["ties"] = double(ties);
+  state.counters["ref_mismatch_rate"] = double(wrong) / std::max(1.0, double(rays.size()));
   if (double(mismatch) > 1e-5 * double(rays.size())) {
     state.SkipWithError(("hits differ from embree on " + std::to_string(mismatch) + " of " +
                          std::to_string(rays.size()) + " rays").c_str());
@@ -154,6 +178,10 @@ void BM_Load(benchmark::State& state, const std::string& path) {
 }  // namespace
 }  // namespace rp
 
+namespace rp::bvh8 {
+void register_kernel_benchmarks();  // bench_kernels.cpp, built for AVX2+FMA
+}
+
 int main(int argc, char** argv) {
   using namespace rp;
   size_t threads = std::max(1u, std::thread::hardware_concurrency());
@@ -184,6 +212,9 @@ int main(int argc, char** argv) {
           ->UseRealTime();
     }
   }
+  // The kernel benchmarks run AVX2+FMA code: only where the simd backend is offered.
+  for (const BackendEntry& e : list_backends())
+    if (e.name == "simd" && e.available) rp::bvh8::register_kernel_benchmarks();
   if (std::filesystem::is_directory(RP_SHARED_SCENES)) {
     std::vector<std::filesystem::path> models;
     for (const auto& e : std::filesystem::directory_iterator(RP_SHARED_SCENES))
