@@ -298,6 +298,13 @@ class SimdBackend final : public Backend {
     v = float8::load_aligned(vv);
   }
 
+  /// The 8 rays of `p` against the triangle in slot l of block tb (broadcast).
+  static Mt8 packet_vs_slot(const RayPacket& p, const Tri8& tb, uint32_t l, const float8& tfar) {
+    return moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                            Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
+                            Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+  }
+
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
   void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, float8& tfar, float8& u, float8& v,
                        uint32_t* prim) const noexcept {
@@ -358,9 +365,7 @@ class SimdBackend final : public Backend {
             analytic_packet(id, rays, e.mask, tfar, u, v, prim);
             continue;
           }
-          const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                                         Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
-                                         Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+          const Mt8 h = packet_vs_slot(p, tb, l, tfar);
           const mask8 upd = h.hit & lanes;
           const uint32_t bits = movemask(upd);
           if (!bits) continue;
@@ -428,9 +433,7 @@ class SimdBackend final : public Backend {
             for (uint32_t b = e.mask; b; b &= b - 1)
               if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
           } else {
-            const Mt8 h = moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                                           Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
-                                           Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
+            const Mt8 h = packet_vs_slot(p, tb, l, tfar);
             hit = movemask(h.hit) & e.mask;
           }
           done |= hit;
