@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <type_traits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -133,31 +134,30 @@ T load(const char* p, bool swap) {
   return v;
 }
 
-double load_number(const char* p, Type t, bool swap) {
+/// The value of type `t` at p, converted to R. Float types never reach R = int64_t: counts
+/// and indices are checked to be integers when the header is read.
+template <typename R>
+R load_as(const char* p, Type t, bool swap) {
   switch (t) {
-    case Type::i8: return load<int8_t>(p, swap);
-    case Type::u8: return load<uint8_t>(p, swap);
-    case Type::i16: return load<int16_t>(p, swap);
-    case Type::u16: return load<uint16_t>(p, swap);
-    case Type::i32: return load<int32_t>(p, swap);
-    case Type::u32: return load<uint32_t>(p, swap);
-    case Type::f32: return load<float>(p, swap);
-    case Type::f64: return load<double>(p, swap);
+    case Type::i8: return R(load<int8_t>(p, swap));
+    case Type::u8: return R(load<uint8_t>(p, swap));
+    case Type::i16: return R(load<int16_t>(p, swap));
+    case Type::u16: return R(load<uint16_t>(p, swap));
+    case Type::i32: return R(load<int32_t>(p, swap));
+    case Type::u32: return R(load<uint32_t>(p, swap));
+    case Type::f32:
+      if constexpr (std::is_floating_point_v<R>) return R(load<float>(p, swap));
+      break;
+    case Type::f64:
+      if constexpr (std::is_floating_point_v<R>) return R(load<double>(p, swap));
+      break;
   }
-  return 0.0;
+  return R(0);
 }
 
-int64_t load_integer(const char* p, Type t, bool swap) {
-  switch (t) {
-    case Type::i8: return load<int8_t>(p, swap);
-    case Type::u8: return load<uint8_t>(p, swap);
-    case Type::i16: return load<int16_t>(p, swap);
-    case Type::u16: return load<uint16_t>(p, swap);
-    case Type::i32: return load<int32_t>(p, swap);
-    case Type::u32: return load<uint32_t>(p, swap);
-    default: return 0;  // float types never reach here: counts and indices are checked to be integers
-  }
-}
+double load_number(const char* p, Type t, bool swap) { return load_as<double>(p, t, swap); }
+
+int64_t load_integer(const char* p, Type t, bool swap) { return load_as<int64_t>(p, t, swap); }
 
 /// What a vertex property feeds: a position or normal component, or nothing.
 enum Role : int8_t { kNone = -1, kX, kY, kZ, kNx, kNy, kNz };

@@ -16,6 +16,7 @@
 
 #include "engine/error.h"
 #include "engine/loaders/load.h"
+#include "scratch.h"
 
 #ifndef RP_SOURCE_DIR
 #define RP_SOURCE_DIR "/work/main"
@@ -28,31 +29,8 @@ namespace fs = std::filesystem;
 
 const std::string kExample = RP_SOURCE_DIR "/docs/example-scene.json";
 
-/// A scratch folder for this process, removed when the tests end.
-const fs::path& scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("raypack_json_scene_test_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-
-class ScratchCleanup : public testing::Environment {
- public:
-  void TearDown() override { fs::remove_all(scratch()); }
-};
-testing::Environment* const kCleanup = testing::AddGlobalTestEnvironment(new ScratchCleanup);
-
-/// Writes `text` to scratch()/name (creating folders) and returns the path.
-std::string write_file(const std::string& name, const std::string& text) {
-  const fs::path path = scratch() / name;
-  fs::create_directories(path.parent_path());
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(text.data(), std::streamsize(text.size()));
-  return path.string();
-}
+using test::scratch;
+using test::write_file;
 
 /// what() of the rp::Error that `f` throws with the scratch folder's path removed, or "no error".
 std::string error_of(const std::function<void()>& f) {

@@ -20,6 +20,7 @@
 
 #include "engine/error.h"
 #include "engine/loaders/load.h"
+#include "scratch.h"
 
 #ifndef RP_SHARED_SCENES
 #define RP_SHARED_SCENES "../shared/scenes"
@@ -30,30 +31,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// A scratch folder for this process, removed when the tests end.
-const fs::path& scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("raypack_loaders_test_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-
-class ScratchCleanup : public testing::Environment {
- public:
-  void TearDown() override { fs::remove_all(scratch()); }
-};
-testing::Environment* const kCleanup = testing::AddGlobalTestEnvironment(new ScratchCleanup);
-
-/// Writes `bytes` verbatim (no newline translation) to scratch()/name and returns the path.
-std::string write_file(const std::string& name, const std::string& bytes) {
-  const fs::path path = scratch() / name;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  return path.string();
-}
+using test::scratch;
+using test::write_file;
 
 /// what() of the rp::Error that `f` throws, or "no error".
 std::string error_of(const std::function<void()>& f) {
