@@ -121,6 +121,17 @@ inline Vec3x8 cross(const Vec3x8& a, const Vec3x8& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
+/// Cross product with one FMA per component, in the order of rp::cross_fma (and Embree's
+/// Vec3 cross): fms(a.y, b.z, a.z * b.y), ...
+inline Vec3x8 cross_fma(const Vec3x8& a, const Vec3x8& b) {
+  return {xsimd::fms(a.y, b.z, a.z * b.y), xsimd::fms(a.z, b.x, a.x * b.z), xsimd::fms(a.x, b.y, a.y * b.x)};
+}
+
+/// Dot product with two FMAs, in the order of rp::dot_fma: fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
+inline float8 dot_fma(const Vec3x8& a, const Vec3x8& b) {
+  return xsimd::fma(a.x, b.x, xsimd::fma(a.y, b.y, a.z * b.z));
+}
+
 /// Lane-wise choice: m ? a : b.
 inline Vec3x8 select(const mask8& m, const Vec3x8& a, const Vec3x8& b) {
   return {xsimd::select(m, a.x, b.x), xsimd::select(m, a.y, b.y), xsimd::select(m, a.z, b.z)};

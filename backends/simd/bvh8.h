@@ -35,10 +35,11 @@ struct alignas(32) Bvh8Node {
 static_assert(sizeof(Bvh8Node) == 224);
 
 /// Eight primitive slots in SoA, stored for the 8-wide Möller–Trumbore test: v0 and the
-/// edges e1 = v1 - v0, e2 = v2 - v0 (computed once, in float, exactly as the scalar routine
-/// does), and the scene prim_id of each lane (kInvalidId for padding). An analytic primitive
+/// edges e1 = v0 - v1, e2 = v2 - v0 (computed once, in float, exactly as the scalar
+/// rp::intersect_triangle_mt_normal does; the normal e2 x e1 is recomputed per test, which
+/// keeps a slot at 40 bytes), and the scene prim_id of each lane (kInvalidId for padding). An analytic primitive
 /// (sphere, quadric, polygon) takes a slot with zero edges, so Möller–Trumbore never hits it
-/// (det = 0), and is tested by its scalar routine. 320 bytes: 40 per slot. Slot s lives in
+/// (D.Ng = 0), and is tested by its scalar routine. 320 bytes: 40 per slot. Slot s lives in
 /// block s / 8, lane s % 8.
 struct alignas(32) Tri8 {
   float v0_x[8], v0_y[8], v0_z[8];

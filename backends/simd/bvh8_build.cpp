@@ -296,7 +296,7 @@ class Collapser {
     const auto ref = scene_.locate(prim_id);
     const TriangleMesh& m = scene_.meshes()[ref.shape];
     const Vec3f v0 = m.vertex(ref.local, 0);
-    const Vec3f e1 = m.vertex(ref.local, 1) - v0;  // as intersect_triangle_mt computes them
+    const Vec3f e1 = v0 - m.vertex(ref.local, 1);  // as intersect_triangle_mt_normal computes them
     const Vec3f e2 = m.vertex(ref.local, 2) - v0;
     const uint32_t l = slot % 8;
     b.v0_x[l] = v0.x; b.v0_y[l] = v0.y; b.v0_z[l] = v0.z;

@@ -191,26 +191,30 @@ struct Mt8 {
   float8 t, u, v;
 };
 
-/// Möller–Trumbore ×8 (Möller and Trumbore 1997, "Fast, Minimum Storage Ray/Triangle
-/// Intersection", JGT 2(1)), lane by lane exactly as rp::intersect_triangle_mt: the same
-/// operations in the same order, no FMA (the TU is built with -ffp-contract=off), one
-/// reciprocal of det, so each lane has the bits of the scalar routine. Serves one ray against 8
-/// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane
-/// hits when det != 0, b1 in [0, 1], b2 >= 0, b1 + b2 <= 1 and tnear <= t <= tfar, t finite.
+/// Möller–Trumbore ×8 in the normal-first factoring of rp::intersect_triangle_mt_normal (Möller
+/// and Trumbore 1997; Kensler and Shirley 2006; Embree's default triangle intersector), lane
+/// by lane exactly as that scalar routine: the same FMAs in the same order, so each lane has
+/// its bits. Edge tests compare the unnormalised U, V against |D.Ng| before any division, so
+/// the decisions at shared edges are those of Embree's default intersector. Takes the
+/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (Tri8's layout). Serves one ray against 8
+/// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
+/// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite.
 inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
                             const Vec3x8& e2, const float8& tnear, const float8& tfar) {
-  const Vec3x8 s1 = simd::cross(dir, e2);
-  const float8 det = simd::dot(s1, e1);
-  const Vec3x8 s = org - v0;
-  const float8 inv_det = float8(1.0f) / det;
-  const float8 b1 = simd::dot(s1, s) * inv_det;
-  const Vec3x8 s2 = simd::cross(s, e1);
-  const float8 b2 = simd::dot(s2, dir) * inv_det;
-  const float8 t = simd::dot(s2, e2) * inv_det;
-  const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
-  const mask8 hit = (det != zero) & (b1 >= zero) & (b1 <= one) & (b2 >= zero) & (b1 + b2 <= one) & (t >= tnear) &
-                    (t <= tfar) & (t < inf);
-  return {hit, t, b1, b2};
+  const Vec3x8 ng = simd::cross_fma(e2, e1);
+  const Vec3x8 c = v0 - org;
+  const Vec3x8 r = simd::cross_fma(c, dir);
+  const float8 den = simd::dot_fma(ng, dir);
+  const float8 sign = den & float8(-0.0f);  // the sign bit of den, xored into U, V, T
+  const float8 abs_den = den ^ sign;
+  const float8 u = simd::dot_fma(r, e2) ^ sign;
+  const float8 v = simd::dot_fma(r, e1) ^ sign;
+  const float8 zero(0.0f), inf(std::numeric_limits<float>::infinity());
+  const mask8 edges = (den != zero) & (u >= zero) & (v >= zero) & (u + v <= abs_den);
+  const float8 inv = float8(1.0f) / abs_den;
+  const float8 t = (simd::dot_fma(ng, c) ^ sign) * inv;
+  const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
+  return {hit, t, u * inv, v * inv};
 }
 
 /// The triangles of block b as Vec3x8 (v0, e1, e2).

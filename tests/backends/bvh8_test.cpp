@@ -186,7 +186,7 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
     for (size_t i = 0; i < rays.size(); ++i) {
       float best = std::numeric_limits<float>::infinity();
       for (uint32_t t = 0; t < m.triangle_count(); ++t) {
-        const Intersection<float> h = intersect_triangle_mt(rays[i], m.vertex(t, 0), m.vertex(t, 1), m.vertex(t, 2));
+        const Intersection<float> h = intersect_triangle_mt_normal(rays[i], m.vertex(t, 0), m.vertex(t, 1), m.vertex(t, 2));
         if (h.hit) best = std::min(best, h.t);
       }
       hit_count += std::isfinite(best);
@@ -195,14 +195,14 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
         const TriangleMesh& mm = sc.meshes()[0];
         const uint32_t t = hits[i].prim_id;
         ASSERT_LT(t, mm.triangle_count());
-        EXPECT_EQ(intersect_triangle_mt(rays[i], mm.vertex(t, 0), mm.vertex(t, 1), mm.vertex(t, 2)).t, best);
+        EXPECT_EQ(intersect_triangle_mt_normal(rays[i], mm.vertex(t, 0), mm.vertex(t, 1), mm.vertex(t, 2)).t, best);
       }
     }
     EXPECT_GT(hit_count, rays.size() / 2);
   }
 }
 
-/// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt bit for bit, both ways of use.
+/// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of use.
 TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-2.0f, 2.0f);
@@ -216,7 +216,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
       v1[l] = v0[l] + v3() * 0.5f;
       v2[l] = v0[l] + v3() * 0.5f;
       if (iter % 7 == 0 && l == 3) v2[l] = v1[l];  // degenerate lane
-      const Vec3f e1 = v1[l] - v0[l], e2 = v2[l] - v0[l];
+      const Vec3f e1 = v0[l] - v1[l], e2 = v2[l] - v0[l];
       block.v0_x[l] = v0[l].x; block.v0_y[l] = v0[l].y; block.v0_z[l] = v0[l].z;
       block.e1_x[l] = e1.x; block.e1_y[l] = e1.y; block.e1_z[l] = e1.z;
       block.e2_x[l] = e2.x; block.e2_y[l] = e2.y; block.e2_z[l] = e2.z;
@@ -235,7 +235,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
     h.v.store_aligned(vv);
     const uint32_t bits = simd::movemask(h.hit);
     for (int l = 0; l < 8; ++l) {
-      const Intersection<float> s = intersect_triangle_mt(r, v0[l], v1[l], v2[l]);
+      const Intersection<float> s = intersect_triangle_mt_normal(r, v0[l], v1[l], v2[l]);
       ASSERT_EQ(bool(bits >> l & 1u), s.hit) << "iter " << iter << " lane " << l;
       if (!s.hit) continue;
       ++hits;
@@ -243,7 +243,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
       EXPECT_EQ(std::bit_cast<uint32_t>(uu[l]), std::bit_cast<uint32_t>(s.u));
       EXPECT_EQ(std::bit_cast<uint32_t>(vv[l]), std::bit_cast<uint32_t>(s.v));
       // The same triangle broadcast against the ray broadcast (the packet form).
-      const Mt8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v1[l] - v0[l]),
+      const Mt8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v0[l] - v1[l]),
                                      Vec3x8(v2[l] - v0[l]), float8(r.tnear), float8(r.tfar));
       EXPECT_EQ(simd::movemask(p.hit), 0xffu);
       EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));

@@ -94,8 +94,9 @@ struct TriangleMethod {
   TriangleFn<T> fn;
 };
 template <typename T>
-std::array<TriangleMethod<T>, 4> triangle_methods() {
+std::array<TriangleMethod<T>, 5> triangle_methods() {
   return {{{"moller_trumbore", &intersect_triangle_mt<T>},
+           {"moller_trumbore_normal", &intersect_triangle_mt_normal<T>},
            {"cramer", &intersect_triangle_cramer<T>},
            {"two_step", &intersect_triangle_two_step<T>},
            {"watertight", &intersect_triangle_watertight<T>}}};
