@@ -60,15 +60,15 @@ void BM_MollerTrumbore8(benchmark::State& state) {
     for (int l = 0; l < 8; ++l) {
       const Vec3f a = v3(-1, 1), e1 = v3(-0.8f, 0.8f), e2 = v3(-0.8f, 0.8f);
       blocks[s].v0_x[l] = a.x; blocks[s].v0_y[l] = a.y; blocks[s].v0_z[l] = a.z;
-      blocks[s].e1_x[l] = e1.x; blocks[s].e1_y[l] = e1.y; blocks[s].e1_z[l] = e1.z;
-      blocks[s].e2_x[l] = e2.x; blocks[s].e2_y[l] = e2.y; blocks[s].e2_z[l] = e2.z;
+      blocks[s].p1_x[l] = e1.x; blocks[s].p1_y[l] = e1.y; blocks[s].p1_z[l] = e1.z;
+      blocks[s].p2_x[l] = e2.x; blocks[s].p2_y[l] = e2.y; blocks[s].p2_z[l] = e2.z;
     }
     rays[s] = random_ray();
   }
   size_t hits = 0, i = 0;
   for (auto _ : state) {
     const Tri8View tv(blocks[i]);
-    const Mt8 h = moller_trumbore8(Vec3x8(rays[i].org), Vec3x8(rays[i].dir), tv.v0, tv.e1, tv.e2, float8(0.0f),
+    const Mt8 h = moller_trumbore8(Vec3x8(rays[i].org), Vec3x8(rays[i].dir), tv.v0, tv.p1, tv.p2, float8(0.0f),
                                    float8(100.0f));
     hits += size_t(std::popcount(simd::movemask(h.hit)));
     benchmark::DoNotOptimize(h.t);

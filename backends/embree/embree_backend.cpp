@@ -131,12 +131,32 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   }
 }
 
+/// Embree is given the float below the caller's tnear (see EmbreeBackend::embree_tnear); in
+/// occlusion queries, which are never retraced, this gives the caller's tnear back.
+/// (Ambiguous only for the single value tnear = FLT_MIN, which comes back one float higher.)
+inline float caller_tnear(float embree_tnear) {
+  return embree_tnear >= std::numeric_limits<float>::min()
+             ? std::nextafter(embree_tnear, std::numeric_limits<float>::infinity())
+             : embree_tnear;
+}
+
+/// Occlusion filter on triangle geometry: rejects a hit below the caller's tnear, which the
+/// lowered Embree tnear lets through. Embree sets the ray's tfar to the candidate hit's
+/// distance before calling a filter.
+void occlusion_tnear_filter(const RTCFilterFunctionNArguments* a) {
+  for (unsigned i = 0; i < a->N; ++i)
+    if (a->valid[i] != 0 && !(RTCRayN_tfar(a->ray, a->N, i) >= caller_tnear(RTCRayN_tnear(a->ray, a->N, i))))
+      a->valid[i] = 0;
+}
+
 template <typename Kind>
 void user_occluded(const RTCOccludedFunctionNArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    if (s.intersect_analytic(Kind::base(s) + a->primID, ray_from(a->ray, a->N, i)).hit)
+    Ray r = ray_from(a->ray, a->N, i);
+    r.tnear = caller_tnear(r.tnear);
+    if (s.intersect_analytic(Kind::base(s) + a->primID, r).hit)
       RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
   }
 }
@@ -173,6 +193,7 @@ class EmbreeBackend final : public Backend {
       if (mesh.triangle_count() == 0) continue;
       RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
       rtcSetGeometryBuildQuality(g, quality);
+      rtcSetGeometryOccludedFilterFunction(g, occlusion_tnear_filter);
       auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                              3 * sizeof(float), mesh.positions.size()));
       auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
@@ -272,11 +293,14 @@ class EmbreeBackend final : public Backend {
 
   /// Embree's triangle tests accept tnear < t <= tfar; raypack's convention closes the
   /// interval at tnear too. Embree is therefore given the float just below tnear, and any hit
-  /// it returns below the caller's tnear is traced again with tnear itself. Two cases stay
-  /// open: tnear == 0 (Embree requires tnear >= 0, so a triangle hit at exactly t = 0, an
-  /// origin lying on the triangle, is missed), and occluded() with a surface exactly one
-  /// float below tnear, which reports occlusion.
-  static float embree_tnear(float tnear) { return tnear > 0.0f ? std::nextafter(tnear, 0.0f) : 0.0f; }
+  /// it returns below the caller's tnear is traced again with tnear itself; occlusion
+  /// queries instead reject such hits in a filter (occlusion_tnear_filter, and user_occluded
+  /// for analytic primitives). One case stays open: tnear == 0 (Embree requires tnear >= 0,
+  /// so a triangle hit at exactly t = 0, an origin lying on the triangle, is missed). A
+  /// tnear up to the smallest normal float is passed unchanged (open there).
+  static float embree_tnear(float tnear) {
+    return tnear > std::numeric_limits<float>::min() ? std::nextafter(tnear, 0.0f) : tnear;
+  }
 
   /// `r` as an Embree ray with the given tnear.
   static RTCRay to_embree(const Ray& r, float tnear) {

@@ -34,17 +34,20 @@ struct alignas(32) Bvh8Node {
 };
 static_assert(sizeof(Bvh8Node) == 224);
 
-/// Eight primitive slots in SoA, stored for the 8-wide Möller–Trumbore test: v0 and the
-/// edges e1 = v0 - v1, e2 = v2 - v0 (computed once, in float, exactly as the scalar
-/// rp::intersect_triangle_mt_normal does; the normal e2 x e1 is recomputed per test, which
-/// keeps a slot at 40 bytes), and the scene prim_id of each lane (kInvalidId for padding). An analytic primitive
-/// (sphere, quadric, polygon) takes a slot with zero edges, so Möller–Trumbore never hits it
-/// (D.Ng = 0), and is tested by its scalar routine. 320 bytes: 40 per slot. Slot s lives in
-/// block s / 8, lane s % 8.
+/// Eight primitive slots in SoA and the scene prim_id of each lane (kInvalidId for padding).
+/// What p1 and p2 hold depends on the triangle test the tree is built for (TriangleLayout):
+/// - edges (Möller–Trumbore): v0, p1 = e1 = v0 - v1, p2 = e2 = v2 - v0, computed once in
+///   float exactly as the scalar rp::intersect_triangle_mt_normal does (the normal e2 x e1 is
+///   recomputed per test, which keeps a slot at 40 bytes);
+/// - vertices (watertight): v0, p1 = v1, p2 = v2 as the mesh stores them, because the
+///   watertight test needs the very vertex values its neighbours share.
+/// An analytic primitive (sphere, quadric, polygon) takes a slot with NaN coordinates, which
+/// neither triangle test ever hits, and is tested by its scalar routine. 320 bytes: 40 per
+/// slot. Slot s lives in block s / 8, lane s % 8.
 struct alignas(32) Tri8 {
   float v0_x[8], v0_y[8], v0_z[8];
-  float e1_x[8], e1_y[8], e1_z[8];
-  float e2_x[8], e2_y[8], e2_z[8];
+  float p1_x[8], p1_y[8], p1_z[8];
+  float p2_x[8], p2_y[8], p2_z[8];
   uint32_t prim_id[8];
 };
 static_assert(sizeof(Tri8) == 320);
@@ -77,9 +80,13 @@ enum class SplitRule : uint8_t {
   median,  ///< the seeds' rule: longest axis of the centroids, balanced median split
 };
 
+/// What the leaf blocks store for a triangle (see Tri8).
+enum class TriangleLayout : uint8_t { edges, vertices };
+
 struct BuildOptions {
   SplitRule rule = SplitRule::sah;
   uint32_t max_leaf = 8;  ///< most primitives per leaf (1..8)
+  TriangleLayout layout = TriangleLayout::edges;
 };
 
 /// Figures of a built tree.

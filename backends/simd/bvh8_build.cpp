@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <memory>
 
 #include "backends/simd/bvh8.h"
@@ -203,7 +204,8 @@ class Builder {
 /// largest surface area until it has 8 children or only leaves.
 class Collapser {
  public:
-  Collapser(const Scene& scene, const std::vector<PrimRef>& refs, Bvh8& out) : scene_(scene), refs_(refs), out_(out) {}
+  Collapser(const Scene& scene, const std::vector<PrimRef>& refs, Bvh8& out, TriangleLayout layout)
+      : scene_(scene), refs_(refs), out_(out), layout_(layout) {}
 
   void root(const BuildNode& bn) {
     if (bn.leaf()) {  // a one-leaf tree still needs a root node
@@ -274,7 +276,7 @@ class Collapser {
       RP_CHECK(uint64_t(block) * 8 + 8 <= kMaxSlots, "bvh8: more than ", kMaxSlots, " primitive slots");
       out_.tris.emplace_back();
       Tri8& b = out_.tris.back();
-      std::fill_n(&b.v0_x[0], 9 * 8, 0.0f);
+      std::fill_n(&b.v0_x[0], 9 * 8, std::numeric_limits<float>::quiet_NaN());
       std::fill_n(b.prim_id, 8, kInvalidId);
       used_.push_back(0);
       open_.push_back(block);
@@ -287,26 +289,28 @@ class Collapser {
     return leaf_ref(first, count);
   }
 
-  /// Slot `slot` holds `prim_id`: a triangle's v0 and edges, or an analytic primitive's id
-  /// with zero edges.
+  /// Slot `slot` holds `prim_id`: a triangle's v0 and, by the layout, its edges or its other
+  /// two vertices; or an analytic primitive's id with NaN coordinates (the block's fill).
   void store(uint32_t slot, uint32_t prim_id) {
     Tri8& b = out_.tris[slot / 8];
     b.prim_id[slot % 8] = prim_id;
     if (prim_id >= scene_.triangle_count()) return;
     const auto ref = scene_.locate(prim_id);
     const TriangleMesh& m = scene_.meshes()[ref.shape];
-    const Vec3f v0 = m.vertex(ref.local, 0);
-    const Vec3f e1 = v0 - m.vertex(ref.local, 1);  // as intersect_triangle_mt_normal computes them
-    const Vec3f e2 = m.vertex(ref.local, 2) - v0;
+    const Vec3f v0 = m.vertex(ref.local, 0), v1 = m.vertex(ref.local, 1), v2 = m.vertex(ref.local, 2);
+    const bool edges = layout_ == TriangleLayout::edges;
+    const Vec3f p1 = edges ? v0 - v1 : v1;  // e1, e2 as intersect_triangle_mt_normal computes them
+    const Vec3f p2 = edges ? v2 - v0 : v2;
     const uint32_t l = slot % 8;
     b.v0_x[l] = v0.x; b.v0_y[l] = v0.y; b.v0_z[l] = v0.z;
-    b.e1_x[l] = e1.x; b.e1_y[l] = e1.y; b.e1_z[l] = e1.z;
-    b.e2_x[l] = e2.x; b.e2_y[l] = e2.y; b.e2_z[l] = e2.z;
+    b.p1_x[l] = p1.x; b.p1_y[l] = p1.y; b.p1_z[l] = p1.z;
+    b.p2_x[l] = p2.x; b.p2_y[l] = p2.y; b.p2_z[l] = p2.z;
   }
 
   const Scene& scene_;
   const std::vector<PrimRef>& refs_;
   Bvh8& out_;
+  TriangleLayout layout_;
   static constexpr size_t kOpenBlocks = 16; ///< blocks with room that later leaves may share
   std::vector<uint32_t> open_;              ///< the last kOpenBlocks blocks opened
   std::vector<uint32_t> used_;              ///< slots taken per block
@@ -373,7 +377,7 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     Builder builder(refs, options);
     const std::unique_ptr<BuildNode> root = builder.build(0, uint32_t(refs.size()), 0);
     out.bounds = root->box;
-    Collapser(scene, refs, out).root(*root);
+    Collapser(scene, refs, out, options.layout).root(*root);
   }
   out.first_analytic = scene.sphere_base();
   out.has_analytic = scene.plane_base() > scene.sphere_base();

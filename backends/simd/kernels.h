@@ -3,9 +3,12 @@
 /// boxes, and 8 rays against one box) and Möller–Trumbore (one ray against 8 triangles, and
 /// 8 rays against one triangle, by the same function). AVX2+FMA translation units only.
 
+#include <bit>
 #include <limits>
+#include <utility>
 
 #include "backends/simd/bvh8.h"
+#include "engine/geometry/triangle.h"
 #include "simd/float8.h"
 
 namespace rp::bvh8 {
@@ -217,13 +220,114 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
   return {hit, t, u * inv, v * inv};
 }
 
-/// The triangles of block b as Vec3x8 (v0, e1, e2).
+/// The slots of block b as Vec3x8: v0, p1, p2 (edges or vertices, see Tri8).
 struct Tri8View {
-  Vec3x8 v0, e1, e2;
+  Vec3x8 v0, p1, p2;
   explicit Tri8View(const Tri8& b)
       : v0(Vec3x8::load(b.v0_x, b.v0_y, b.v0_z)),
-        e1(Vec3x8::load(b.e1_x, b.e1_y, b.e1_z)),
-        e2(Vec3x8::load(b.e2_x, b.e2_y, b.e2_z)) {}
+        p1(Vec3x8::load(b.p1_x, b.p1_y, b.p1_z)),
+        p2(Vec3x8::load(b.p2_x, b.p2_y, b.p2_z)) {}
 };
+
+/// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8
+/// lanes: one ray broadcast, or the 8 rays of a packet, each with its own axis permutation.
+/// The constants are computed per lane by the scalar code of rp::intersect_triangle_watertight,
+/// so each lane gets that routine's bits.
+struct WatertightRays {
+  Vec3x8 org, dir;
+  mask8 kx_x, kx_y, ky_x, ky_y, kz_x, kz_y;  ///< axis k? is x / is y (else z), per lane
+  float8 sx, sy, sz;
+  float8 tnear;
+
+  /// The lanes of `rays` (missing lanes repeat lane 0; the caller masks them).
+  explicit WatertightRays(const Ray* rays, size_t n) {
+    alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], fx[8], fy[8], fz[8], tn[8];
+    alignas(32) int32_t a[6][8];
+    for (size_t i = 0; i < 8; ++i) {
+      const Ray& r = rays[i < n ? i : 0];
+      const int kz = max_abs_axis(r.dir);
+      int kx = kz + 1 == 3 ? 0 : kz + 1;
+      int ky = kx + 1 == 3 ? 0 : kx + 1;
+      if (r.dir[kz] < 0.0f) std::swap(kx, ky);
+      fx[i] = r.dir[kx] / r.dir[kz];
+      fy[i] = r.dir[ky] / r.dir[kz];
+      fz[i] = 1.0f / r.dir[kz];
+      const int k[3] = {kx, ky, kz};
+      for (int j = 0; j < 3; ++j) {
+        a[2 * j][i] = k[j] == 0 ? -1 : 0;
+        a[2 * j + 1][i] = k[j] == 1 ? -1 : 0;
+      }
+      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
+      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
+      tn[i] = r.tnear;
+    }
+    org = Vec3x8::load(ox, oy, oz);
+    dir = Vec3x8::load(dx, dy, dz);
+    mask8* m[6] = {&kx_x, &kx_y, &ky_x, &ky_y, &kz_x, &kz_y};
+    for (int j = 0; j < 6; ++j)
+      *m[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[j]))));
+    sx = float8::load_aligned(fx);
+    sy = float8::load_aligned(fy);
+    sz = float8::load_aligned(fz);
+    tnear = float8::load_aligned(tn);
+  }
+
+  /// Component k of p per lane, k given by the masks (is x, is y).
+  static float8 pick(const Vec3x8& p, const mask8& is_x, const mask8& is_y) {
+    return xsimd::select(is_x, p.x, xsimd::select(is_y, p.y, p.z));
+  }
+};
+
+/// Watertight ray/triangle test ×8 (Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
+/// Intersection", JCGT 2(1)), lane by lane exactly as rp::intersect_triangle_watertight: the
+/// same products, each rounded once (no FMA: the TU is built with -ffp-contract=off), the same
+/// sign tests, and the same fallback: a lane with an edge function of exactly 0 is decided by
+/// the scalar routine, which re-evaluates the edge functions in double. Two rays share one
+/// edge's value for two triangles only when the vertices are the same floats, so the test
+/// takes the vertices (Tri8 in the vertex layout), never edges. Serves one ray against 8
+/// triangles and 8 rays against one triangle.
+inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
+                       const float8& tfar) {
+  using W = WatertightRays;
+  const Vec3x8 a = v0 - r.org, b = v1 - r.org, c = v2 - r.org;
+  const float8 a_z = W::pick(a, r.kz_x, r.kz_y), b_z = W::pick(b, r.kz_x, r.kz_y), c_z = W::pick(c, r.kz_x, r.kz_y);
+  const float8 ax = W::pick(a, r.kx_x, r.kx_y) - r.sx * a_z, ay = W::pick(a, r.ky_x, r.ky_y) - r.sy * a_z;
+  const float8 bx = W::pick(b, r.kx_x, r.kx_y) - r.sx * b_z, by = W::pick(b, r.ky_x, r.ky_y) - r.sy * b_z;
+  const float8 cx = W::pick(c, r.kx_x, r.kx_y) - r.sx * c_z, cy = W::pick(c, r.ky_x, r.ky_y) - r.sy * c_z;
+  const float8 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+  const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
+  const mask8 mixed = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
+  const float8 det = u + v + w;
+  const float8 t_scaled = (u * (r.sz * a_z) + v * (r.sz * b_z)) + w * (r.sz * c_z);
+  const float8 sign = xsimd::select(det < zero, float8(-1.0f), one);
+  const float8 t_signed = t_scaled * sign, abs_det = det * sign;
+  const float8 t = t_scaled / det;
+  Mt8 out{~mixed & (det != zero) & (t_signed >= r.tnear * abs_det) & (t_signed <= tfar * abs_det) &
+              (t >= r.tnear) & (t <= tfar) & (t < inf) & (t > -inf),
+          t, v / det, w / det};
+  const uint32_t exact = simd::movemask((u == zero) | (v == zero) | (w == zero));
+  if (exact) {  // rare: decide those lanes in double precision, by the scalar routine
+    alignas(32) float ht[8], hu[8], hv[8], tf[8], tn[8];
+    alignas(32) int32_t hit[8];
+    out.t.store_aligned(ht);
+    out.u.store_aligned(hu);
+    out.v.store_aligned(hv);
+    tfar.store_aligned(tf);
+    r.tnear.store_aligned(tn);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(hit), _mm256_castps_si256(__m256(out.hit)));
+    for (uint32_t bits = exact; bits; bits &= bits - 1) {
+      const int l = std::countr_zero(bits);
+      const Ray ray{r.org.lane(l), tn[l], r.dir.lane(l), tf[l]};
+      const Intersection<float> h = intersect_triangle_watertight(ray, v0.lane(l), v1.lane(l), v2.lane(l));
+      hit[l] = h.hit ? -1 : 0;
+      ht[l] = h.t;
+      hu[l] = h.u;
+      hv[l] = h.v;
+    }
+    out = {mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(hit)))),
+           float8::load_aligned(ht), float8::load_aligned(hu), float8::load_aligned(hv)};
+  }
+  return out;
+}
 
 }  // namespace rp::bvh8

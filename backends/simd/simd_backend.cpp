@@ -26,16 +26,64 @@ constexpr int kSingleRayLanes = 2;
 /// Lane bits [lo, hi) of a block.
 inline uint32_t lane_range(uint32_t lo, uint32_t hi) { return ((1u << hi) - 1u) & ~((1u << lo) - 1u); }
 
+/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
+/// edge layout. Single: one ray against a block's 8 slots; Packet: the 8 rays of a packet
+/// against one slot.
+struct MtKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::edges;
+  struct Single {
+    Vec3x8 org, dir;
+    float8 tnear;
+    explicit Single(const Ray& r) : org(r.org), dir(r.dir), tnear(r.tnear) {}
+    Mt8 block(const Tri8& tb, const float8& tfar) const {
+      const Tri8View tv(tb);
+      return moller_trumbore8(org, dir, tv.v0, tv.p1, tv.p2, tnear, tfar);
+    }
+  };
+  struct Packet {
+    const RayPacket& p;
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(packet) {}
+    Mt8 slot(const Tri8& tb, uint32_t l, const float8& tfar) const {
+      return moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                              Vec3x8(Vec3f{tb.p1_x[l], tb.p1_y[l], tb.p1_z[l]}),
+                              Vec3x8(Vec3f{tb.p2_x[l], tb.p2_y[l], tb.p2_z[l]}), p.tnear, tfar);
+    }
+  };
+};
+
+/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the vertex
+/// layout; the traversal around it is the same conservative one.
+struct WatertightKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::vertices;
+  struct Single {
+    WatertightRays r;
+    explicit Single(const Ray& ray) : r(&ray, 1) {}
+    Mt8 block(const Tri8& tb, const float8& tfar) const {
+      const Tri8View tv(tb);
+      return watertight8(r, tv.v0, tv.p1, tv.p2, tfar);
+    }
+  };
+  struct Packet {
+    WatertightRays r;
+    Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
+    Mt8 slot(const Tri8& tb, uint32_t l, const float8& tfar) const {
+      return watertight8(r, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
+                         Vec3x8(Vec3f{tb.p1_x[l], tb.p1_y[l], tb.p1_z[l]}),
+                         Vec3x8(Vec3f{tb.p2_x[l], tb.p2_y[l], tb.p2_z[l]}), tfar);
+    }
+  };
+};
+
+template <class Kernel>
 class SimdBackend final : public Backend {
  public:
-  SimdBackend(const Scene& scene, const BackendOptions& options) : scene_(scene) {
+  SimdBackend(const Scene& scene, const std::string& variant, SplitRule rule) : scene_(scene) {
     BuildOptions bo;
-    if (options.variant == "median") bo.rule = SplitRule::median;
-    else if (options.variant != "default")
-      throw Error(cat("simd: unknown variant '", options.variant, "' (default, median)"));
+    bo.rule = rule;
+    bo.layout = Kernel::kLayout;
     bvh_ = build(scene, bo);
     info_.name = "simd";
-    info_.variant = options.variant;
+    info_.variant = variant;
     info_.build_seconds = bvh_.stats.seconds;
     info_.bytes = bvh_.stats.bytes;
     info_.stats = {{"nodes", double(bvh_.stats.nodes)},  {"leaves", double(bvh_.stats.leaves)},
@@ -96,8 +144,7 @@ class SimdBackend final : public Backend {
     float tfar = std::min(r.tfar, best.t);
     {
       const SingleRay sr(r);
-      const Vec3x8 org(r.org), dir(r.dir);
-      const float8 tnear8(r.tnear);
+      const typename Kernel::Single kr(r);
       struct Entry { int32_t ref; float t; };
       Entry stack[kStackSize];
       int sp = 0;
@@ -132,8 +179,7 @@ class SimdBackend final : public Backend {
           const uint32_t first = leaf_first(ref), lo = first % 8;
           const uint32_t in_leaf = lane_range(lo, lo + leaf_count(ref));
           const Tri8& tb = bvh_.tris[first / 8];
-          const Tri8View tv(tb);
-          const Mt8 h = moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, float8(tfar));
+          const Mt8 h = kr.block(tb, float8(tfar));
           const uint32_t bits = movemask(h.hit) & in_leaf;
           if (bits) {
             // The minimum over this leaf's lanes only: the block may hold other leaves too.
@@ -181,8 +227,8 @@ class SimdBackend final : public Backend {
   /// Any hit of a valid ray in the subtree `root`.
   bool traverse_any(const Ray& r, int32_t root) const noexcept {
     const SingleRay sr(r);
-    const Vec3x8 org(r.org), dir(r.dir);
-    const float8 tnear8(r.tnear), tfar8(r.tfar);
+    const typename Kernel::Single kr(r);
+    const float8 tfar8(r.tfar);
     int32_t stack[kStackSize];
     int sp = 0;
     stack[sp++] = root;
@@ -197,8 +243,7 @@ class SimdBackend final : public Backend {
       }
       const uint32_t first = leaf_first(ref), lo = first % 8, count = leaf_count(ref);
       const Tri8& tb = bvh_.tris[first / 8];
-      const Tri8View tv(tb);
-      if (movemask(moller_trumbore8(org, dir, tv.v0, tv.e1, tv.e2, tnear8, tfar8).hit) & lane_range(lo, lo + count))
+      if (movemask(kr.block(tb, tfar8).hit) & lane_range(lo, lo + count))
         return true;
       if (bvh_.has_analytic)
         for (uint32_t l = lo; l < lo + count; ++l)
@@ -298,13 +343,6 @@ class SimdBackend final : public Backend {
     v = float8::load_aligned(vv);
   }
 
-  /// The 8 rays of `p` against the triangle in slot l of block tb (broadcast).
-  static Mt8 packet_vs_slot(const RayPacket& p, const Tri8& tb, uint32_t l, const float8& tfar) {
-    return moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                            Vec3x8(Vec3f{tb.e1_x[l], tb.e1_y[l], tb.e1_z[l]}),
-                            Vec3x8(Vec3f{tb.e2_x[l], tb.e2_y[l], tb.e2_z[l]}), p.tnear, tfar);
-  }
-
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
   void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, float8& tfar, float8& u, float8& v,
                        uint32_t* prim) const noexcept {
@@ -337,6 +375,7 @@ class SimdBackend final : public Backend {
     std::fill_n(prim, 8, kInvalidId);
     float8 u(0.0f), v(0.0f);
     if (active && !bvh_.empty()) {
+      const typename Kernel::Packet kp(p, rays);
       float8 sx, sy, sz;
       packet_signs(p, active, sx, sy, sz);
       const PacketBeam beam(p, active);
@@ -365,7 +404,7 @@ class SimdBackend final : public Backend {
             analytic_packet(id, rays, e.mask, tfar, u, v, prim);
             continue;
           }
-          const Mt8 h = packet_vs_slot(p, tb, l, tfar);
+          const Mt8 h = kp.slot(tb, l, tfar);
           const mask8 upd = h.hit & lanes;
           const uint32_t bits = movemask(upd);
           if (!bits) continue;
@@ -401,6 +440,7 @@ class SimdBackend final : public Backend {
     }
     uint32_t live = active & ~done;
     if (live && !bvh_.empty()) {
+      const typename Kernel::Packet kp(p, rays);
       float8 sx, sy, sz;
       packet_signs(p, live, sx, sy, sz);
       const PacketBeam beam(p, live);
@@ -433,7 +473,7 @@ class SimdBackend final : public Backend {
             for (uint32_t b = e.mask; b; b &= b - 1)
               if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
           } else {
-            const Mt8 h = packet_vs_slot(p, tb, l, tfar);
+            const Mt8 h = kp.slot(tb, l, tfar);
             hit = movemask(h.hit) & e.mask;
           }
           done |= hit;
@@ -452,10 +492,14 @@ class SimdBackend final : public Backend {
 
 }  // namespace
 
-std::vector<std::string> variants() { return {"default", "median"}; }
+std::vector<std::string> variants() { return {"default", "median", "watertight"}; }
 
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
-  return std::make_unique<SimdBackend>(scene, options);
+  const std::string& v = options.variant;
+  if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, SplitRule::sah);
+  if (v == "median") return std::make_unique<SimdBackend<MtKernel>>(scene, v, SplitRule::median);
+  if (v == "watertight") return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, SplitRule::sah);
+  throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight)"));
 }
 
 }  // namespace rp::bvh8

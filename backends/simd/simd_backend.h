@@ -12,8 +12,10 @@
 
 namespace rp::bvh8 {
 
-/// Variants: "default" (binned SAH build), "median" (the seeds' rule: longest axis, centroid
-/// median, balanced).
+/// Variants: "default" (binned SAH build, Möller–Trumbore), "median" (the seeds' rule: longest
+/// axis, centroid median, balanced), "watertight" (SAH build, the watertight triangle test of
+/// Woop, Benthin and Wald 2013: no ray passes between triangles that share an edge). Every
+/// variant traverses with conservative (padded) box tests.
 std::vector<std::string> variants();
 
 /// Builds the backend; the caller (the registry) has checked that the CPU has AVX2 and FMA.

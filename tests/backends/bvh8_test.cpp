@@ -218,8 +218,8 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
       if (iter % 7 == 0 && l == 3) v2[l] = v1[l];  // degenerate lane
       const Vec3f e1 = v0[l] - v1[l], e2 = v2[l] - v0[l];
       block.v0_x[l] = v0[l].x; block.v0_y[l] = v0[l].y; block.v0_z[l] = v0[l].z;
-      block.e1_x[l] = e1.x; block.e1_y[l] = e1.y; block.e1_z[l] = e1.z;
-      block.e2_x[l] = e2.x; block.e2_y[l] = e2.y; block.e2_z[l] = e2.z;
+      block.p1_x[l] = e1.x; block.p1_y[l] = e1.y; block.p1_z[l] = e1.z;
+      block.p2_x[l] = e2.x; block.p2_y[l] = e2.y; block.p2_z[l] = e2.z;
     }
     // Aimed at a random point of a random lane's plane, near or inside that triangle.
     const int k = iter % 8;
@@ -228,7 +228,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
     Ray r{org, 0.0f, (v0[k] + (v1[k] - v0[k]) * a + (v2[k] - v0[k]) * b) - org, iter % 3 ? 100.0f : 0.7f};
     if (iter % 11 == 0) r.dir.y = -0.0f;
     const Tri8View tv(block);
-    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.e1, tv.e2, float8(r.tnear), float8(r.tfar));
+    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(r.tnear), float8(r.tfar));
     alignas(32) float t[8], uu[8], vv[8];
     h.t.store_aligned(t);
     h.u.store_aligned(uu);

@@ -25,6 +25,21 @@ using test::oracle_ambiguous;
 using test::oracle_intersect;
 using test::OracleHit;
 
+/// Every variant of every available backend, as "backend/variant": the conformance suite holds
+/// each of them to the same oracle.
+std::vector<std::string> backend_variants() {
+  std::vector<std::string> out;
+  for (const BackendEntry& b : list_backends())
+    if (b.available)
+      for (const std::string& v : b.variants) out.push_back(b.name + "/" + v);
+  return out;
+}
+
+std::unique_ptr<Backend> make_param_backend(const std::string& param, const Scene& scene) {
+  const size_t slash = param.find('/');
+  return make_backend(param.substr(0, slash), scene, {.variant = param.substr(slash + 1), .device_config = {}});
+}
+
 Vec3f random_in_box(std::mt19937& rng, float lo, float hi) {
   std::uniform_real_distribution<float> u(lo, hi);
   return {u(rng), u(rng), u(rng)};
@@ -190,7 +205,7 @@ class Conformance : public ::testing::TestWithParam<std::string> {
   /// itself is ill-conditioned (1% for random rays; more for rays aimed along boundaries).
   void check_scene(const Scene& scene, const std::vector<Ray>& rays, const std::string& name, int min_hits,
                    double max_ambiguous = 0.01) {
-    auto backend = make_backend(GetParam(), scene);
+    auto backend = make_param_backend(GetParam(), scene);
     for (Coherence coh : {Coherence::coherent, Coherence::incoherent}) {
       const std::string what = name + (coh == Coherence::coherent ? "/coherent" : "/incoherent");
       const Counts c = check_against_oracle(scene, *backend, rays, coh, what);
@@ -231,7 +246,7 @@ TEST_P(Conformance, DefaultSceneMatchesOracle) {
 
 TEST_P(Conformance, EmptySceneAlwaysMisses) {
   Scene scene;
-  auto backend = make_backend(GetParam(), scene);
+  auto backend = make_param_backend(GetParam(), scene);
   const std::vector<Ray> rays = random_rays(14, 64);
   std::vector<Hit> hits(rays.size(), Hit{1.0f, 3, 0.5f, 0.5f});
   std::vector<uint8_t> occ(rays.size(), 1);
@@ -255,7 +270,7 @@ TEST_P(Conformance, HitCountsOnlyWithinClosedInterval) {
   quad.indices = {0, 1, 2, 0, 2, 3};
   scene.add_mesh(quad);
   scene.add_sphere({{0.0f, 0.0f, -3.0f}, 1.0f, 0});  // surface at z = -2
-  auto backend = make_backend(GetParam(), scene);
+  auto backend = make_param_backend(GetParam(), scene);
   const float below = std::nextafter(2.0f, 0.0f), above = std::nextafter(2.0f, 4.0f);
   struct Case { Vec3f dir; float tnear, tfar; bool hit; };
   const Case cases[] = {
@@ -281,7 +296,7 @@ TEST_P(Conformance, HitCountsOnlyWithinClosedInterval) {
 
 TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
   const Scene scene = analytic_scene();
-  auto backend = make_backend(GetParam(), scene);
+  auto backend = make_param_backend(GetParam(), scene);
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   const std::vector<Ray> rays = {
       {{nan, 0, 4}, 0, {0, 0, -1}, inf}, {{0, 0, 4}, 0, {0, nan, -1}, inf}, {{0, 0, 4}, nan, {0, 0, -1}, inf},
@@ -302,7 +317,7 @@ TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
 
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
-  auto backend = make_backend(GetParam(), scene);
+  auto backend = make_param_backend(GetParam(), scene);
   CameraDesc lens = *scene.camera();
   lens.model = CameraModel::thin_lens;
   lens.aperture = 0.2f;
@@ -331,8 +346,11 @@ TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(available_backends()),
-                         [](const auto& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(backend_variants()), [](const auto& info) {
+  std::string name = info.param;
+  std::replace(name.begin(), name.end(), '/', '_');
+  return name;
+});
 
 TEST(Registry, UnknownBackendIsAnErrorListingTheNames) {
   const Scene scene;
