@@ -31,6 +31,7 @@ struct SingleRay {
   float8 org_x, org_y, org_z, inv_x, inv_y, inv_z;
   float8 oi_x, oi_y, oi_z;  ///< org * inv, for the one-FMA slab distances
   float8 abs_pad;           ///< bound on the rounding error of org * inv (see intersect_node)
+  float pad;                ///< the slack intersect_node grants an exit distance (abs_pad, or 0 when axis_parallel)
   bool axis_parallel;       ///< a direction component is +-0: use the exact slab form
   int near_x, near_y, near_z, far_x, far_y, far_z;
 
@@ -45,6 +46,7 @@ struct SingleRay {
     for (int a = 0; a < 3; ++a)
       if (r.dir[a] != 0.0f) m = std::max(m, std::abs(r.org[a] / r.dir[a]));
     abs_pad = float8(m * 0x1p-23f);
+    pad = axis_parallel ? 0.0f : m * 0x1p-23f;
     const bool nx = std::signbit(r.dir.x), ny = std::signbit(r.dir.y), nz = std::signbit(r.dir.z);
     near_x = nx ? 24 : 0;  far_x = nx ? 0 : 24;
     near_y = ny ? 32 : 8;  far_y = ny ? 8 : 32;
@@ -54,7 +56,9 @@ struct SingleRay {
 
 /// Slab test ×8: one ray against the 8 child boxes of `n` (seeds' slab method; the swap is
 /// the octant's near/far choice). Returns the bit mask of children hit within [tnear, tfar]
-/// and their entry distances.
+/// and their entry distances. An entry distance may exceed the true one by the same slack
+/// the exit is granted, so a caller that later compares it with a hit distance must compare
+/// with fma(t_hit, kSlabPad, r.pad) (see traverse_closest).
 ///
 /// Common case: each slab distance is one FMA, plane * inv - org * inv (as Embree's fast
 /// traversal); the exit distance is widened by kSlabPad for the final rounding and by

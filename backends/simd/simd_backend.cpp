@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/kernels.h"
@@ -209,7 +210,7 @@ class SimdBackend final : public Backend {
         for (;;) {  // pop, skipping subtrees entered beyond the current hit
           if (sp == 0) return;
           const Entry e = stack[--sp];
-          if (e.t <= tfar) {
+          if (e.t <= std::fma(tfar, kSlabPad, sr.pad)) {  // conservative, as intersect_node
             ref = e.ref;
             break;
           }

@@ -1,4 +1,5 @@
 #include "engine/cli/bench_cmd.h"
+#include "engine/cli/plot.h"
 
 #include <unistd.h>
 
@@ -95,25 +96,6 @@ Timing time_it(size_t rays, const BenchArgs& a, Trace&& trace) {
   t.spread = (last.back() - last.front()) / med;
   t.runs = int(secs.size());
   return t;
-}
-
-/// Writes `target` through `write(tmp)` to a temporary name beside it, then renames, so the
-/// target is never left half-written.
-template <typename Write>
-void write_atomically(const std::string& target, Write&& write) {
-  namespace fs = std::filesystem;
-  const fs::path t(target);
-  const fs::path tmp = t.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + t.filename().string());
-  std::error_code ec;
-  if (!write(tmp.string())) {
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", target, "'"));
-  }
-  fs::rename(tmp, t, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", target, "': ", ec.message()));
-  }
 }
 
 }  // namespace
@@ -245,8 +227,7 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
   }
   RP_CHECK(j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty(), json_path,
            ": not a raypack bench file (no \"scenes\")");
-  RP_CHECK(std::system("command -v gnuplot >/dev/null 2>&1") == 0,
-           "chart: gnuplot is not installed (apt-get install gnuplot-nox; .ci/setup.sh does it)");
+  require_gnuplot();
   namespace fs = std::filesystem;
   const fs::path png(chart);
   const fs::path base = png.parent_path() / png.stem();
@@ -269,7 +250,6 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
     }
   auto plot = [&](const std::string& terminal, const fs::path& file, bool scaling) {
     std::ostringstream g;
-    g << "set terminal " << terminal << "\nset output '" << file.string() << "'\n";
     if (!scaling) {
       g << "set multiplot layout " << n_scenes << ",3 title '" << "raypack bench: speed against accuracy (" << title
         << ")' font ',12'\n";
@@ -303,20 +283,7 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
           << labels[m] << "'";
       g << "\n";
     }
-    write_atomically(file.string(), [&](const std::string& tmp) {
-      std::string gp = g.str();
-      const std::string from = "set output '" + file.string() + "'";
-      gp.replace(gp.find(from), from.size(), "set output '" + tmp + "'");
-      const fs::path script = dir / "plot.gp";
-      std::ofstream(script) << gp;
-      if (std::system(cat("gnuplot '", script.string(), "' 2>", (dir / "err.txt").string()).c_str()) == 0) return true;
-      std::ifstream e(dir / "err.txt");
-      std::string first;
-      std::getline(e, first);
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw Error(cat("chart: gnuplot failed for '", file.string(), "': ", first));
-    });
+    plot_to(terminal, g.str(), file.string(), dir);
   };
   const int h = 380 * int(n_scenes) + 60;
   plot(cat("pngcairo size 1500,", h, " noenhanced"), png, false);

@@ -23,6 +23,7 @@
 #include "engine/error.h"
 #include "engine/image_io.h"
 #include "engine/cli/bench_cmd.h"
+#include "engine/cli/stability_cmd.h"
 #include "engine/diff.h"
 #include "engine/loaders/load.h"
 #include "engine/rayfile.h"
@@ -603,6 +604,26 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("backends", "List the backends, their variants and availability");
 
+  rp::cli::StabilityArgs sa;
+  int stability_threads = 0;
+  CLI::App* stability =
+      app.add_subcommand("stability", "Failure rates per method and ray family where intersection methods fail");
+  stability->add_option("--scene", sa.scene, "Scene: 'default' or a file; its meshes give the mesh families")
+      ->capture_default_str();
+  stability->add_option("--rays", sa.rays, "Rays per family")->check(CLI::Range(1, 1 << 22))->capture_default_str();
+  stability->add_option("--seed", sa.seed, "Seed of every family's rays")->capture_default_str();
+  stability->add_option("--t-tolerance", sa.t_tolerance, "Relative t difference counted as an error")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  stability->add_option("--method", sa.methods,
+                        "Backend method backend/variant (repeatable; default embree/default, embree/robust, "
+                        "simd/default, simd/watertight)");
+  stability->add_option("--family", sa.families, "Run only this family (repeatable; see --list)");
+  stability->add_flag("--list", sa.list, "List the families and scalar methods");
+  stability->add_option("--json", sa.json, "Write the results as JSON");
+  stability->add_option("--chart", sa.chart, "Draw the chart (PNG and SVG beside it, with gnuplot)");
+  stability->add_option("-t,--threads", stability_threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -625,6 +646,11 @@ int main(int argc, char** argv) {
       std::optional<tbb::global_control> limit;
       if (bench_threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(bench_threads));
       return rp::cli::run_bench(ba);
+    }
+    if (*stability) {
+      std::optional<tbb::global_control> limit;
+      if (stability_threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(stability_threads));
+      return rp::cli::run_stability(sa);
     }
     if (*chart) {
       rp::cli::draw_charts(chart_json, chart_out);

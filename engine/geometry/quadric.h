@@ -3,6 +3,7 @@
 /// common axis-aligned shapes.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -210,6 +211,30 @@ struct Quadric {
 using Quadricf = Quadric<float>;
 using Quadricd = Quadric<double>;
 
+/// Coefficients of a t^2 + b t + c = 0 for r against q, with the origin in the quadric's
+/// coordinates (org - center). Lecture notes, "Ray-Quadric Surface Intersection": substitute
+/// P(t) = o + t d into the quadric:
+///   a = A dx^2 + B dy^2 + C dz^2 + D dx dy + E dy dz + F dx dz   (the quadratic form at d)
+///   b = 2(A ox dx + B oy dy + C oz dz) + D(ox dy + oy dx) + E(oy dz + oz dy)
+///       + F(ox dz + oz dx) + G dx + H dy + I dz                  (= gradient(o) . d)
+///   c = eval(o).
+template <typename T>
+std::array<T, 3> quadric_coefficients(const RayT<T>& r, const Quadric<T>& q) {
+  const Vec3<T> o = r.org - q.center;
+  const Vec3<T>& d = r.dir;
+  const T a = q.A * d.x * d.x + q.B * d.y * d.y + q.C * d.z * d.z + q.D * d.x * d.y +
+              q.E * d.y * d.z + q.F * d.x * d.z;
+  return {a, dot(q.gradient_local(o), d), q.eval_local(o)};
+}
+
+/// The first of the roots t0 <= t1 in [tnear, tfar] whose point lies in q.clip, else a miss.
+template <typename T>
+Intersection<T> quadric_pick_root(const RayT<T>& r, const Quadric<T>& q, T t0, T t1) {
+  if (in_ray_interval(r, t0) && q.clip.contains(r.at(t0))) return make_intersection(t0);
+  if (in_ray_interval(r, t1) && q.clip.contains(r.at(t1))) return make_intersection(t1);
+  return {};
+}
+
 /// Closest hit of r with the clipped quadric q; u == v == 0.
 /// Accepts the smaller root in [r.tnear, r.tfar] whose point lies in q.clip (closed), else
 /// the larger one. Miss: no such root, a ray lying in a degenerate direction of the surface
@@ -217,19 +242,7 @@ using Quadricd = Quadric<double>;
 /// (org - center) first, so precision follows the shape's size rather than its position.
 template <typename T>
 Intersection<T> intersect_quadric(const RayT<T>& r, const Quadric<T>& q) {
-  // Lecture notes, "Ray-Quadric Surface Intersection": substitute P(t) = o + t d into the
-  // quadric to get a t^2 + b t + c = 0 with
-  //   a = A dx^2 + B dy^2 + C dz^2 + D dx dy + E dy dz + F dx dz   (the quadratic form at d)
-  //   b = 2(A ox dx + B oy dy + C oz dz) + D(ox dy + oy dx) + E(oy dz + oz dy)
-  //       + F(ox dz + oz dx) + G dx + H dy + I dz                  (= gradient(o) . d)
-  //   c = eval(o).
-  const Vec3<T> o = r.org - q.center;
-  const Vec3<T>& d = r.dir;
-  const T a = q.A * d.x * d.x + q.B * d.y * d.y + q.C * d.z * d.z + q.D * d.x * d.y +
-              q.E * d.y * d.z + q.F * d.x * d.z;
-  const T b = dot(q.gradient_local(o), d);
-  const T c = q.eval_local(o);
-
+  const auto [a, b, c] = quadric_coefficients(r, q);
   T t0, t1;
   if (a == T(0)) {
     // Linear case: the direction is asymptotic to the surface. One root -c/b; b == 0 too
@@ -251,9 +264,25 @@ Intersection<T> intersect_quadric(const RayT<T>& r, const Quadric<T>& q) {
       if (t1 < t0) std::swap(t0, t1);
     }
   }
-  if (in_ray_interval(r, t0) && q.clip.contains(r.at(t0))) return make_intersection(t0);
-  if (in_ray_interval(r, t1) && q.clip.contains(r.at(t1))) return make_intersection(t1);
-  return {};
+  return quadric_pick_root(r, q, t0, t1);
+}
+
+/// The same test with the textbook roots (-b -+ sqrt(b^2 - 4ac)) / 2a (the seeds' algebraic
+/// method): cancellation when b^2 >> 4ac loses the near root of a far or grazing ray. Kept as
+/// the baseline `raypack stability` measures; raypack renders with intersect_quadric.
+template <typename T>
+Intersection<T> intersect_quadric_naive(const RayT<T>& r, const Quadric<T>& q) {
+  const auto [a, b, c] = quadric_coefficients(r, q);
+  if (a == T(0)) {
+    if (b == T(0)) return {};
+    return quadric_pick_root(r, q, -c / b, -c / b);
+  }
+  const T disc = b * b - T(4) * a * c;
+  if (!(disc >= T(0))) return {};
+  const T s = std::sqrt(disc);
+  T t0 = (-b - s) / (T(2) * a), t1 = (-b + s) / (T(2) * a);
+  if (t1 < t0) std::swap(t0, t1);
+  return quadric_pick_root(r, q, t0, t1);
 }
 
 }  // namespace rp

@@ -60,6 +60,19 @@ Intersection<T> intersect_triangle_mt(const RayT<T>& r, const Vec3<T>& v0, const
   return make_intersection(t, b1, b2);
 }
 
+/// Möller–Trumbore with the paper's epsilon test (Möller and Trumbore 1997, listing: EPSILON
+/// 0.000001): |det| < 1e-6 counts as parallel and misses. The epsilon is absolute, so it
+/// rejects every ray against triangles whose det (about |e1| |e2| |dir|) falls below it, such
+/// as a model scaled to millimetres; kept as the baseline `raypack stability` measures.
+template <typename T>
+Intersection<T> intersect_triangle_mt_epsilon(const RayT<T>& r, const Vec3<T>& v0, const Vec3<T>& v1,
+                                              const Vec3<T>& v2) {
+  const Vec3<T> e2 = v2 - v0;
+  const T det = dot(cross(r.dir, e2), v1 - v0);
+  if (!(std::abs(det) >= T(1e-6))) return {};
+  return intersect_triangle_mt(r, v0, v1, v2);
+}
+
 /// a*b - c*d style helpers with one rounding per fused step, in the order Embree's Vec3
 /// helpers use them (cross: msub(a.y, b.z, a.z*b.y), ...; dot: madd(a.x, b.x, madd(a.y, b.y,
 /// a.z*b.z))). std::fma rounds once, as the FMA instruction does, so the 8-wide kernel that

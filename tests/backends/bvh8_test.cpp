@@ -252,6 +252,60 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   EXPECT_GT(hits, 1000);
 }
 
+/// The watertight test ×8 reproduces rp::intersect_triangle_watertight bit for bit, both ways
+/// of use, including rays through vertices and edges, where an edge function is exactly 0 and
+/// the lane is decided in double precision.
+TEST(Kernels, Watertight8MatchesScalarBitForBit) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  auto v3 = [&] { return Vec3f{u(rng), u(rng), u(rng)}; };
+  int hits = 0, exact_zero = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    Vec3f v[3][8];
+    Tri8 block{};
+    for (int l = 0; l < 8; ++l) {
+      v[0][l] = v3();
+      v[1][l] = (iter % 5 == 0 && l > 0) ? v[1][l - 1] : v[0][l] + v3() * 0.5f;  // shared vertices
+      v[2][l] = v[0][l] + v3() * 0.5f;
+      block.v0_x[l] = v[0][l].x; block.v0_y[l] = v[0][l].y; block.v0_z[l] = v[0][l].z;
+      block.p1_x[l] = v[1][l].x; block.p1_y[l] = v[1][l].y; block.p1_z[l] = v[1][l].z;
+      block.p2_x[l] = v[2][l].x; block.p2_y[l] = v[2][l].y; block.p2_z[l] = v[2][l].z;
+    }
+    const int k = iter % 8;
+    const Vec3f org = v3() * 2.0f;
+    // Aimed at a vertex, an edge midpoint or an interior point of lane k.
+    const Vec3f target = iter % 3 == 0 ? v[1][k] : iter % 3 == 1 ? (v[0][k] + v[2][k]) * 0.5f
+                                                                 : (v[0][k] + v[1][k] + v[2][k]) * (1.0f / 3.0f);
+    Ray r{org, 0.0f, target - org, iter % 4 ? 100.0f : 0.9f};
+    if (iter % 13 == 0) r.dir.x = -0.0f;
+    const Tri8View tv(block);
+    const Mt8 h = watertight8(WatertightRays(&r, 1), tv.v0, tv.p1, tv.p2, float8(r.tfar));
+    alignas(32) float t[8], uu[8], vv[8];
+    h.t.store_aligned(t);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    const uint32_t bits = simd::movemask(h.hit);
+    for (int l = 0; l < 8; ++l) {
+      const Intersection<float> s = intersect_triangle_watertight(r, v[0][l], v[1][l], v[2][l]);
+      ASSERT_EQ(bool(bits >> l & 1u), s.hit) << "iter " << iter << " lane " << l;
+      if (!s.hit) continue;
+      ++hits;
+      exact_zero += s.u == 0.0f || s.v == 0.0f || s.u + s.v == 1.0f;
+      EXPECT_EQ(std::bit_cast<uint32_t>(t[l]), std::bit_cast<uint32_t>(s.t));
+      EXPECT_EQ(std::bit_cast<uint32_t>(uu[l]), std::bit_cast<uint32_t>(s.u));
+      EXPECT_EQ(std::bit_cast<uint32_t>(vv[l]), std::bit_cast<uint32_t>(s.v));
+      // 8 rays (the same one) against the triangle broadcast: the packet form.
+      const Ray eight[8] = {r, r, r, r, r, r, r, r};
+      const Mt8 p = watertight8(WatertightRays(eight, 8), Vec3x8(v[0][l]), Vec3x8(v[1][l]), Vec3x8(v[2][l]),
+                                float8(r.tfar));
+      EXPECT_EQ(simd::movemask(p.hit), 0xffu);
+      EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));
+    }
+  }
+  EXPECT_GT(hits, 1000);
+  EXPECT_GT(exact_zero, 50);  // the double-precision fallback was exercised
+}
+
 /// Slab ×8 is conservative against the scalar slab test of engine/geometry/slab.h: it never
 /// misses a box the scalar test hits, and extra hits are within its padding.
 TEST(Kernels, SlabTestsAreConservativeAgainstTheScalarSlab) {

@@ -1,0 +1,128 @@
+#include "engine/cli/stability_cmd.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "backends/registry.h"
+#include "engine/cli/plot.h"
+#include "engine/error.h"
+#include "engine/loaders/load.h"
+#include "engine/stability.h"
+
+namespace rp::cli {
+
+namespace {
+
+/// The chart users look for: failure rate against translation magnitude per backend method
+/// (left), and the share of rays leaving a surface that hit it again, raw and offset (right).
+void draw_chart(const std::vector<stability::Result>& results, const std::string& scene, const std::string& chart) {
+  require_gnuplot();
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("raypack-stability-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  constexpr double kFloor = 1e-5;  // where a zero rate is drawn
+  // series name -> data lines "k rate"
+  std::map<std::string, std::ostringstream> left, right;
+  for (const stability::Result& r : results) {
+    if (!r.has_exponent) continue;
+    const double rate = std::max(kFloor, r.counts.rate());
+    if (r.family == "translated") left[r.method] << r.exponent << ' ' << rate << '\n';
+    if ((r.family == "leaving_raw" || r.family == "leaving_offset") && r.param.rfind("translated", 0) == 0 &&
+        r.method.find('/') != std::string::npos && r.method.rfind("triangle", 0) != 0)
+      right[r.family.substr(8) + " " + r.method] << r.exponent << ' ' << rate << '\n';
+  }
+  std::ostringstream g;
+  g << "set multiplot layout 1,2 title 'raypack stability: " << scene << "' font ',12'\n";
+  g << "set logscale y\nset yrange [" << kFloor / 2 << ":1.5]\nset format y '%.0e'\nset grid\n";
+  g << "set ytics add ('0' " << kFloor << ")\nset xlabel 'translation 10^k: k'\nset xrange [-0.3:7.3]\n";
+  g << "set key top left font ',9'\n";
+  auto panel = [&](const char* title, const char* ylabel, std::map<std::string, std::ostringstream>& series) {
+    g << "set title '" << title << "'\nset ylabel '" << ylabel << "'\n";
+    if (series.empty()) {
+      g << "plot 2 notitle\n";  // an empty panel (nothing selected), axes only
+      return;
+    }
+    g << "plot ";
+    int i = 0;
+    for (auto& [name, data] : series) {
+      const fs::path dat = dir / cat("s", i, title[0] == 'f' ? 'l' : 'r', ".dat");
+      std::ofstream(dat) << data.str();
+      g << (i++ ? ", " : "") << "'" << dat.string() << "' using 1:2 with linespoints lw 2 title '" << name << "'";
+    }
+    g << "\n";
+  };
+  panel("failures on the moved scene (leaks, false hits, t errors)", "failure rate", left);
+  panel("rays leaving a surface that hit it again", "self-hit rate", right);
+  g << "unset multiplot\n";
+  const fs::path png(chart);
+  plot_to("pngcairo size 1400,560 noenhanced", g.str(), png.string(), dir);
+  plot_to("svg size 1400,560 noenhanced", g.str(), (png.parent_path() / png.stem()).string() + ".svg", dir);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+
+int run_stability(const StabilityArgs& a) {
+  if (a.list) {
+    std::printf("families:\n");
+    for (const auto& [name, what] : stability::family_names()) std::printf("  %-15s %s\n", name.c_str(), what.c_str());
+    std::printf("scalar methods:\n ");
+    for (const std::string& m : stability::scalar_methods()) std::printf(" %s", m.c_str());
+    std::printf("\n");
+    return 0;
+  }
+  stability::Options o;
+  o.rays = a.rays;
+  o.seed = a.seed;
+  o.t_tolerance = a.t_tolerance;
+  o.families = a.families;
+  // Methods: the ones asked for, else every backend variant whose triangle test differs.
+  std::set<std::string> available;
+  for (const BackendEntry& e : list_backends())
+    if (e.available)
+      for (const std::string& v : e.variants) available.insert(e.name + "/" + v);
+  if (!a.methods.empty()) {
+    o.backends = a.methods;
+    for (const std::string& m : o.backends)
+      RP_CHECK(available.count(m), "stability: --method '", m, "' is not an available backend/variant");
+  } else {
+    o.backends.clear();
+    for (const char* m : {"embree/default", "embree/robust", "simd/default", "simd/watertight"})
+      if (available.count(m)) o.backends.push_back(m);
+      else std::fprintf(stderr, "raypack: stability: %s is not available here, skipped\n", m);
+  }
+  o.make_backend = [](const std::string& method, const Scene& scene) {
+    const size_t slash = method.find('/');
+    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}});
+  };
+  o.progress = [](const std::string& family) { std::fprintf(stderr, "raypack: stability: %s\n", family.c_str()); };
+  const Scene scene = load_scene(a.scene);
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<stability::Result> results = stability::run(scene, o);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("raypack stability: scene %s, %u rays per family, seed %llu, t tolerance %g (relative)\n",
+              a.scene.c_str(), a.rays, (unsigned long long)a.seed, a.t_tolerance);
+  stability::print_table(stdout, results);
+  std::printf("(%.1f s)\n", seconds);
+  if (!a.json.empty())
+    write_atomically(a.json, [&](const std::string& tmp) {
+      std::ofstream f(tmp);
+      f << stability::to_json(results, a.scene, o);
+      return bool(f.flush());
+    });
+  if (!a.chart.empty()) {
+    draw_chart(results, a.scene, a.chart);
+    std::fprintf(stderr, "raypack: wrote %s\n", a.chart.c_str());
+  }
+  return 0;
+}
+
+}  // namespace rp::cli

@@ -1,0 +1,25 @@
+#pragma once
+// `raypack stability`: failure rates per method × ray family (engine/stability.h) as a table,
+// JSON and a chart.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rp::cli {
+
+struct StabilityArgs {
+  std::string scene = "default";
+  uint32_t rays = 4096;
+  uint64_t seed = 1;
+  double t_tolerance = 1e-4;
+  std::vector<std::string> methods;   ///< backend/variant; empty: every variant worth comparing
+  std::vector<std::string> families;  ///< empty: all
+  std::string json, chart;
+  bool list = false;  ///< print the families and methods, run nothing
+};
+
+/// Runs the families, prints the table, writes JSON and the chart when asked. Returns 0.
+int run_stability(const StabilityArgs& args);
+
+}  // namespace rp::cli
