@@ -35,6 +35,7 @@ struct Family {
   std::vector<uint32_t> source;
   std::vector<uint8_t> judged;  ///< 0: no right answer (a ray inside a triangle's plane): NaN and interval checks only
   bool invalid = false;         ///< every ray has a NaN or Inf in it
+  double diagonal = 1.0;        ///< of the scene's bounds (self-hits on curved surfaces are judged against it)
 
   void add(const Ray& r, std::span<const uint32_t> prims = {}, bool judge = true) {
     rays.push_back(r);
@@ -526,8 +527,7 @@ void classify(const Family& f, size_t i, const ReferenceHit& ref, const Outcome&
   if (!f.source.empty()) {  // leaving families: judged on self-hits only
     const uint32_t src = f.source[i];
     const double dist = m.t * length(dvec(r.dir));
-    if (m.hit && m.prim == src && (is_planar(*f.scene, src) || dist < 1e-4 * scene_diagonal(*f.scene)))
-      fail(c.self_hits);
+    if (m.hit && m.prim == src && (is_planar(*f.scene, src) || dist < 1e-4 * f.diagonal)) fail(c.self_hits);
     return;
   }
   if (m.n_hits >= 2) ++c.double_hits;  // counted, not a failure: see Counts
@@ -727,6 +727,7 @@ std::vector<Result> run(const Scene& base, const Options& o) {
     f.exponent = exponent;
     f.has_exponent = has_exponent;
     f.scene = std::move(scene);
+    f.diagonal = scene_diagonal(*f.scene);
     return f;
   };
   auto rng_for = [&](const std::string& name) { return std::mt19937_64(fnv1a(name, o.seed)); };

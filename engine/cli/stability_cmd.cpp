@@ -43,7 +43,7 @@ void draw_chart(const std::vector<stability::Result>& results, const std::string
   g << "set multiplot layout 1,2 title 'raypack stability: " << scene << "' font ',12'\n";
   g << "set logscale y\nset yrange [" << kFloor / 2 << ":1.5]\nset format y '%.0e'\nset grid\n";
   g << "set ytics add ('0' " << kFloor << ")\nset xlabel 'translation 10^k: k'\nset xrange [-0.3:7.3]\n";
-  g << "set key top left font ',9'\n";
+  g << "set key below font ',9' maxrows 3\n";
   auto panel = [&](const char* title, const char* ylabel, std::map<std::string, std::ostringstream>& series) {
     g << "set title '" << title << "'\nset ylabel '" << ylabel << "'\n";
     if (series.empty()) {
@@ -63,8 +63,8 @@ void draw_chart(const std::vector<stability::Result>& results, const std::string
   panel("rays leaving a surface that hit it again", "self-hit rate", right);
   g << "unset multiplot\n";
   const fs::path png(chart);
-  plot_to("pngcairo size 1400,560 noenhanced", g.str(), png.string(), dir);
-  plot_to("svg size 1400,560 noenhanced", g.str(), (png.parent_path() / png.stem()).string() + ".svg", dir);
+  plot_to("pngcairo size 1400,620 noenhanced", g.str(), png.string(), dir);
+  plot_to("svg size 1400,620 noenhanced", g.str(), (png.parent_path() / png.stem()).string() + ".svg", dir);
   fs::remove_all(dir);
 }
 
