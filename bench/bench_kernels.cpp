@@ -52,29 +52,51 @@ void BM_Slab8(benchmark::State& state) {
   state.counters["hit_fraction"] = double(hits) / (8.0 * double(state.iterations()));
 }
 
-/// Moller-Trumbore x8: one ray against the 8 triangles of a block.
-void BM_MollerTrumbore8(benchmark::State& state) {
+/// kSets blocks of 8 random triangles (v0 in [-1, 1]^3, edges up to 0.8) in `layout`.
+std::vector<Tri8> random_blocks(TriangleLayout layout) {
   std::vector<Tri8> blocks(kSets);
-  std::vector<Ray> rays(kSets);
-  for (int s = 0; s < kSets; ++s) {
+  for (Tri8& b : blocks)
     for (int l = 0; l < 8; ++l) {
       const Vec3f a = v3(-1, 1), e1 = v3(-0.8f, 0.8f), e2 = v3(-0.8f, 0.8f);
-      blocks[s].v0_x[l] = a.x; blocks[s].v0_y[l] = a.y; blocks[s].v0_z[l] = a.z;
-      blocks[s].p1_x[l] = e1.x; blocks[s].p1_y[l] = e1.y; blocks[s].p1_z[l] = e1.z;
-      blocks[s].p2_x[l] = e2.x; blocks[s].p2_y[l] = e2.y; blocks[s].p2_z[l] = e2.z;
+      const Vec3f p1 = layout == TriangleLayout::edges ? e1 : a - e1, p2 = layout == TriangleLayout::edges ? e2 : a + e2;
+      b.v0_x[l] = a.x; b.v0_y[l] = a.y; b.v0_z[l] = a.z;
+      b.p1_x[l] = p1.x; b.p1_y[l] = p1.y; b.p1_z[l] = p1.z;
+      b.p2_x[l] = p2.x; b.p2_y[l] = p2.y; b.p2_z[l] = p2.z;
     }
-    rays[s] = random_ray();
-  }
+  return blocks;
+}
+
+/// One triangle test x8: one ray against the 8 triangles of a block. prepare(ray) is the
+/// per-ray set-up traversal does once per ray (outside the timing); kernel(prepared, block) -> Mt8.
+template <typename Prepare, typename Kernel>
+void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare prepare, Kernel kernel) {
+  const std::vector<Tri8> blocks = random_blocks(layout);
+  std::vector<decltype(prepare(Ray{}))> rays;
+  for (int k = 0; k < kSets; ++k) rays.push_back(prepare(random_ray()));
   size_t hits = 0, i = 0;
   for (auto _ : state) {
-    const Tri8View tv(blocks[i]);
-    const Mt8 h = moller_trumbore8(Vec3x8(rays[i].org), Vec3x8(rays[i].dir), tv.v0, tv.p1, tv.p2, float8(0.0f),
-                                   float8(100.0f));
+    const Mt8 h = kernel(rays[i], Tri8View(blocks[i]));
     hits += size_t(std::popcount(simd::movemask(h.hit)));
     benchmark::DoNotOptimize(h.t);
     i = (i + 1) % kSets;
   }
   state.counters["hit_fraction"] = double(hits) / (8.0 * double(state.iterations()));
+}
+
+/// Moller-Trumbore x8 (edge layout).
+void BM_MollerTrumbore8(benchmark::State& state) {
+  triangle_kernel(
+      state, TriangleLayout::edges, [](const Ray& r) { return r; },
+      [](const Ray& r, const Tri8View& tv) {
+        return moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(0.0f), float8(100.0f));
+      });
+}
+
+/// Watertight x8 (vertex layout), the per-ray shear and axis permutation prepared once per ray.
+void BM_Watertight8(benchmark::State& state) {
+  triangle_kernel(
+      state, TriangleLayout::vertices, [](const Ray& r) { return WatertightRays(&r, 1); },
+      [](const WatertightRays& w, const Tri8View& tv) { return watertight8(w, tv.v0, tv.p1, tv.p2, float8(100.0f)); });
 }
 
 /// Sphere x8: one ray against 8 spheres by the scalar stable-quadratic routine the backends
@@ -104,6 +126,7 @@ void BM_Sphere8(benchmark::State& state) {
 void register_kernel_benchmarks() {
   benchmark::RegisterBenchmark("BM_Kernel/slab8", BM_Slab8);
   benchmark::RegisterBenchmark("BM_Kernel/moller_trumbore8", BM_MollerTrumbore8);
+  benchmark::RegisterBenchmark("BM_Kernel/watertight8", BM_Watertight8);
   benchmark::RegisterBenchmark("BM_Kernel/sphere8", BM_Sphere8);
 }
 

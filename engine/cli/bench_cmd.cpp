@@ -43,6 +43,8 @@ std::vector<Method> methods() {
     if (e.name == "simd") {
       m.push_back({"simd packet", "simd", "default", Coherence::coherent});
       m.push_back({"simd single", "simd", "default", Coherence::incoherent});
+      m.push_back({"simd watertight packet", "simd", "watertight", Coherence::coherent});
+      m.push_back({"simd watertight single", "simd", "watertight", Coherence::incoherent});
     } else if (e.name == "embree") {
       m.push_back({"embree rtcIntersect8", "embree", "default", Coherence::coherent});
       m.push_back({"embree rtcIntersect1", "embree", "default", Coherence::incoherent});
