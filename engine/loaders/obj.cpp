@@ -21,9 +21,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <map>
 #include <span>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "engine/error.h"
@@ -188,23 +191,56 @@ struct CornerKeyHash {
   }
 };
 
+/// Reads the `mtllib` files of an OBJ from the OBJ's folder as tinyobj's MaterialFileReader
+/// does (same warning for a missing file), but opens only regular files: tinyobj's reader opens
+/// whatever the name reaches, so "mtllib ../../dev/zero" read one endless line until memory ran
+/// out, and a FIFO or a terminal blocked the load. Such a file is skipped with a warning.
+class RegularMtlReader final : public tinyobj::MaterialReader {
+ public:
+  explicit RegularMtlReader(std::string dir) : dir_(std::move(dir)) {}
+
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* ids, std::string* warn, std::string* err) override {
+    const std::string file = dir_ + name;
+    struct stat st {};
+    if (::stat(file.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      if (warn) *warn += cat("Material file [ ", name, " ] is not a regular file: ", file, "\n");
+      return false;
+    }
+    std::ifstream in(file);
+    if (!in) {
+      if (warn) *warn += cat("Material file [ ", name, " ] not found in a path : ", dir_, "\n");
+      return false;
+    }
+    tinyobj::LoadMtl(ids, materials, &in, warn, err);
+    return true;
+  }
+
+ private:
+  std::string dir_;  ///< the OBJ's folder with a trailing '/', or empty for the working folder
+};
+
 }  // namespace
 
 void load_obj(const std::string& path, Scene& scene) {
   check_readable(path);
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = false;  // see the top of this file
-  config.vertex_color = false;
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(path, config)) throw Error(cat(path, ": ", first_line(reader.Error())));
+  std::ifstream in(path);
+  if (!in) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
+  const size_t slash = path.find_last_of('/');
+  RegularMtlReader mtl_reader(slash == std::string::npos ? std::string() : path.substr(0, slash + 1));
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warning, error;
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warning, &error, &in, &mtl_reader,
+                        /*triangulate=*/false, /*default_vcols_fallback=*/false))  // see the top of this file
+    throw Error(cat(path, ": ", first_line(error)));
 
-  const tinyobj::attrib_t& attrib = reader.GetAttrib();
   const std::vector<float>& vertices = attrib.vertices;
   const size_t nv = vertices.size() / 3, nn = attrib.normals.size() / 3, nt = attrib.texcoords.size() / 2;
   for (size_t i = 0; i < vertices.size(); ++i)
     RP_CHECK(std::isfinite(vertices[i]), path, ": vertex ", i / 3 + 1, " has a non-finite coordinate");
 
-  const std::vector<tinyobj::material_t>& materials = reader.GetMaterials();
   const uint32_t first_material = uint32_t(scene.materials().size());
   try {
     for (const tinyobj::material_t& m : materials) scene.add_material(to_material(m));
@@ -220,7 +256,7 @@ void load_obj(const std::string& path, Scene& scene) {
   std::vector<double> projected;
   size_t face_number = 0;  // 1-based over the file's faces of 3+ corners, in file order
 
-  for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+  for (const tinyobj::shape_t& shape : shapes) {
     const tinyobj::mesh_t& m = shape.mesh;
     if (m.num_face_vertices.empty()) continue;  // lines or points only
     size_t corners = 0, triangles = 0;
@@ -303,8 +339,8 @@ void load_obj(const std::string& path, Scene& scene) {
     }
   }
 
-  if (!reader.Warning().empty())
-    std::fprintf(stderr, "raypack: warning: %s: %s\n", path.c_str(), one_line_warning(reader.Warning()).c_str());
+  if (!warning.empty())
+    std::fprintf(stderr, "raypack: warning: %s: %s\n", path.c_str(), one_line_warning(warning).c_str());
 }
 
 }  // namespace rp

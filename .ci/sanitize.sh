@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Runs the whole test suite under AddressSanitizer (with LeakSanitizer) and UBSan: configures
+# ./build-asan (the default compiler, RelWithDebInfo, every file built with the sanitizers),
+# builds only the GoogleTest binaries (every rp_test(...) of tests/) and the raypack CLI that
+# rp_test_cli runs (not the benchmark rp_bench), and runs ctest. Any sanitizer report aborts
+# its test, so ctest fails.
+# Usage: .ci/sanitize.sh    (from anywhere; RAYPACK_JOBS build jobs, default 2)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+jobs=${RAYPACK_JOBS:-2}
+build=build-asan
+sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS="$sanitize" \
+  -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" >/dev/null
+
+# The options apply to the test discovery that runs each binary after it is linked, too.
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+mapfile -t targets < <(grep -rhoE '^[[:space:]]*rp_test\([A-Za-z0-9_]+' tests --include=CMakeLists.txt |
+                       sed -E 's/.*rp_test\(//' | sort -u)
+if ((${#targets[@]} == 0)); then
+  echo "sanitize: no rp_test(...) targets found under tests/" >&2
+  exit 1
+fi
+echo "sanitize: building ${targets[*]} raypack in $build"
+cmake --build "$build" -j"$jobs" --target "${targets[@]}" raypack
+
+# gtest_discover_tests registers "<binary>_NOT_BUILT" for a test binary that was not built:
+# every test ctest knows must have its binary.
+if not_built=$(ctest --test-dir "$build" -N | grep -o '[A-Za-z0-9_]*_NOT_BUILT'); then
+  echo "sanitize: ctest has tests whose binaries were not built: $not_built" >&2
+  exit 1
+fi
+ctest --test-dir "$build" --output-on-failure -j2
