@@ -239,15 +239,19 @@ struct Tri8View {
 /// so each lane gets that routine's bits.
 struct WatertightRays {
   Vec3x8 org, dir;
-  mask8 kx_x, kx_y, ky_x, ky_y, kz_x, kz_y;  ///< axis k? is x / is y (else z), per lane
+  mask8 is_x[3], is_y[3];  ///< per lane: axis kx, ky, kz (index 0, 1, 2) is x / is y (else z)
   float8 sx, sy, sz;
   float8 tnear;
+  bool uniform = false;    ///< one ray in every lane: the axes are k[] (no per-lane selects)
+  int k[3] = {0, 1, 2};
 
-  /// The lanes of `rays` (missing lanes repeat lane 0; the caller masks them).
-  explicit WatertightRays(const Ray* rays, size_t n) {
+  /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
+  /// caller masks them).
+  WatertightRays(const Ray* rays, size_t n) {
     alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], fx[8], fy[8], fz[8], tn[8];
     alignas(32) int32_t a[6][8];
-    for (size_t i = 0; i < 8; ++i) {
+    const size_t lanes = n == 1 ? 1 : 8;
+    for (size_t i = 0; i < lanes; ++i) {
       const Ray& r = rays[i < n ? i : 0];
       const int kz = max_abs_axis(r.dir);
       int kx = kz + 1 == 3 ? 0 : kz + 1;
@@ -256,7 +260,7 @@ struct WatertightRays {
       fx[i] = r.dir[kx] / r.dir[kz];
       fy[i] = r.dir[ky] / r.dir[kz];
       fz[i] = 1.0f / r.dir[kz];
-      const int k[3] = {kx, ky, kz};
+      k[0] = kx, k[1] = ky, k[2] = kz;
       for (int j = 0; j < 3; ++j) {
         a[2 * j][i] = k[j] == 0 ? -1 : 0;
         a[2 * j + 1][i] = k[j] == 1 ? -1 : 0;
@@ -265,20 +269,36 @@ struct WatertightRays {
       dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
       tn[i] = r.tnear;
     }
+    if (lanes == 1) {
+      uniform = true;
+      org = Vec3x8(rays[0].org);
+      dir = Vec3x8(rays[0].dir);
+      sx = float8(fx[0]);
+      sy = float8(fy[0]);
+      sz = float8(fz[0]);
+      tnear = float8(tn[0]);
+      for (int j = 0; j < 3; ++j) {
+        is_x[j] = simd::mask_from_bits(k[j] == 0 ? 0xffu : 0u);
+        is_y[j] = simd::mask_from_bits(k[j] == 1 ? 0xffu : 0u);
+      }
+      return;
+    }
     org = Vec3x8::load(ox, oy, oz);
     dir = Vec3x8::load(dx, dy, dz);
-    mask8* m[6] = {&kx_x, &kx_y, &ky_x, &ky_y, &kz_x, &kz_y};
-    for (int j = 0; j < 6; ++j)
-      *m[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[j]))));
+    for (int j = 0; j < 3; ++j) {
+      is_x[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[2 * j]))));
+      is_y[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[2 * j + 1]))));
+    }
     sx = float8::load_aligned(fx);
     sy = float8::load_aligned(fy);
     sz = float8::load_aligned(fz);
     tnear = float8::load_aligned(tn);
   }
 
-  /// Component k of p per lane, k given by the masks (is x, is y).
-  static float8 pick(const Vec3x8& p, const mask8& is_x, const mask8& is_y) {
-    return xsimd::select(is_x, p.x, xsimd::select(is_y, p.y, p.z));
+  /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz).
+  float8 axis(const Vec3x8& p, int j) const {
+    if (uniform) return k[j] == 0 ? p.x : k[j] == 1 ? p.y : p.z;
+    return xsimd::select(is_x[j], p.x, xsimd::select(is_y[j], p.y, p.z));
   }
 };
 
@@ -292,12 +312,11 @@ struct WatertightRays {
 /// triangles and 8 rays against one triangle.
 inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
                        const float8& tfar) {
-  using W = WatertightRays;
   const Vec3x8 a = v0 - r.org, b = v1 - r.org, c = v2 - r.org;
-  const float8 a_z = W::pick(a, r.kz_x, r.kz_y), b_z = W::pick(b, r.kz_x, r.kz_y), c_z = W::pick(c, r.kz_x, r.kz_y);
-  const float8 ax = W::pick(a, r.kx_x, r.kx_y) - r.sx * a_z, ay = W::pick(a, r.ky_x, r.ky_y) - r.sy * a_z;
-  const float8 bx = W::pick(b, r.kx_x, r.kx_y) - r.sx * b_z, by = W::pick(b, r.ky_x, r.ky_y) - r.sy * b_z;
-  const float8 cx = W::pick(c, r.kx_x, r.kx_y) - r.sx * c_z, cy = W::pick(c, r.ky_x, r.ky_y) - r.sy * c_z;
+  const float8 a_z = r.axis(a, 2), b_z = r.axis(b, 2), c_z = r.axis(c, 2);
+  const float8 ax = r.axis(a, 0) - r.sx * a_z, ay = r.axis(a, 1) - r.sy * a_z;
+  const float8 bx = r.axis(b, 0) - r.sx * b_z, by = r.axis(b, 1) - r.sy * b_z;
+  const float8 cx = r.axis(c, 0) - r.sx * c_z, cy = r.axis(c, 1) - r.sy * c_z;
   const float8 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
   const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
   const mask8 mixed = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
