@@ -282,12 +282,28 @@ class SimdBackend final : public Backend {
     return active;
   }
 
+  /// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
+  /// that order children near-first, and the beam that culls them.
+  struct PacketSetup {
+    typename Kernel::Packet kp;
+    float8 sx, sy, sz;
+    PacketBeam beam;
+    PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active) : kp(p, rays), beam(p, active) {
+      packet_signs(p, active, sx, sy, sz);
+    }
+  };
+  struct PacketEntry {
+    int32_t ref;
+    uint32_t mask;
+  };
+
   /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
   /// direction signs (the key sum_a sign_a (lo_a + hi_a) of each child, one 8-wide op).
   struct Child { int32_t ref; uint32_t mask; float key; };
-  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const PacketBeam& beam, const float8& tfar,
-                              uint32_t mask, const float8& sign_x, const float8& sign_y, const float8& sign_z,
-                              Child* out) {
+  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const PacketSetup& ps, const float8& tfar,
+                              uint32_t mask, Child* out) {
+    const PacketBeam& beam = ps.beam;
+    const float8 &sign_x = ps.sx, &sign_y = ps.sy, &sign_z = ps.sz;
     uint32_t candidates = 0xffu;
     if (beam.valid)
       candidates = beam.cull(n, simd::reduce_max(xsimd::select(simd::mask_from_bits(mask), tfar, float8(0.0f))));
@@ -376,23 +392,19 @@ class SimdBackend final : public Backend {
     std::fill_n(prim, 8, kInvalidId);
     float8 u(0.0f), v(0.0f);
     if (active && !bvh_.empty()) {
-      const typename Kernel::Packet kp(p, rays);
-      float8 sx, sy, sz;
-      packet_signs(p, active, sx, sy, sz);
-      const PacketBeam beam(p, active);
-      struct Entry { int32_t ref; uint32_t mask; };
-      Entry stack[kStackSize];
+      const PacketSetup ps(p, rays, active);
+      PacketEntry stack[kStackSize];
       int sp = 0;
       stack[sp++] = {0, active};
       while (sp > 0) {
-        const Entry e = stack[--sp];
+        const PacketEntry e = stack[--sp];
         if (simd::lane_count(e.mask) <= kSingleRayLanes) {
           single_rays_closest(e.ref, e.mask, rays, tfar, u, v, prim);
           continue;
         }
         if (!is_leaf(e.ref)) {
           Child kids[8];
-          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, beam, tfar, e.mask, sx, sy, sz, kids);
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, ps, tfar, e.mask, kids);
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
@@ -405,7 +417,7 @@ class SimdBackend final : public Backend {
             analytic_packet(id, rays, e.mask, tfar, u, v, prim);
             continue;
           }
-          const Mt8 h = kp.slot(tb, l, tfar);
+          const Mt8 h = ps.kp.slot(tb, l, tfar);
           const mask8 upd = h.hit & lanes;
           const uint32_t bits = movemask(upd);
           if (!bits) continue;
@@ -441,16 +453,12 @@ class SimdBackend final : public Backend {
     }
     uint32_t live = active & ~done;
     if (live && !bvh_.empty()) {
-      const typename Kernel::Packet kp(p, rays);
-      float8 sx, sy, sz;
-      packet_signs(p, live, sx, sy, sz);
-      const PacketBeam beam(p, live);
-      struct Entry { int32_t ref; uint32_t mask; };
-      Entry stack[kStackSize];
+      const PacketSetup ps(p, rays, live);
+      PacketEntry stack[kStackSize];
       int sp = 0;
       stack[sp++] = {0, live};
       while (sp > 0 && live) {  // early exit once every lane is occluded
-        Entry e = stack[--sp];
+        PacketEntry e = stack[--sp];
         e.mask &= live;
         if (!e.mask) continue;
         if (simd::lane_count(e.mask) <= kSingleRayLanes) {
@@ -461,7 +469,7 @@ class SimdBackend final : public Backend {
         }
         if (!is_leaf(e.ref)) {
           Child kids[8];
-          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, beam, tfar, e.mask, sx, sy, sz, kids);
+          const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, ps, tfar, e.mask, kids);
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
@@ -474,7 +482,7 @@ class SimdBackend final : public Backend {
             for (uint32_t b = e.mask; b; b &= b - 1)
               if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
           } else {
-            const Mt8 h = kp.slot(tb, l, tfar);
+            const Mt8 h = ps.kp.slot(tb, l, tfar);
             hit = movemask(h.hit) & e.mask;
           }
           done |= hit;

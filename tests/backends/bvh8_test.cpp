@@ -202,6 +202,22 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
   }
 }
 
+/// Lane l of an 8-wide triangle test's result, as a scalar Intersection.
+Intersection<float> lane_of(const Mt8& h, int l) {
+  alignas(32) float t[8], u[8], v[8];
+  h.t.store_aligned(t);
+  h.u.store_aligned(u);
+  h.v.store_aligned(v);
+  return {bool(simd::movemask(h.hit) >> l & 1u), t[l], u[l], v[l]};
+}
+
+/// The same t, u and v, bit for bit.
+void expect_same_bits(const Intersection<float>& a, const Intersection<float>& b) {
+  EXPECT_EQ(std::bit_cast<uint32_t>(a.t), std::bit_cast<uint32_t>(b.t));
+  EXPECT_EQ(std::bit_cast<uint32_t>(a.u), std::bit_cast<uint32_t>(b.u));
+  EXPECT_EQ(std::bit_cast<uint32_t>(a.v), std::bit_cast<uint32_t>(b.v));
+}
+
 /// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of use.
 TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   std::mt19937 rng(5);
@@ -229,19 +245,12 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
     if (iter % 11 == 0) r.dir.y = -0.0f;
     const Tri8View tv(block);
     const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(r.tnear), float8(r.tfar));
-    alignas(32) float t[8], uu[8], vv[8];
-    h.t.store_aligned(t);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
-    const uint32_t bits = simd::movemask(h.hit);
     for (int l = 0; l < 8; ++l) {
       const Intersection<float> s = intersect_triangle_mt_normal(r, v0[l], v1[l], v2[l]);
-      ASSERT_EQ(bool(bits >> l & 1u), s.hit) << "iter " << iter << " lane " << l;
+      ASSERT_EQ(lane_of(h, l).hit, s.hit) << "iter " << iter << " lane " << l;
       if (!s.hit) continue;
       ++hits;
-      EXPECT_EQ(std::bit_cast<uint32_t>(t[l]), std::bit_cast<uint32_t>(s.t));
-      EXPECT_EQ(std::bit_cast<uint32_t>(uu[l]), std::bit_cast<uint32_t>(s.u));
-      EXPECT_EQ(std::bit_cast<uint32_t>(vv[l]), std::bit_cast<uint32_t>(s.v));
+      expect_same_bits(lane_of(h, l), s);
       // The same triangle broadcast against the ray broadcast (the packet form).
       const Mt8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v0[l] - v1[l]),
                                      Vec3x8(v2[l] - v0[l]), float8(r.tnear), float8(r.tfar));
@@ -280,20 +289,13 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
     if (iter % 13 == 0) r.dir.x = -0.0f;
     const Tri8View tv(block);
     const Mt8 h = watertight8(WatertightRays(&r, 1), tv.v0, tv.p1, tv.p2, float8(r.tfar));
-    alignas(32) float t[8], uu[8], vv[8];
-    h.t.store_aligned(t);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
-    const uint32_t bits = simd::movemask(h.hit);
     for (int l = 0; l < 8; ++l) {
       const Intersection<float> s = intersect_triangle_watertight(r, v[0][l], v[1][l], v[2][l]);
-      ASSERT_EQ(bool(bits >> l & 1u), s.hit) << "iter " << iter << " lane " << l;
+      ASSERT_EQ(lane_of(h, l).hit, s.hit) << "iter " << iter << " lane " << l;
       if (!s.hit) continue;
       ++hits;
       exact_zero += s.u == 0.0f || s.v == 0.0f || s.u + s.v == 1.0f;
-      EXPECT_EQ(std::bit_cast<uint32_t>(t[l]), std::bit_cast<uint32_t>(s.t));
-      EXPECT_EQ(std::bit_cast<uint32_t>(uu[l]), std::bit_cast<uint32_t>(s.u));
-      EXPECT_EQ(std::bit_cast<uint32_t>(vv[l]), std::bit_cast<uint32_t>(s.v));
+      expect_same_bits(lane_of(h, l), s);
       // 8 rays (the same one) against the triangle broadcast: the packet form.
       const Ray eight[8] = {r, r, r, r, r, r, r, r};
       const Mt8 p = watertight8(WatertightRays(eight, 8), Vec3x8(v[0][l]), Vec3x8(v[1][l]), Vec3x8(v[2][l]),
