@@ -23,12 +23,23 @@ struct PrimRef {
   uint32_t prim_id;
 };
 
-/// Binary build tree: a leaf has no children and owns refs[begin, end).
+/// Binary build tree: a leaf has no children and owns refs[begin, end). Each node also carries
+/// its row of the cost-optimal collapse into 8-wide nodes (see Builder::plan).
 struct BuildNode {
   Box3f box;
   uint32_t begin = 0, end = 0;
   std::unique_ptr<BuildNode> left, right;
   bool leaf() const { return !left; }
+  uint32_t count() const { return end - begin; }
+
+  /// cost[i - 1]: least SAH cost of the subtree as at most i children of an 8-wide node
+  /// (i = 1..8); split[i - 1] (i >= 2): how many of them come from the left child, or 0 when
+  /// i - 1 children do as well. With one child the subtree is one leaf (as_leaf) or one
+  /// 8-wide node of node_width children, node_split of them from the left.
+  float cost[8];
+  uint8_t split[8];
+  uint8_t node_width = 0, node_split = 0;
+  bool as_leaf = false;
 };
 
 constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use fewer (bins_for)
@@ -36,8 +47,10 @@ constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use f
 /// Bins for a node of n primitives: 32 near the root, where the split matters most, down to
 /// 8 near the leaves, where a sweep over 32 mostly empty bins would cost more than it finds.
 constexpr int bins_for(uint32_t n) { return n >= 1024 ? 32 : (n >= 64 ? 16 : 8); }
-constexpr float kTraversalCost = 1.0f;     ///< SAH cost of visiting a node
-constexpr float kIntersectionCost = 0.15f;  ///< SAH cost of one primitive test (8-wide leaf tests: cheap)
+constexpr float kTraversalCost = 1.0f;      ///< SAH cost of visiting a node
+constexpr float kIntersectionCost = 0.15f;  ///< binary build: SAH cost of one primitive test (8-wide leaf tests: cheap)
+constexpr float kLeafCost = 0.5f;           ///< collapse: SAH cost of one leaf's block test...
+constexpr float kPrimCost = 0.1f;           ///< ...plus this per primitive in it
 constexpr uint32_t kParallelThreshold = 4096;
 constexpr uint32_t kMaxSahDepth = 64;  ///< deeper than this, median splits bound the depth
 
@@ -53,22 +66,23 @@ class Builder {
     node->box = b.box;
     const Box3f& centroids = b.centroids;
     const uint32_t n = end - begin;
-    if (n <= 1) return node;
-    uint32_t mid = 0;
-    if (opt_.rule == SplitRule::sah && depth < kMaxSahDepth) {
-      mid = sah_split(begin, end, node->box, centroids);
-      if (mid == begin) return node;  // SAH prefers a leaf
-    } else {
-      if (n <= opt_.max_leaf) return node;
+    uint32_t mid = begin;  // stays begin for a leaf
+    if (n <= 1) {
+    } else if (opt_.rule == SplitRule::sah && depth < kMaxSahDepth) {
+      mid = sah_split(begin, end, node->box, centroids);  // begin when SAH prefers a leaf
+    } else if (n > opt_.max_leaf) {
       mid = median_split(begin, end, node->box);
     }
-    if (n > kParallelThreshold) {
-      tbb::parallel_invoke([&] { node->left = build(begin, mid, depth + 1); },
-                           [&] { node->right = build(mid, end, depth + 1); });
-    } else {
-      node->left = build(begin, mid, depth + 1);
-      node->right = build(mid, end, depth + 1);
+    if (mid != begin) {
+      if (n > kParallelThreshold) {
+        tbb::parallel_invoke([&] { node->left = build(begin, mid, depth + 1); },
+                             [&] { node->right = build(mid, end, depth + 1); });
+      } else {
+        node->left = build(begin, mid, depth + 1);
+        node->right = build(mid, end, depth + 1);
+      }
     }
+    plan(*node);
     return node;
   }
 
@@ -195,20 +209,69 @@ class Builder {
     return std::clamp(int((c - lo) * scale), 0, nbins - 1);
   }
 
+  /// The node's row of the cost-optimal collapse (Ylitie, Karras and Laine, "Efficient
+  /// Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", HPG 2017, sec. 4.1),
+  /// from its children's rows: the binary tree is cut into 8-wide nodes and leaves so that
+  /// the SAH cost is least, where an 8-wide node costs kTraversalCost times its area and a
+  /// leaf, one block test, (kLeafCost + kPrimCost * primitives) times its area. A subtree of
+  /// at most max_leaf primitives may become one leaf (its refs are contiguous), so small
+  /// sibling leaves merge into one block test, and nodes are filled by cost rather than
+  /// opened greedily. Runs in the (parallel) build as children finish; the result depends on
+  /// the tree only, so it stays deterministic.
+  void plan(BuildNode& n) const {
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    const float area = n.box.area();
+    const float leaf = n.count() <= opt_.max_leaf ? area * (kLeafCost + kPrimCost * float(n.count())) : inf;
+    std::fill_n(n.split, 8, uint8_t(0));
+    if (n.leaf()) {
+      n.as_leaf = true;
+      std::fill_n(n.cost, 8, leaf);
+      return;
+    }
+    const BuildNode &l = *n.left, &r = *n.right;
+    float dist[9];  // dist[j]: the subtree as j children (j = 2..8), at[j] of them from the left
+    uint8_t at[9] = {};
+    for (int j = 2; j <= 8; ++j) {
+      dist[j] = inf;
+      for (int k = 1; k < j; ++k) {
+        const float c = l.cost[k - 1] + r.cost[j - k - 1];
+        if (c < dist[j]) {
+          dist[j] = c;
+          at[j] = uint8_t(k);
+        }
+      }
+    }
+    int width = 2;
+    for (int j = 3; j <= 8; ++j)
+      if (dist[j] < dist[width]) width = j;
+    const float inner = area * kTraversalCost + dist[width];
+    n.node_width = uint8_t(width);
+    n.node_split = at[width];
+    n.as_leaf = leaf <= inner;
+    n.cost[0] = std::min(leaf, inner);
+    for (int i = 2; i <= 8; ++i) {
+      if (dist[i] < n.cost[i - 2]) {
+        n.cost[i - 1] = dist[i];
+        n.split[i - 1] = at[i];
+      } else {
+        n.cost[i - 1] = n.cost[i - 2];
+      }
+    }
+  }
+
   std::vector<PrimRef>& refs_;
   const BuildOptions& opt_;
 };
 
-/// Collapses the binary tree into 8-wide nodes (pre-order, single-threaded, so the layout is
-/// deterministic): a node takes its two children, then keeps opening the inner child with the
-/// largest surface area until it has 8 children or only leaves.
+/// Lays the binary tree out as 8-wide nodes and leaf blocks, cut as Builder::plan chose
+/// (pre-order, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
   Collapser(const Scene& scene, const std::vector<PrimRef>& refs, Bvh8& out, TriangleLayout layout)
       : scene_(scene), refs_(refs), out_(out), layout_(layout) {}
 
   void root(const BuildNode& bn) {
-    if (bn.leaf()) {  // a one-leaf tree still needs a root node
+    if (bn.as_leaf) {  // a one-leaf tree still needs a root node
       out_.nodes.emplace_back();
       clear(out_.nodes[0]);
       set_child(0, 0, bn, emit_leaf(bn));
@@ -235,28 +298,31 @@ class Collapser {
     n.child[slot] = ref;
   }
 
+  /// Appends the pieces of `bn` when its subtree takes at most i children of a node.
+  static void gather(const BuildNode& bn, int i, std::vector<const BuildNode*>& out) {
+    while (i > 1 && bn.split[i - 1] == 0) --i;
+    if (i == 1) {
+      out.push_back(&bn);
+      return;
+    }
+    gather(*bn.left, bn.split[i - 1], out);
+    gather(*bn.right, i - bn.split[i - 1], out);
+  }
+
+  /// Emits the 8-wide node of an inner `bn` (as_leaf false): its node_width children as the
+  /// plan cut them, then their subtrees, depth-first.
   int32_t collapse(const BuildNode& bn, uint32_t depth) {
     out_.stats.depth = std::max(out_.stats.depth, depth);
-    std::vector<const BuildNode*> kids{bn.left.get(), bn.right.get()};
-    while (kids.size() < 8) {
-      int open = -1;
-      float area = -1.0f;
-      for (size_t k = 0; k < kids.size(); ++k)
-        if (!kids[k]->leaf() && kids[k]->box.area() > area) {
-          area = kids[k]->box.area();
-          open = int(k);
-        }
-      if (open < 0) break;
-      const BuildNode* o = kids[size_t(open)];
-      kids[size_t(open)] = o->left.get();
-      kids.insert(kids.begin() + open + 1, o->right.get());
-    }
+    std::vector<const BuildNode*> kids;
+    const int width = bn.node_width, k = bn.node_split;
+    gather(*bn.left, k, kids);
+    gather(*bn.right, width - k, kids);
     const size_t index = out_.nodes.size();
     out_.nodes.emplace_back();
     clear(out_.nodes[index]);
-    for (size_t k = 0; k < kids.size(); ++k) {
-      const int32_t ref = kids[k]->leaf() ? emit_leaf(*kids[k]) : collapse(*kids[k], depth + 1);
-      set_child(index, int(k), *kids[k], ref);  // nodes may have grown: index, not a reference
+    for (size_t c = 0; c < kids.size(); ++c) {
+      const int32_t ref = kids[c]->as_leaf ? emit_leaf(*kids[c]) : collapse(*kids[c], depth + 1);
+      set_child(index, int(c), *kids[c], ref);  // nodes may have grown: index, not a reference
     }
     return int32_t(index);
   }
@@ -325,7 +391,7 @@ double sah_cost(const Bvh8& t) {
     for (int k = 0; k < 8 && n.child[k] != kEmpty; ++k) {
       const Box3f b({n.lo_x[k], n.lo_y[k], n.lo_z[k]}, {n.hi_x[k], n.hi_y[k], n.hi_z[k]});
       if (is_leaf(n.child[k])) {
-        cost += b.area() / root * kIntersectionCost * double(leaf_count(n.child[k]));
+        cost += b.area() / root * (kLeafCost + kPrimCost * double(leaf_count(n.child[k])));
       } else {
         cost += b.area() / root * kTraversalCost;
       }

@@ -137,6 +137,35 @@ TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
   EXPECT_EQ(0, std::memcmp(a.tris.data(), b.tris.data(), a.tris.size() * sizeof(Tri8)));
 }
 
+/// The collapse minimises the SAH cost, so no node keeps a child node whose children it has
+/// room for: lifting them into the parent would remove that child's traversal cost (its
+/// area) and change nothing else. Also checks that child counts add up.
+TEST(Bvh8Build, NoNodeCouldAbsorbAChildNode) {
+  for (SplitRule rule : {SplitRule::sah, SplitRule::median}) {
+    const Scene sc = soup(5, 20000, false);
+    const Bvh8 t = build(sc, {rule, 8});
+    auto width = [&](const Bvh8Node& n) {
+      int k = 0;
+      while (k < 8 && n.child[k] != kEmpty) ++k;
+      return k;
+    };
+    size_t children = 0;
+    for (size_t i = 0; i < t.nodes.size(); ++i) {
+      const Bvh8Node& n = t.nodes[i];
+      const int k = width(n);
+      EXPECT_GE(k, i == 0 ? 1 : 2) << "node " << i;
+      children += size_t(k);
+      for (int c = 0; c < k; ++c) {
+        if (is_leaf(n.child[c])) continue;
+        const Box3f box({n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]});
+        if (!(box.area() > 0.0f)) continue;
+        EXPECT_GT(k - 1 + width(t.nodes[size_t(n.child[c])]), 8) << "node " << i << " could absorb child " << c;
+      }
+    }
+    EXPECT_EQ(children, t.nodes.size() - 1 + t.stats.leaves);  // every node but the root is a child once
+  }
+}
+
 /// The seeds' rule: longest axis, centroid median, balanced. Halving n until it fits a leaf
 /// of 4 leaves every leaf with 2..4 primitives (5 splits into 2 + 3); SAH has no such floor.
 TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
