@@ -129,6 +129,14 @@ class SimdBackend final : public Backend {
     }
   }
 
+  /// The lanes of block `tb` holding an analytic primitive (prim_id >= first_analytic,
+  /// padding included), in one unsigned 8-wide compare.
+  uint32_t analytic_lanes(const Tri8& tb) const noexcept {
+    const __m256i ids = _mm256_load_si256(reinterpret_cast<const __m256i*>(tb.prim_id));
+    const __m256i at_least = _mm256_cmpeq_epi32(_mm256_max_epu32(ids, _mm256_set1_epi32(int32_t(bvh_.first_analytic))), ids);
+    return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(at_least)));
+  }
+
   /// Closest hit of one ray.
   Hit intersect_single(const Ray& r) const noexcept {
     Hit best;
@@ -195,9 +203,8 @@ class SimdBackend final : public Backend {
             best = {tmin, tb.prim_id[lane], u[lane], v[lane]};
           }
           if (bvh_.has_analytic)
-            for (uint32_t l = lo; l < lo + leaf_count(ref); ++l) {
-              const uint32_t id = tb.prim_id[l];
-              if (id < bvh_.first_analytic) continue;
+            for (uint32_t a = analytic_lanes(tb) & in_leaf; a; a &= a - 1) {
+              const uint32_t id = tb.prim_id[std::countr_zero(a)];
               Ray rr = r;
               rr.tfar = tfar;
               const Intersection<float> ah = scene_.intersect_analytic(id, rr);
@@ -247,8 +254,8 @@ class SimdBackend final : public Backend {
       if (movemask(kr.block(tb, tfar8).hit) & lane_range(lo, lo + count))
         return true;
       if (bvh_.has_analytic)
-        for (uint32_t l = lo; l < lo + count; ++l)
-          if (tb.prim_id[l] >= bvh_.first_analytic && scene_.intersect_analytic(tb.prim_id[l], r).hit) return true;
+        for (uint32_t a = analytic_lanes(tb) & lane_range(lo, lo + count); a; a &= a - 1)
+          if (scene_.intersect_analytic(tb.prim_id[std::countr_zero(a)], r).hit) return true;
     }
     return false;
   }
