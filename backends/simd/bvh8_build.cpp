@@ -350,10 +350,22 @@ class Collapser {
     }
     const uint32_t first = block * 8 + used_[block];
     used_[block] += count;
-    for (uint32_t i = 0; i < count; ++i) store(first + i, refs_[bn.begin + i].prim_id);
+    leaves_.push_back({first, bn.begin, count});
     ++out_.stats.leaves;
     return leaf_ref(first, count);
   }
+
+ public:
+  /// Writes every leaf's primitives into the slots emit_leaf gave them, in parallel (each
+  /// slot is written once, so the bytes do not depend on the thread count).
+  void fill() {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        for (uint32_t k = 0; k < leaves_[i].count; ++k) store(leaves_[i].slot + k, refs_[leaves_[i].ref + k].prim_id);
+    });
+  }
+
+ private:
 
   /// Slot `slot` holds `prim_id`: a triangle's v0 and, by the layout, its edges or its other
   /// two vertices; or an analytic primitive's id with NaN coordinates (the block's fill).
@@ -380,6 +392,8 @@ class Collapser {
   static constexpr size_t kOpenBlocks = 16; ///< blocks with room that later leaves may share
   std::vector<uint32_t> open_;              ///< the last kOpenBlocks blocks opened
   std::vector<uint32_t> used_;              ///< slots taken per block
+  struct Leaf { uint32_t slot, ref, count; };
+  std::vector<Leaf> leaves_;                ///< placed by emit_leaf, written by fill
 };
 
 /// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
@@ -443,7 +457,9 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     Builder builder(refs, options);
     const std::unique_ptr<BuildNode> root = builder.build(0, uint32_t(refs.size()), 0);
     out.bounds = root->box;
-    Collapser(scene, refs, out, options.layout).root(*root);
+    Collapser collapser(scene, refs, out, options.layout);
+    collapser.root(*root);
+    collapser.fill();
   }
   out.first_analytic = scene.sphere_base();
   out.has_analytic = scene.plane_base() > scene.sphere_base();
