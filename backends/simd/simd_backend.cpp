@@ -168,9 +168,19 @@ class SimdBackend final : public Backend {
               ref = n.child[std::countr_zero(bits)];
               continue;
             }
-            prefetch_children(n, bits);
             alignas(32) float dist[8];
             t_enter.store_aligned(dist);
+            const uint32_t rest = bits & (bits - 1);
+            if ((rest & (rest - 1)) == 0) {  // two children: one compare, push the far one
+              const int a = std::countr_zero(bits), b = std::countr_zero(rest);
+              const bool a_near = dist[a] < dist[b];  // ties: the higher slot first, as below
+              const int near = a_near ? a : b, far = a_near ? b : a;
+              prefetch_children(n, 1u << far);
+              stack[sp++] = {n.child[far], dist[far]};
+              ref = n.child[near];
+              continue;
+            }
+            prefetch_children(n, bits);
             Entry hit[8];
             int k = 0;
             for (; bits; bits &= bits - 1) {
