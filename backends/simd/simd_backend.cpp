@@ -181,16 +181,18 @@ class SimdBackend final : public Backend {
               continue;
             }
             prefetch_children(n, bits);
-            Entry hit[8];
+            // Onto the stack in slot order, then sorted there by descending distance (a stable
+            // insertion sort: ties keep the higher slot nearer the top); the nearest is visited.
+            Entry* hit = stack + sp;
             int k = 0;
             for (; bits; bits &= bits - 1) {
               const int c = std::countr_zero(bits);
-              Entry e{n.child[c], dist[c]};
+              const Entry e{n.child[c], dist[c]};
               int j = k++;
-              for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];  // descending by distance
+              for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];
               hit[j] = e;
             }
-            for (int j = 0; j < k - 1; ++j) stack[sp++] = hit[j];
+            sp += k - 1;
             ref = hit[k - 1].ref;
             continue;
           }
