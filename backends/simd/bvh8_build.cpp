@@ -3,8 +3,11 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <limits>
 #include <memory>
 
@@ -22,6 +25,21 @@ struct PrimRef {
   Vec3f centroid;
   uint32_t prim_id;
 };
+static_assert(sizeof(PrimRef) == 40 && offsetof(PrimRef, centroid) == 24, "PrimRef is read as 10 floats");
+
+/// Four floats of a PrimRef from float `at` (0: box.lo, 3: box.hi); the fourth lane holds the
+/// next field and is never used.
+inline __m128 load4(const PrimRef& r, int at) { return _mm_loadu_ps(reinterpret_cast<const float*>(&r) + at); }
+/// The centroid with a zero fourth lane (the prim_id's bits would be a denormal float).
+inline __m128 load_centroid(const PrimRef& r) {
+  return _mm_and_ps(load4(r, 6), _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)));
+}
+inline Box3f to_box(__m128 lo, __m128 hi) {
+  alignas(16) float l[4], h[4];
+  _mm_store_ps(l, lo);
+  _mm_store_ps(h, hi);
+  return Box3f({l[0], l[1], l[2]}, {h[0], h[1], h[2]});
+}
 
 /// Binary build tree: a leaf has no children and owns refs[begin, end). Each node also carries
 /// its row of the cost-optimal collapse into 8-wide nodes (see Builder::plan).
@@ -62,7 +80,7 @@ class Builder {
     auto node = std::make_unique<BuildNode>();
     node->begin = begin;
     node->end = end;
-    const Bounds b = bounds(begin, end);
+    const BoxPair b = bounds(begin, end);
     node->box = b.box;
     const Box3f& centroids = b.centroids;
     const uint32_t n = end - begin;
@@ -87,54 +105,99 @@ class Builder {
   }
 
  private:
-  /// Bounds of refs[begin, end) and of their centroids; in parallel for large ranges (box
-  /// unions are exact, so the result does not depend on how the range is cut).
+  /// Bounds of refs[begin, end) and of their centroids, four lanes at a time; in parallel for
+  /// large ranges (min and max are exact, so the result does not depend on how the range is
+  /// cut).
   struct Bounds {
-    Box3f box, centroids;
-    void join(const Bounds& o) { box.extend(o.box); centroids.extend(o.centroids); }
+    __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity()), hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    __m128 clo = lo, chi = hi;
+    void join(const Bounds& o) {
+      lo = _mm_min_ps(lo, o.lo);
+      hi = _mm_max_ps(hi, o.hi);
+      clo = _mm_min_ps(clo, o.clo);
+      chi = _mm_max_ps(chi, o.chi);
+    }
   };
-  Bounds bounds(uint32_t begin, uint32_t end) const {
+  struct BoxPair {
+    Box3f box, centroids;
+  };
+  BoxPair bounds(uint32_t begin, uint32_t end) const {
     auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bounds b) {
       for (uint32_t i = r.begin(); i < r.end(); ++i) {
-        b.box.extend(refs_[i].box);
-        b.centroids.extend(refs_[i].centroid);
+        const PrimRef& p = refs_[i];
+        const __m128 c = load_centroid(p);
+        b.lo = _mm_min_ps(b.lo, load4(p, 0));
+        b.hi = _mm_max_ps(b.hi, load4(p, 3));
+        b.clo = _mm_min_ps(b.clo, c);
+        b.chi = _mm_max_ps(b.chi, c);
       }
       return b;
     };
-    if (end - begin < kParallelThreshold) return scan({begin, end}, Bounds{});
-    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bounds{}, scan,
-                                [](Bounds a, const Bounds& b) { a.join(b); return a; });
+    const Bounds b = end - begin < kParallelThreshold
+                         ? scan({begin, end}, Bounds{})
+                         : tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bounds{}, scan,
+                                                [](Bounds a, const Bounds& o) { a.join(o); return a; });
+    return {to_box(b.lo, b.hi), to_box(b.clo, b.chi)};
   }
 
-  /// Bin boxes and counts for all three axes in one pass (in parallel for large ranges;
-  /// unions and integer sums are exact, so the bins do not depend on the cut either).
+  /// Bin boxes and counts for all three axes in one pass over the refs: the three bin indices
+  /// of a centroid in one 4-wide step, each bin box a 4-wide min/max (in parallel for large
+  /// ranges; unions and integer sums are exact, so the bins do not depend on the cut either).
   struct Bins {
-    Box3f box[3][kBins];
-    uint32_t count[3][kBins] = {};
+    __m128 lo[3][kBins], hi[3][kBins];
+    uint32_t count[3][kBins];
+    int nbins;
+    explicit Bins(int n) : nbins(n) {
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < n; ++b) {
+          lo[a][b] = _mm_set1_ps(std::numeric_limits<float>::infinity());
+          hi[a][b] = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+          count[a][b] = 0;
+        }
+    }
     void join(const Bins& o) {
       for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < kBins; ++b) {
-          box[a][b].extend(o.box[a][b]);
+        for (int b = 0; b < nbins; ++b) {
+          lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
+          hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
           count[a][b] += o.count[a][b];
         }
     }
+    Box3f box(int a, int b) const { return to_box(lo[a][b], hi[a][b]); }
   };
   Bins bin(uint32_t begin, uint32_t end, const Box3f& centroids, int nbins) const {
     const Vec3f extent = centroids.extent();
     const float nb = float(nbins);
     const Vec3f scale{extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
                       extent.z > 0.0f ? nb / extent.z : 0.0f};
-    auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bins b) {
-      for (uint32_t i = r.begin(); i < r.end(); ++i)
+    const __m128 origin = _mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
+    const __m128 scale4 = _mm_setr_ps(scale.x, scale.y, scale.z, 0.0f);
+    const __m128i top = _mm_set1_epi32(nbins - 1), zero = _mm_setzero_si128();
+    auto scan_into = [&](const tbb::blocked_range<uint32_t>& r, Bins& b) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i) {
+        const PrimRef& p = refs_[i];
+        // bin_of for x, y, z at once: the same subtraction, product and truncation
+        const __m128 t = _mm_mul_ps(_mm_sub_ps(load_centroid(p), origin), scale4);
+        alignas(16) int32_t k[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_min_epi32(_mm_max_epi32(_mm_cvttps_epi32(t), zero), top));
+        const __m128 lo = load4(p, 0), hi = load4(p, 3);
         for (int a = 0; a < 3; ++a) {
-          const int k = bin_of(refs_[i].centroid[a], centroids.lo[a], scale[a], nbins);
-          b.box[a][k].extend(refs_[i].box);
-          ++b.count[a][k];
+          b.lo[a][k[a]] = _mm_min_ps(b.lo[a][k[a]], lo);
+          b.hi[a][k[a]] = _mm_max_ps(b.hi[a][k[a]], hi);
+          ++b.count[a][k[a]];
         }
+      }
+    };
+    if (end - begin < kParallelThreshold) {  // most nodes: no copies of the 3.5 KB of bins
+      Bins b(nbins);
+      scan_into({begin, end}, b);
+      return b;
+    }
+    auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bins b) {
+      scan_into(r, b);
       return b;
     };
-    if (end - begin < kParallelThreshold) return scan({begin, end}, Bins{});
-    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins{}, scan,
+    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins(nbins), scan,
                                 [](Bins a, const Bins& b) { a.join(b); return a; });
   }
 
@@ -150,7 +213,8 @@ class Builder {
     int best_axis = -1, best_bin = 0;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(extent[axis] > 0.0f)) continue;
-      const Box3f* bin_box = bins.box[axis];
+      Box3f bin_box[kBins];
+      for (int b = 0; b < nbins; ++b) bin_box[b] = bins.box(axis, b);
       const uint32_t* bin_count = bins.count[axis];
       float right_area[kBins];
       uint32_t right_count[kBins];
