@@ -75,7 +75,7 @@ void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare pre
   for (int k = 0; k < kSets; ++k) rays.push_back(prepare(random_ray()));
   size_t hits = 0, i = 0;
   for (auto _ : state) {
-    const Mt8 h = kernel(rays[i], Tri8View(blocks[i]));
+    const Mt8 h = kernel(rays[i], LeafView(blocks[i]));
     hits += size_t(std::popcount(simd::movemask(h.hit)));
     benchmark::DoNotOptimize(h.t);
     i = (i + 1) % kSets;
@@ -87,7 +87,7 @@ void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare pre
 void BM_MollerTrumbore8(benchmark::State& state) {
   triangle_kernel(
       state, TriangleLayout::edges, [](const Ray& r) { return r; },
-      [](const Ray& r, const Tri8View& tv) {
+      [](const Ray& r, const LeafView& tv) {
         return moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(0.0f), float8(100.0f));
       });
 }
@@ -96,7 +96,7 @@ void BM_MollerTrumbore8(benchmark::State& state) {
 void BM_Watertight8(benchmark::State& state) {
   triangle_kernel(
       state, TriangleLayout::vertices, [](const Ray& r) { return WatertightRays(&r, 1); },
-      [](const WatertightRays& w, const Tri8View& tv) { return watertight8(w, tv.v0, tv.p1, tv.p2, float8(100.0f)); });
+      [](const WatertightRays& w, const LeafView& tv) { return watertight8(w, tv.v0, tv.p1, tv.p2, float8(100.0f)); });
 }
 
 /// Sphere x8: one ray against 8 spheres by the scalar stable-quadratic routine the backends

@@ -4,6 +4,7 @@
 
 #include <sys/mman.h>
 
+#include <bit>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
@@ -15,14 +16,14 @@
 
 namespace rp::bvh8 {
 
-/// Child reference in a node: >= 0 an inner node index; < 0 a leaf, ~(first_slot << 3 |
-/// (count - 1)): `count` (1..8) primitives in slots [first_slot, first_slot + count), all in
-/// one Tri8 block; kEmpty a missing child (its box is empty: lo = +inf, hi = -inf, so no slab
-/// test ever hits it). Slots stay below 2^28 - 1, so a leaf never encodes as kEmpty.
+/// Child reference in a node: >= 0 an inner node index; < 0 a leaf, ~(first << 3 |
+/// (count - 1)): `count` (1..8) primitives, the tree's primitives [first, first + count) (see
+/// Bvh8::leaf); kEmpty a missing child (its box is empty: lo = +inf, hi = -inf, so no slab
+/// test ever hits it). `first` stays below 2^28 - 1, so a leaf never encodes as kEmpty.
 inline constexpr int32_t kEmpty = std::numeric_limits<int32_t>::min();
-inline constexpr uint32_t kMaxSlots = (1u << 28) - 1;
+inline constexpr uint32_t kMaxPrims = (1u << 28) - 1;
 inline bool is_leaf(int32_t c) { return c < 0 && c != kEmpty; }
-inline int32_t leaf_ref(uint32_t first_slot, uint32_t count) { return ~int32_t(first_slot << 3 | (count - 1)); }
+inline int32_t leaf_ref(uint32_t first, uint32_t count) { return ~int32_t(first << 3 | (count - 1)); }
 inline uint32_t leaf_first(int32_t c) { return uint32_t(~c) >> 3; }
 inline uint32_t leaf_count(int32_t c) { return (uint32_t(~c) & 7u) + 1; }
 
@@ -34,16 +35,20 @@ struct alignas(32) Bvh8Node {
 };
 static_assert(sizeof(Bvh8Node) == 224);
 
-/// Eight primitive slots in SoA and the scene prim_id of each lane (kInvalidId for padding).
+/// A leaf of n primitives (1..8) is 10 rows of n values, 40 bytes per primitive and no
+/// padding: v0_x, v0_y, v0_z, p1_x, p1_y, p1_z, p2_x, p2_y, p2_z (floats), then the scene
+/// prim_ids (uint32 bits). Tri8 spells out the layout for n = 8.
 /// What p1 and p2 hold depends on the triangle test the tree is built for (TriangleLayout):
 /// - edges (Möller–Trumbore): v0, p1 = e1 = v0 - v1, p2 = e2 = v2 - v0, computed once in
 ///   float exactly as the scalar rp::intersect_triangle_mt_normal does (the normal e2 x e1 is
-///   recomputed per test, which keeps a slot at 40 bytes);
+///   recomputed per test, which keeps a primitive at 40 bytes);
 /// - vertices (watertight): v0, p1 = v1, p2 = v2 as the mesh stores them, because the
 ///   watertight test needs the very vertex values its neighbours share.
-/// An analytic primitive (sphere, quadric, polygon) takes a slot with NaN coordinates, which
-/// neither triangle test ever hits, and is tested by its scalar routine. 320 bytes: 40 per
-/// slot. Slot s lives in block s / 8, lane s % 8.
+/// An analytic primitive (sphere, quadric, polygon) has NaN coordinates, which neither
+/// triangle test ever hits, and is tested by its scalar routine. Leaves are stored back to
+/// back in tree order, so a leaf's first primitive also gives its offset (Bvh8::leaf).
+inline constexpr uint32_t kLeafRows = 10;
+inline constexpr uint32_t kLeafPad = 8;  ///< floats after the last leaf, so 8-wide row loads stay in the array
 struct alignas(32) Tri8 {
   float v0_x[8], v0_y[8], v0_z[8];
   float p1_x[8], p1_y[8], p1_z[8];
@@ -92,25 +97,31 @@ struct BuildOptions {
 /// Figures of a built tree.
 struct BuildStats {
   uint32_t nodes = 0, leaves = 0, depth = 0;  ///< depth: 8-wide levels, root = 1
-  uint32_t slots = 0;                         ///< primitive slots, padding included (8 per block)
   uint32_t prims = 0;                         ///< primitives in the tree (degenerate triangles excluded)
   double sah_cost = 0;   ///< SAH cost of the 8-wide tree, the one its collapse minimises: sum over
                          ///< nodes of area / root area (traversal cost 1) + sum over leaves of
                          ///< area / root area * (0.5 per block test + 0.1 per primitive)
-  size_t bytes = 0;      ///< nodes + primitive blocks
+  size_t bytes = 0;      ///< nodes + leaves
   double seconds = 0;    ///< wall time of build()
 };
 
 /// The built tree. Immutable after build().
 struct Bvh8 {
   std::vector<Bvh8Node, HugePageAllocator<Bvh8Node>> nodes;  ///< nodes[0] is the root when !empty()
-  std::vector<Tri8, HugePageAllocator<Tri8>> tris;
-  uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a slot are analytic
+  /// Every leaf's rows (see Tri8), leaf after leaf, then kLeafPad zeros.
+  std::vector<float, HugePageAllocator<float>> leaf_data;
+  uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a leaf are analytic
   bool has_analytic = false;             ///< any analytic primitive in the tree
   Box3f bounds;
   BuildStats stats;
 
   bool empty() const { return nodes.empty(); }
+  /// The rows of the leaf whose first primitive is `first`.
+  const float* leaf(uint32_t first) const { return leaf_data.data() + size_t(first) * kLeafRows; }
+  /// prim_id of primitive i of the leaf `ref`.
+  uint32_t prim_id(int32_t ref, uint32_t i) const {
+    return std::bit_cast<uint32_t>(leaf(leaf_first(ref))[9 * leaf_count(ref) + i]);
+  }
 };
 
 /// Builds the tree over every non-degenerate triangle and every sphere, quadric and polygon

@@ -6,6 +6,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstddef>
 #include <limits>
@@ -391,73 +392,57 @@ class Collapser {
     return int32_t(index);
   }
 
-  /// A leaf's primitives go to one block (first fit among the last few blocks that still
-  /// have room, else a new block), so the single-ray test of a leaf is one 8-wide
-  /// Möller–Trumbore.
+  /// A leaf takes the next `count` primitives of the leaf array, in tree order, so that a
+  /// leaf is one contiguous run of rows and the test of a leaf is one 8-wide kernel call.
   int32_t emit_leaf(const BuildNode& bn) {
-    const uint32_t count = bn.end - bn.begin;
-    size_t k = open_.size();
-    while (k > 0 && used_[open_[k - 1]] + count > 8) --k;
-    uint32_t block;
-    if (k > 0) {
-      block = open_[k - 1];
-    } else {
-      block = uint32_t(out_.tris.size());
-      RP_CHECK(uint64_t(block) * 8 + 8 <= kMaxSlots, "bvh8: more than ", kMaxSlots, " primitive slots");
-      out_.tris.emplace_back();
-      Tri8& b = out_.tris.back();
-      std::fill_n(&b.v0_x[0], 9 * 8, std::numeric_limits<float>::quiet_NaN());
-      std::fill_n(b.prim_id, 8, kInvalidId);
-      used_.push_back(0);
-      open_.push_back(block);
-      if (open_.size() > kOpenBlocks) open_.erase(open_.begin());
-    }
-    const uint32_t first = block * 8 + used_[block];
-    used_[block] += count;
+    const uint32_t count = bn.end - bn.begin, first = next_;
+    RP_CHECK(uint64_t(first) + count <= kMaxPrims, "bvh8: more than ", kMaxPrims, " primitives");
+    next_ += count;
     leaves_.push_back({first, bn.begin, count});
     ++out_.stats.leaves;
     return leaf_ref(first, count);
   }
 
  public:
-  /// Writes every leaf's primitives into the slots emit_leaf gave them, in parallel (each
-  /// slot is written once, so the bytes do not depend on the thread count).
+  /// Writes every leaf's rows where emit_leaf placed them, in parallel (each value is written
+  /// once, so the bytes do not depend on the thread count).
   void fill() {
+    out_.leaf_data.assign(size_t(next_) * kLeafRows + kLeafPad, 0.0f);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i)
-        for (uint32_t k = 0; k < leaves_[i].count; ++k) store(leaves_[i].slot + k, refs_[leaves_[i].ref + k].prim_id);
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Leaf& leaf = leaves_[i];
+        float* rows = out_.leaf_data.data() + size_t(leaf.first) * kLeafRows;
+        for (uint32_t k = 0; k < leaf.count; ++k) store(rows, leaf.count, k, refs_[leaf.ref + k].prim_id);
+      }
     });
   }
 
  private:
-
-  /// Slot `slot` holds `prim_id`: a triangle's v0 and, by the layout, its edges or its other
-  /// two vertices; or an analytic primitive's id with NaN coordinates (the block's fill).
-  void store(uint32_t slot, uint32_t prim_id) {
-    Tri8& b = out_.tris[slot / 8];
-    b.prim_id[slot % 8] = prim_id;
-    if (prim_id >= scene_.triangle_count()) return;
-    const auto ref = scene_.locate(prim_id);
-    const TriangleMesh& m = scene_.meshes()[ref.shape];
-    const Vec3f v0 = m.vertex(ref.local, 0), v1 = m.vertex(ref.local, 1), v2 = m.vertex(ref.local, 2);
-    const bool edges = layout_ == TriangleLayout::edges;
-    const Vec3f p1 = edges ? v0 - v1 : v1;  // e1, e2 as intersect_triangle_mt_normal computes them
-    const Vec3f p2 = edges ? v2 - v0 : v2;
-    const uint32_t l = slot % 8;
-    b.v0_x[l] = v0.x; b.v0_y[l] = v0.y; b.v0_z[l] = v0.z;
-    b.p1_x[l] = p1.x; b.p1_y[l] = p1.y; b.p1_z[l] = p1.z;
-    b.p2_x[l] = p2.x; b.p2_y[l] = p2.y; b.p2_z[l] = p2.z;
+  /// Primitive k of a leaf of n at `rows` is `prim_id`: a triangle's v0 and, by the layout,
+  /// its edges or its other two vertices; or an analytic primitive with NaN coordinates.
+  void store(float* rows, uint32_t n, uint32_t k, uint32_t prim_id) const {
+    rows[9 * n + k] = std::bit_cast<float>(prim_id);
+    Vec3f v0(std::numeric_limits<float>::quiet_NaN()), p1 = v0, p2 = v0;
+    if (prim_id < scene_.triangle_count()) {
+      const auto ref = scene_.locate(prim_id);
+      const TriangleMesh& m = scene_.meshes()[ref.shape];
+      const Vec3f v1 = m.vertex(ref.local, 1), v2 = m.vertex(ref.local, 2);
+      v0 = m.vertex(ref.local, 0);
+      const bool edges = layout_ == TriangleLayout::edges;
+      p1 = edges ? v0 - v1 : v1;  // e1, e2 as intersect_triangle_mt_normal computes them
+      p2 = edges ? v2 - v0 : v2;
+    }
+    const float values[9] = {v0.x, v0.y, v0.z, p1.x, p1.y, p1.z, p2.x, p2.y, p2.z};
+    for (uint32_t row = 0; row < 9; ++row) rows[row * n + k] = values[row];
   }
 
   const Scene& scene_;
   const std::vector<PrimRef>& refs_;
   Bvh8& out_;
   TriangleLayout layout_;
-  static constexpr size_t kOpenBlocks = 16; ///< blocks with room that later leaves may share
-  std::vector<uint32_t> open_;              ///< the last kOpenBlocks blocks opened
-  std::vector<uint32_t> used_;              ///< slots taken per block
-  struct Leaf { uint32_t slot, ref, count; };
-  std::vector<Leaf> leaves_;                ///< placed by emit_leaf, written by fill
+  uint32_t next_ = 0;         ///< primitives placed so far
+  struct Leaf { uint32_t first, ref, count; };
+  std::vector<Leaf> leaves_;  ///< placed by emit_leaf, written by fill
 };
 
 /// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
@@ -528,9 +513,8 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   out.first_analytic = scene.sphere_base();
   out.has_analytic = scene.plane_base() > scene.sphere_base();
   out.stats.nodes = uint32_t(out.nodes.size());
-  out.stats.slots = uint32_t(out.tris.size() * 8);
   out.stats.sah_cost = sah_cost(out);
-  out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.tris.size() * sizeof(Tri8);
+  out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.leaf_data.size() * sizeof(float);
   out.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

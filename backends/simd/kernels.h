@@ -203,7 +203,7 @@ struct Mt8 {
 /// by lane exactly as that scalar routine: the same FMAs in the same order, so each lane has
 /// its bits. Edge tests compare the unnormalised U, V against |D.Ng| before any division, so
 /// the decisions at shared edges are those of Embree's default intersector. Takes the
-/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (Tri8's layout). Serves one ray against 8
+/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (the leaf layout, see Tri8). Serves one ray against 8
 /// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
 /// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite.
 inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
@@ -224,13 +224,27 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
   return {hit, t, u * inv, v * inv};
 }
 
-/// The slots of block b as Vec3x8: v0, p1, p2 (edges or vertices, see Tri8).
-struct Tri8View {
+/// The lane mask of the first n lanes (n = 0..8).
+inline __m256i first_lanes(uint32_t n) {
+  alignas(32) static constexpr int32_t kOnes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kOnes + 8 - n));
+}
+
+/// The primitives of a leaf of n (rows at `rows`, see Tri8) as Vec3x8: v0, p1, p2 (edges or
+/// vertices). Each row is one unaligned 8-wide load, which for n < 8 reads on into the next
+/// row or leaf (Bvh8::leaf_data ends in kLeafPad floats for the last one); those lanes are
+/// then set to NaN, like an analytic primitive's, so no triangle test hits them or sends them
+/// to a fallback. (Masked loads cost 10% of the single-ray speed on bunny.)
+struct LeafView {
   Vec3x8 v0, p1, p2;
-  explicit Tri8View(const Tri8& b)
-      : v0(Vec3x8::load(b.v0_x, b.v0_y, b.v0_z)),
-        p1(Vec3x8::load(b.p1_x, b.p1_y, b.p1_z)),
-        p2(Vec3x8::load(b.p2_x, b.p2_y, b.p2_z)) {}
+  LeafView(const float* rows, uint32_t n) {
+    const __m256 past = _mm256_castsi256_ps(~first_lanes(n));  // all ones: a NaN
+    auto row = [&](uint32_t i) { return float8(_mm256_or_ps(_mm256_loadu_ps(rows + i * n), past)); };
+    v0 = {row(0), row(1), row(2)};
+    p1 = {row(3), row(4), row(5)};
+    p2 = {row(6), row(7), row(8)};
+  }
+  explicit LeafView(const Tri8& b) : LeafView(b.v0_x, 8) {}
 };
 
 /// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8

@@ -24,30 +24,31 @@ constexpr int kStackSize = 1024;
 /// A packet entry with at most this many active lanes continues as single rays.
 constexpr int kSingleRayLanes = 2;
 
-/// Lane bits [lo, hi) of a block.
-inline uint32_t lane_range(uint32_t lo, uint32_t hi) { return ((1u << hi) - 1u) & ~((1u << lo) - 1u); }
+/// Primitive k of a leaf of n: rows `row`, `row` + 1, `row` + 2 (see Tri8), in every lane.
+inline Vec3x8 row3(const float* rows, uint32_t n, uint32_t row, uint32_t k) {
+  return Vec3x8(Vec3f{rows[row * n + k], rows[(row + 1) * n + k], rows[(row + 2) * n + k]});
+}
 
 /// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
-/// edge layout. Single: one ray against a block's 8 slots; Packet: the 8 rays of a packet
-/// against one slot.
+/// edge layout. Single: one ray against a leaf's primitives; Packet: the 8 rays of a packet
+/// against one primitive.
 struct MtKernel {
   static constexpr TriangleLayout kLayout = TriangleLayout::edges;
   struct Single {
     Vec3x8 org, dir;
     float8 tnear;
     explicit Single(const Ray& r) : org(r.org), dir(r.dir), tnear(r.tnear) {}
-    Mt8 block(const Tri8& tb, const float8& tfar) const {
-      const Tri8View tv(tb);
-      return moller_trumbore8(org, dir, tv.v0, tv.p1, tv.p2, tnear, tfar);
+    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return moller_trumbore8(org, dir, lv.v0, lv.p1, lv.p2, tnear, tfar);
     }
   };
   struct Packet {
     const RayPacket& p;
     Packet(const RayPacket& packet, std::span<const Ray>) : p(packet) {}
-    Mt8 slot(const Tri8& tb, uint32_t l, const float8& tfar) const {
-      return moller_trumbore8(p.org, p.dir, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                              Vec3x8(Vec3f{tb.p1_x[l], tb.p1_y[l], tb.p1_z[l]}),
-                              Vec3x8(Vec3f{tb.p2_x[l], tb.p2_y[l], tb.p2_z[l]}), p.tnear, tfar);
+    Mt8 slot(const float* rows, uint32_t n, uint32_t k, const float8& tfar) const {
+      return moller_trumbore8(p.org, p.dir, row3(rows, n, 0, k), row3(rows, n, 3, k), row3(rows, n, 6, k), p.tnear,
+                              tfar);
     }
   };
 };
@@ -59,18 +60,16 @@ struct WatertightKernel {
   struct Single {
     WatertightRays r;
     explicit Single(const Ray& ray) : r(&ray, 1) {}
-    Mt8 block(const Tri8& tb, const float8& tfar) const {
-      const Tri8View tv(tb);
-      return watertight8(r, tv.v0, tv.p1, tv.p2, tfar);
+    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return watertight8(r, lv.v0, lv.p1, lv.p2, tfar);
     }
   };
   struct Packet {
     WatertightRays r;
     Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
-    Mt8 slot(const Tri8& tb, uint32_t l, const float8& tfar) const {
-      return watertight8(r, Vec3x8(Vec3f{tb.v0_x[l], tb.v0_y[l], tb.v0_z[l]}),
-                         Vec3x8(Vec3f{tb.p1_x[l], tb.p1_y[l], tb.p1_z[l]}),
-                         Vec3x8(Vec3f{tb.p2_x[l], tb.p2_y[l], tb.p2_z[l]}), tfar);
+    Mt8 slot(const float* rows, uint32_t n, uint32_t k, const float8& tfar) const {
+      return watertight8(r, row3(rows, n, 0, k), row3(rows, n, 3, k), row3(rows, n, 6, k), tfar);
     }
   };
 };
@@ -89,7 +88,7 @@ class SimdBackend final : public Backend {
     info_.bytes = bvh_.stats.bytes;
     info_.stats = {{"nodes", double(bvh_.stats.nodes)},  {"leaves", double(bvh_.stats.leaves)},
                    {"depth", double(bvh_.stats.depth)},  {"sah_cost", bvh_.stats.sah_cost},
-                   {"prims", double(bvh_.stats.prims)},  {"slots", double(bvh_.stats.slots)}};
+                   {"prims", double(bvh_.stats.prims)}};
   }
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
@@ -120,22 +119,29 @@ class SimdBackend final : public Backend {
   void prefetch_children(const Bvh8Node& n, uint32_t bits) const noexcept {
     for (; bits; bits &= bits - 1) {
       const int32_t c = n.child[std::countr_zero(bits)];
-      const char* p = is_leaf(c) ? reinterpret_cast<const char*>(&bvh_.tris[leaf_first(c) / 8])
-                                 : reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
-      _mm_prefetch(p, _MM_HINT_T0);
-      _mm_prefetch(p + 64, _MM_HINT_T0);
-      _mm_prefetch(p + 128, _MM_HINT_T0);
-      _mm_prefetch(p + 192, _MM_HINT_T0);
+      if (is_leaf(c)) {  // 40 bytes per primitive, from anywhere in a line
+        const char* p = reinterpret_cast<const char*>(bvh_.leaf(leaf_first(c)));
+        const uint32_t bytes = 40 * leaf_count(c);
+        for (uint32_t off = 0; off < bytes; off += 64) _mm_prefetch(p + off, _MM_HINT_T0);
+        _mm_prefetch(p + bytes - 1, _MM_HINT_T0);
+      } else {
+        const char* p = reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
+        _mm_prefetch(p, _MM_HINT_T0);
+        _mm_prefetch(p + 64, _MM_HINT_T0);
+        _mm_prefetch(p + 128, _MM_HINT_T0);
+        _mm_prefetch(p + 192, _MM_HINT_T0);
+      }
     }
   }
 
-  /// The lanes of block `tb` holding an analytic primitive (prim_id >= first_analytic,
-  /// padding included), in one unsigned 8-wide compare.
-  uint32_t analytic_lanes(const Tri8& tb) const noexcept {
-    const __m256i ids = _mm256_load_si256(reinterpret_cast<const __m256i*>(tb.prim_id));
+  /// The primitives of a leaf of n (at `rows`) that are analytic (prim_id >= first_analytic),
+  /// in one unsigned 8-wide compare.
+  uint32_t analytic_lanes(const float* rows, uint32_t n) const noexcept {
+    const __m256i ids = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows + 9 * n));  // lanes >= n: masked below
     const __m256i at_least = _mm256_cmpeq_epi32(_mm256_max_epu32(ids, _mm256_set1_epi32(int32_t(bvh_.first_analytic))), ids);
-    return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(at_least)));
+    return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(at_least))) & ((1u << n) - 1);
   }
+  static uint32_t prim_at(const float* rows, uint32_t n, uint32_t k) { return std::bit_cast<uint32_t>(rows[9 * n + k]); }
 
   /// Closest hit of one ray.
   Hit intersect_single(const Ray& r) const noexcept {
@@ -197,13 +203,11 @@ class SimdBackend final : public Backend {
             continue;
           }
         } else {
-          const uint32_t first = leaf_first(ref), lo = first % 8;
-          const uint32_t in_leaf = lane_range(lo, lo + leaf_count(ref));
-          const Tri8& tb = bvh_.tris[first / 8];
-          const Mt8 h = kr.block(tb, float8(tfar));
-          const uint32_t bits = movemask(h.hit) & in_leaf;
+          const uint32_t n = leaf_count(ref);
+          const float* rows = bvh_.leaf(leaf_first(ref));
+          const Mt8 h = kr.block(rows, n, float8(tfar));
+          const uint32_t bits = movemask(h.hit) & ((1u << n) - 1);
           if (bits) {
-            // The minimum over this leaf's lanes only: the block may hold other leaves too.
             const float tmin = simd::reduce_min(
                 xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
             const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
@@ -212,11 +216,11 @@ class SimdBackend final : public Backend {
             h.u.store_aligned(u);
             h.v.store_aligned(v);
             tfar = tmin;
-            best = {tmin, tb.prim_id[lane], u[lane], v[lane]};
+            best = {tmin, prim_at(rows, n, uint32_t(lane)), u[lane], v[lane]};
           }
           if (bvh_.has_analytic)
-            for (uint32_t a = analytic_lanes(tb) & in_leaf; a; a &= a - 1) {
-              const uint32_t id = tb.prim_id[std::countr_zero(a)];
+            for (uint32_t a = analytic_lanes(rows, n); a; a &= a - 1) {
+              const uint32_t id = prim_at(rows, n, uint32_t(std::countr_zero(a)));
               Ray rr = r;
               rr.tfar = tfar;
               const Intersection<float> ah = scene_.intersect_analytic(id, rr);
@@ -261,13 +265,12 @@ class SimdBackend final : public Backend {
           stack[sp++] = n.child[std::countr_zero(bits)];
         continue;
       }
-      const uint32_t first = leaf_first(ref), lo = first % 8, count = leaf_count(ref);
-      const Tri8& tb = bvh_.tris[first / 8];
-      if (movemask(kr.block(tb, tfar8).hit) & lane_range(lo, lo + count))
-        return true;
+      const uint32_t n = leaf_count(ref);
+      const float* rows = bvh_.leaf(leaf_first(ref));
+      if (movemask(kr.block(rows, n, tfar8).hit) & ((1u << n) - 1)) return true;
       if (bvh_.has_analytic)
-        for (uint32_t a = analytic_lanes(tb) & lane_range(lo, lo + count); a; a &= a - 1)
-          if (scene_.intersect_analytic(tb.prim_id[std::countr_zero(a)], r).hit) return true;
+        for (uint32_t a = analytic_lanes(rows, n); a; a &= a - 1)
+          if (scene_.intersect_analytic(prim_at(rows, n, uint32_t(std::countr_zero(a))), r).hit) return true;
     }
     return false;
   }
@@ -428,15 +431,15 @@ class SimdBackend final : public Backend {
           continue;
         }
         const mask8 lanes = simd::mask_from_bits(e.mask);
-        const uint32_t first = leaf_first(e.ref);
-        for (uint32_t s = first; s < first + leaf_count(e.ref); ++s) {
-          const Tri8& tb = bvh_.tris[s / 8];
-          const uint32_t l = s % 8, id = tb.prim_id[l];
+        const uint32_t n = leaf_count(e.ref);
+        const float* rows = bvh_.leaf(leaf_first(e.ref));
+        for (uint32_t k = 0; k < n; ++k) {
+          const uint32_t id = prim_at(rows, n, k);
           if (id >= bvh_.first_analytic) {
             analytic_packet(id, rays, e.mask, tfar, u, v, prim);
             continue;
           }
-          const Mt8 h = ps.kp.slot(tb, l, tfar);
+          const Mt8 h = ps.kp.slot(rows, n, k, tfar);
           const mask8 upd = h.hit & lanes;
           const uint32_t bits = movemask(upd);
           if (!bits) continue;
@@ -492,16 +495,16 @@ class SimdBackend final : public Backend {
           for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
           continue;
         }
-        const uint32_t first = leaf_first(e.ref);
-        for (uint32_t s = first; s < first + leaf_count(e.ref) && e.mask; ++s) {
-          const Tri8& tb = bvh_.tris[s / 8];
-          const uint32_t l = s % 8, id = tb.prim_id[l];
+        const uint32_t n = leaf_count(e.ref);
+        const float* rows = bvh_.leaf(leaf_first(e.ref));
+        for (uint32_t k = 0; k < n && e.mask; ++k) {
+          const uint32_t id = prim_at(rows, n, k);
           uint32_t hit = 0;
           if (id >= bvh_.first_analytic) {
             for (uint32_t b = e.mask; b; b &= b - 1)
               if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
           } else {
-            const Mt8 h = ps.kp.slot(tb, l, tfar);
+            const Mt8 h = ps.kp.slot(rows, n, k, tfar);
             hit = movemask(h.hit) & e.mask;
           }
           done |= hit;

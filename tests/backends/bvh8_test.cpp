@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <random>
@@ -43,7 +44,7 @@ Scene soup(uint32_t seed, int count, bool with_degenerate) {
 /// prim_ids of a leaf.
 std::vector<uint32_t> leaf_prims(const Bvh8& t, int32_t ref) {
   std::vector<uint32_t> ids;
-  for (uint32_t s = leaf_first(ref); s < leaf_first(ref) + leaf_count(ref); ++s) ids.push_back(t.tris[s / 8].prim_id[s % 8]);
+  for (uint32_t i = 0; i < leaf_count(ref); ++i) ids.push_back(t.prim_id(ref, i));
   return ids;
 }
 
@@ -79,15 +80,20 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
     }
     EXPECT_EQ(degenerate, 60u);
     EXPECT_EQ(seen.size(), size_t(t.stats.prims));
+    // Leaves lie back to back, without padding: their ranges tile [0, prims).
+    std::vector<std::pair<uint32_t, uint32_t>> ranges;
     for (int32_t ref : refs) {
       EXPECT_LE(leaf_count(ref), 8u);
-      EXPECT_EQ(leaf_first(ref) / 8, (leaf_first(ref) + leaf_count(ref) - 1) / 8) << "a leaf straddles two blocks";
+      ranges.emplace_back(leaf_first(ref), leaf_count(ref));
     }
-    // Padding slots hold no primitive; used slots hold each primitive once (checked above).
-    size_t used = 0;
-    for (const Tri8& b : t.tris)
-      for (uint32_t id : b.prim_id) used += id != kInvalidId;
-    EXPECT_EQ(used, seen.size());
+    std::sort(ranges.begin(), ranges.end());
+    uint32_t next = 0;
+    for (const auto& [first, count] : ranges) {
+      EXPECT_EQ(first, next);
+      next = first + count;
+    }
+    EXPECT_EQ(next, t.stats.prims);
+    EXPECT_EQ(t.leaf_data.size(), size_t(t.stats.prims) * kLeafRows + kLeafPad);
   }
 }
 
@@ -121,7 +127,7 @@ TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
   EXPECT_GT(t.stats.nodes, 1u);
   EXPECT_GT(t.stats.depth, 1u);
   EXPECT_GT(t.stats.sah_cost, 1.0);
-  EXPECT_EQ(t.stats.bytes, t.nodes.size() * sizeof(Bvh8Node) + t.tris.size() * sizeof(Tri8));
+  EXPECT_EQ(t.stats.bytes, t.nodes.size() * sizeof(Bvh8Node) + t.leaf_data.size() * sizeof(float));
 }
 
 TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
@@ -132,9 +138,9 @@ TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
   };
   const Bvh8 a = run(1), b = run(2);
   ASSERT_EQ(a.nodes.size(), b.nodes.size());
-  ASSERT_EQ(a.tris.size(), b.tris.size());
+  ASSERT_EQ(a.leaf_data.size(), b.leaf_data.size());
   EXPECT_EQ(0, std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(Bvh8Node)));
-  EXPECT_EQ(0, std::memcmp(a.tris.data(), b.tris.data(), a.tris.size() * sizeof(Tri8)));
+  EXPECT_EQ(0, std::memcmp(a.leaf_data.data(), b.leaf_data.data(), a.leaf_data.size() * sizeof(float)));
 }
 
 /// The collapse minimises the SAH cost, so no node keeps a child node whose children it has
@@ -247,34 +253,49 @@ void expect_same_bits(const Intersection<float>& a, const Intersection<float>& b
   EXPECT_EQ(std::bit_cast<uint32_t>(a.v), std::bit_cast<uint32_t>(b.v));
 }
 
-/// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of use.
+/// A leaf of n primitives in the tree's layout (see Tri8): v0 and p1, p2 per primitive.
+std::vector<float> leaf_rows(const Vec3f* v0, const Vec3f* p1, const Vec3f* p2, uint32_t n) {
+  std::vector<float> rows(kLeafRows * n + kLeafPad, 1.0f);  // what follows a leaf: any floats
+  for (uint32_t l = 0; l < n; ++l) {
+    const float values[9] = {v0[l].x, v0[l].y, v0[l].z, p1[l].x, p1[l].y, p1[l].z, p2[l].x, p2[l].y, p2[l].z};
+    for (uint32_t row = 0; row < 9; ++row) rows[row * n + l] = values[row];
+    rows[9 * n + l] = std::bit_cast<float>(l);
+  }
+  return rows;
+}
+
+/// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of
+/// use, on leaves of 1..8 primitives; the lanes past a leaf never hit.
 TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-2.0f, 2.0f);
   auto v3 = [&] { return Vec3f{u(rng), u(rng), u(rng)}; };
   int hits = 0;
-  for (int iter = 0; iter < 4000; ++iter) {
-    Tri8 block{};
-    Vec3f v0[8], v1[8], v2[8];
+  for (int iter = 0; iter < 8000; ++iter) {
+    const uint32_t n = 1 + uint32_t(iter) % 8;
+    Vec3f v0[8], v1[8], v2[8], e1[8], e2[8];
     for (int l = 0; l < 8; ++l) {
       v0[l] = v3();
       v1[l] = v0[l] + v3() * 0.5f;
       v2[l] = v0[l] + v3() * 0.5f;
       if (iter % 7 == 0 && l == 3) v2[l] = v1[l];  // degenerate lane
-      const Vec3f e1 = v0[l] - v1[l], e2 = v2[l] - v0[l];
-      block.v0_x[l] = v0[l].x; block.v0_y[l] = v0[l].y; block.v0_z[l] = v0[l].z;
-      block.p1_x[l] = e1.x; block.p1_y[l] = e1.y; block.p1_z[l] = e1.z;
-      block.p2_x[l] = e2.x; block.p2_y[l] = e2.y; block.p2_z[l] = e2.z;
+      e1[l] = v0[l] - v1[l];
+      e2[l] = v2[l] - v0[l];
     }
+    const std::vector<float> rows = leaf_rows(v0, e1, e2, n);
     // Aimed at a random point of a random lane's plane, near or inside that triangle.
-    const int k = iter % 8;
+    const int k = iter % int(n);
     const float a = std::abs(u(rng)) * 0.6f, b = std::abs(u(rng)) * 0.6f;
     const Vec3f org = v3() * 2.0f;
     Ray r{org, 0.0f, (v0[k] + (v1[k] - v0[k]) * a + (v2[k] - v0[k]) * b) - org, iter % 3 ? 100.0f : 0.7f};
     if (iter % 11 == 0) r.dir.y = -0.0f;
-    const Tri8View tv(block);
-    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(r.tnear), float8(r.tfar));
+    const LeafView lv(rows.data(), n);
+    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), lv.v0, lv.p1, lv.p2, float8(r.tnear), float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
+      if (l >= int(n)) {
+        ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
+        continue;
+      }
       const Intersection<float> s = intersect_triangle_mt_normal(r, v0[l], v1[l], v2[l]);
       ASSERT_EQ(lane_of(h, l).hit, s.hit) << "iter " << iter << " lane " << l;
       if (!s.hit) continue;
@@ -292,33 +313,35 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
 
 /// The watertight test ×8 reproduces rp::intersect_triangle_watertight bit for bit, both ways
 /// of use, including rays through vertices and edges, where an edge function is exactly 0 and
-/// the lane is decided in double precision.
+/// the lane is decided in double precision; on leaves of 1..8, whose missing lanes never hit.
 TEST(Kernels, Watertight8MatchesScalarBitForBit) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-2.0f, 2.0f);
   auto v3 = [&] { return Vec3f{u(rng), u(rng), u(rng)}; };
   int hits = 0, exact_zero = 0;
   for (int iter = 0; iter < 4000; ++iter) {
+    const uint32_t n = 8 - uint32_t(iter) % 8;
     Vec3f v[3][8];
-    Tri8 block{};
     for (int l = 0; l < 8; ++l) {
       v[0][l] = v3();
       v[1][l] = (iter % 5 == 0 && l > 0) ? v[1][l - 1] : v[0][l] + v3() * 0.5f;  // shared vertices
       v[2][l] = v[0][l] + v3() * 0.5f;
-      block.v0_x[l] = v[0][l].x; block.v0_y[l] = v[0][l].y; block.v0_z[l] = v[0][l].z;
-      block.p1_x[l] = v[1][l].x; block.p1_y[l] = v[1][l].y; block.p1_z[l] = v[1][l].z;
-      block.p2_x[l] = v[2][l].x; block.p2_y[l] = v[2][l].y; block.p2_z[l] = v[2][l].z;
     }
-    const int k = iter % 8;
+    const std::vector<float> rows = leaf_rows(v[0], v[1], v[2], n);
+    const int k = iter % int(n);
     const Vec3f org = v3() * 2.0f;
     // Aimed at a vertex, an edge midpoint or an interior point of lane k.
     const Vec3f target = iter % 3 == 0 ? v[1][k] : iter % 3 == 1 ? (v[0][k] + v[2][k]) * 0.5f
                                                                  : (v[0][k] + v[1][k] + v[2][k]) * (1.0f / 3.0f);
     Ray r{org, 0.0f, target - org, iter % 4 ? 100.0f : 0.9f};
     if (iter % 13 == 0) r.dir.x = -0.0f;
-    const Tri8View tv(block);
-    const Mt8 h = watertight8(WatertightRays(&r, 1), tv.v0, tv.p1, tv.p2, float8(r.tfar));
+    const LeafView lv(rows.data(), n);
+    const Mt8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.p1, lv.p2, float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
+      if (l >= int(n)) {
+        ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
+        continue;
+      }
       const Intersection<float> s = intersect_triangle_watertight(r, v[0][l], v[1][l], v[2][l]);
       ASSERT_EQ(lane_of(h, l).hit, s.hit) << "iter " << iter << " lane " << l;
       if (!s.hit) continue;
