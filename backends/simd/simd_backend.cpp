@@ -134,12 +134,13 @@ class SimdBackend final : public Backend {
     }
   }
 
-  /// The primitives of a leaf of n (at `rows`) that are analytic (prim_id >= first_analytic),
-  /// in one unsigned 8-wide compare.
-  uint32_t analytic_lanes(const float* rows, uint32_t n) const noexcept {
-    const __m256i ids = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(rows + 9 * n));  // lanes >= n: masked below
-    const __m256i at_least = _mm256_cmpeq_epi32(_mm256_max_epu32(ids, _mm256_set1_epi32(int32_t(bvh_.first_analytic))), ids);
-    return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(at_least))) & ((1u << n) - 1);
+  /// The prim_id of the leaf of n at `rows` when it is an analytic primitive, else
+  /// kInvalidId. The build gives an analytic primitive a leaf of its own, so a leaf is all
+  /// triangles (one 8-wide test) or one analytic primitive (its scalar routine).
+  uint32_t analytic_leaf(const float* rows, uint32_t n) const noexcept {
+    if (n != 1 || !bvh_.has_analytic) return kInvalidId;
+    const uint32_t id = prim_at(rows, 1, 0);
+    return id >= bvh_.first_analytic ? id : kInvalidId;
   }
   static uint32_t prim_at(const float* rows, uint32_t n, uint32_t k) { return std::bit_cast<uint32_t>(rows[9 * n + k]); }
 
@@ -205,30 +206,28 @@ class SimdBackend final : public Backend {
         } else {
           const uint32_t n = leaf_count(ref);
           const float* rows = bvh_.leaf(leaf_first(ref));
-          const Mt8 h = kr.block(rows, n, float8(tfar));
-          const uint32_t bits = movemask(h.hit) & ((1u << n) - 1);
-          if (bits) {
-            const float tmin = simd::reduce_min(
-                xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
-            const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
-            const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
-            alignas(32) float u[8], v[8];
-            h.u.store_aligned(u);
-            h.v.store_aligned(v);
-            tfar = tmin;
-            best = {tmin, prim_at(rows, n, uint32_t(lane)), u[lane], v[lane]};
-          }
-          if (bvh_.has_analytic)
-            for (uint32_t a = analytic_lanes(rows, n); a; a &= a - 1) {
-              const uint32_t id = prim_at(rows, n, uint32_t(std::countr_zero(a)));
-              Ray rr = r;
-              rr.tfar = tfar;
-              const Intersection<float> ah = scene_.intersect_analytic(id, rr);
-              if (ah.hit) {
-                tfar = ah.t;
-                best = {ah.t, id, ah.u, ah.v};
-              }
+          if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+            Ray rr = r;
+            rr.tfar = tfar;
+            const Intersection<float> ah = scene_.intersect_analytic(id, rr);
+            if (ah.hit) {
+              tfar = ah.t;
+              best = {ah.t, id, ah.u, ah.v};
             }
+          } else {
+            const Mt8 h = kr.block(rows, n, float8(tfar));
+            if (const uint32_t bits = movemask(h.hit) & ((1u << n) - 1)) {
+              const float tmin = simd::reduce_min(
+                  xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
+              const uint32_t at_min = movemask(h.t == float8(tmin)) & bits;
+              const int lane = 31 - std::countl_zero(at_min);  // ties: the last, as the packet path
+              alignas(32) float u[8], v[8];
+              h.u.store_aligned(u);
+              h.v.store_aligned(v);
+              tfar = tmin;
+              best = {tmin, prim_at(rows, n, uint32_t(lane)), u[lane], v[lane]};
+            }
+          }
         }
         for (;;) {  // pop, skipping subtrees entered beyond the current hit
           if (sp == 0) return;
@@ -267,10 +266,11 @@ class SimdBackend final : public Backend {
       }
       const uint32_t n = leaf_count(ref);
       const float* rows = bvh_.leaf(leaf_first(ref));
-      if (movemask(kr.block(rows, n, tfar8).hit) & ((1u << n) - 1)) return true;
-      if (bvh_.has_analytic)
-        for (uint32_t a = analytic_lanes(rows, n); a; a &= a - 1)
-          if (scene_.intersect_analytic(prim_at(rows, n, uint32_t(std::countr_zero(a))), r).hit) return true;
+      if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+        if (scene_.intersect_analytic(id, r).hit) return true;
+      } else if (movemask(kr.block(rows, n, tfar8).hit) & ((1u << n) - 1)) {
+        return true;
+      }
     }
     return false;
   }
