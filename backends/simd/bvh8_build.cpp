@@ -344,22 +344,22 @@ class Builder {
   uint32_t first_analytic_;
 };
 
-/// Lays the binary tree out as 8-wide nodes and leaf blocks, cut as Builder::plan chose
-/// (pre-order, single-threaded, so the layout is deterministic).
+/// Lays the binary tree out as 8-wide nodes and leaves, cut as Builder::plan chose
+/// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
   Collapser(const Scene& scene, const std::vector<PrimRef>& refs, Bvh8& out, TriangleLayout layout)
       : scene_(scene), refs_(refs), out_(out), layout_(layout) {}
 
   void root(const BuildNode& bn) {
+    out_.nodes.emplace_back();
+    clear(out_.nodes[0]);
     if (bn.as_leaf) {  // a one-leaf tree still needs a root node
-      out_.nodes.emplace_back();
-      clear(out_.nodes[0]);
       set_child(0, 0, bn, emit_leaf(bn));
       out_.stats.depth = 1;
       return;
     }
-    collapse(bn, 1);
+    collapse(0, bn, 1);
   }
 
  private:
@@ -390,22 +390,31 @@ class Collapser {
     gather(*bn.right, i - bn.split[i - 1], out);
   }
 
-  /// Emits the 8-wide node of an inner `bn` (as_leaf false): its node_width children as the
-  /// plan cut them, then their subtrees, depth-first.
-  int32_t collapse(const BuildNode& bn, uint32_t depth) {
+  /// Fills node `index` with the children of an inner `bn` (as_leaf false), as the plan cut
+  /// them, then descends. A node's leaves are placed one after another, and so are its inner
+  /// children's nodes (as Embree allocates a node's children together): what one ray visits
+  /// next is often adjacent in memory.
+  void collapse(size_t index, const BuildNode& bn, uint32_t depth) {
     out_.stats.depth = std::max(out_.stats.depth, depth);
     std::vector<const BuildNode*> kids;
     const int width = bn.node_width, k = bn.node_split;
     gather(*bn.left, k, kids);
     gather(*bn.right, width - k, kids);
-    const size_t index = out_.nodes.size();
-    out_.nodes.emplace_back();
-    clear(out_.nodes[index]);
+    std::vector<size_t> inner;
     for (size_t c = 0; c < kids.size(); ++c) {
-      const int32_t ref = kids[c]->as_leaf ? emit_leaf(*kids[c]) : collapse(*kids[c], depth + 1);
-      set_child(index, int(c), *kids[c], ref);  // nodes may have grown: index, not a reference
+      if (kids[c]->as_leaf) {
+        set_child(index, int(c), *kids[c], emit_leaf(*kids[c]));
+      } else {
+        inner.push_back(c);
+      }
     }
-    return int32_t(index);
+    const size_t first = out_.nodes.size();
+    for (size_t i = 0; i < inner.size(); ++i) {
+      out_.nodes.emplace_back();
+      clear(out_.nodes.back());
+      set_child(index, int(inner[i]), *kids[inner[i]], int32_t(first + i));
+    }
+    for (size_t i = 0; i < inner.size(); ++i) collapse(first + i, *kids[inner[i]], depth + 1);
   }
 
   /// A leaf takes the next `count` primitives of the leaf array, in tree order, so that a
