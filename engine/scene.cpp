@@ -154,7 +154,7 @@ Intersection<float> Scene::intersect_analytic(uint32_t id, const Ray& ray) const
   }
 }
 
-void Scene::intersect_planes(const Ray& ray, Hit& hit) const {
+void Scene::intersect_planes_in_order(const Ray& ray, Hit& hit) const {
   for (uint32_t k = 0; k < planes_.size(); ++k) {
     Ray r = ray;
     r.tfar = std::min(ray.tfar, hit.t);
@@ -163,7 +163,7 @@ void Scene::intersect_planes(const Ray& ray, Hit& hit) const {
   }
 }
 
-bool Scene::occluded_by_planes(const Ray& ray) const {
+bool Scene::occluded_by_any_plane(const Ray& ray) const {
   for (const Plane& p : planes_)
     if (intersect_plane(ray, p.normal, p.d).hit) return true;
   return false;

@@ -176,9 +176,12 @@ class Scene {
   Intersection<float> intersect_analytic(uint32_t prim_id, const Ray& ray) const;
   /// Lets the unbounded planes, which live beside every backend's structure, take `hit`
   /// when one is at least as close (t in [tnear, min(tfar, hit.t)]); planes in index order.
-  void intersect_planes(const Ray& ray, Hit& hit) const;
+  /// Inline so that the per-ray call costs nothing in a scene without planes.
+  void intersect_planes(const Ray& ray, Hit& hit) const {
+    if (!planes_.empty()) intersect_planes_in_order(ray, hit);
+  }
   /// True when any plane is hit within [tnear, tfar].
-  bool occluded_by_planes(const Ray& ray) const;
+  bool occluded_by_planes(const Ray& ray) const { return !planes_.empty() && occluded_by_any_plane(ray); }
   /// Position, normals and material of a hit of `ray` (hit.hit() must be true).
   SurfacePoint surface(const Ray& ray, const Hit& hit) const;
   /// Number of triangles with zero area (kept: they never produce hits).
@@ -187,6 +190,9 @@ class Scene {
   size_t bytes() const;
 
  private:
+  void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
+  bool occluded_by_any_plane(const Ray& ray) const;
+
   std::vector<Material> materials_;
   std::vector<TriangleMesh> meshes_;
   std::vector<uint32_t> mesh_base_;

@@ -454,13 +454,14 @@ class SimdBackend final : public Backend {
     tfar.store_aligned(tf);
     u.store_aligned(uu);
     v.store_aligned(vv);
-    for (size_t i = 0; i < rays.size(); ++i) {
-      Hit h;
-      if (active >> i & 1u) {
-        if (prim[i] != kInvalidId) h = {tf[i], prim[i], uu[i], vv[i]};
-        scene_.intersect_planes(rays[i], h);
-      }
-      hits[i] = h;
+    for (size_t i = 0; i < rays.size(); ++i) {  // field by field: no 16-byte reload of a Hit built in pieces
+      Hit& h = hits[i];
+      const bool hit = prim[i] != kInvalidId;  // an inactive lane never gets a primitive
+      h.t = hit ? tf[i] : std::numeric_limits<float>::infinity();
+      h.prim_id = prim[i];
+      h.u = hit ? uu[i] : 0.0f;
+      h.v = hit ? vv[i] : 0.0f;
+      if (active >> i & 1u) scene_.intersect_planes(rays[i], h);
     }
   }
 
