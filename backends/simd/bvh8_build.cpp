@@ -6,11 +6,15 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cstddef>
 #include <limits>
 #include <memory>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "backends/simd/bvh8.h"
 #include "engine/error.h"
@@ -21,12 +25,30 @@ namespace {
 
 /// A primitive's box and the point the splits sort it by (triangle centroid, the seeds'
 /// "centre of mass"; box centre for analytic primitives).
+/// Trivial, so that the build's array of them is allocated without a serial zeroing pass and
+/// first touched by the parallel loop that fills it (see RefArray).
 struct PrimRef {
-  Box3f box;
-  Vec3f centroid;
+  float lo[3], hi[3], centroid[3];
   uint32_t prim_id;
+  static PrimRef make(const Box3f& box, const Vec3f& c, uint32_t id) {
+    return {{box.lo.x, box.lo.y, box.lo.z}, {box.hi.x, box.hi.y, box.hi.z}, {c.x, c.y, c.z}, id};
+  }
 };
 static_assert(sizeof(PrimRef) == 40 && offsetof(PrimRef, centroid) == 24, "PrimRef is read as 10 floats");
+static_assert(std::is_trivially_default_constructible_v<PrimRef>);
+
+/// Leaves a new element uninitialised (default-initialisation of a trivial type).
+template <typename T>
+struct NoInitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind { using other = NoInitAllocator<U>; };
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+using RefArray = std::vector<PrimRef, NoInitAllocator<PrimRef>>;
 
 /// Four floats of a PrimRef from float `at` (0: box.lo, 3: box.hi); the fourth lane holds the
 /// next field and is never used.
@@ -77,7 +99,7 @@ constexpr uint32_t kMaxSahDepth = 64;  ///< deeper than this, median splits boun
 class Builder {
  public:
   /// `first_analytic`: prim_ids from here on are analytic primitives.
-  Builder(std::vector<PrimRef>& refs, const BuildOptions& o, uint32_t first_analytic)
+  Builder(RefArray& refs, const BuildOptions& o, uint32_t first_analytic)
       : refs_(refs), opt_(o), first_analytic_(first_analytic) {}
 
   std::unique_ptr<BuildNode> build(uint32_t begin, uint32_t end, uint32_t depth) {
@@ -174,7 +196,9 @@ class Builder {
     }
     Box3f box(int a, int b) const { return to_box(lo[a][b], hi[a][b]); }
   };
-  Bins bin(uint32_t begin, uint32_t end, const Box3f& centroids, int nbins) const {
+  /// Fills `out` (constructed for nbins): a return by value would copy its 3.5 KB per node.
+  void bin(uint32_t begin, uint32_t end, const Box3f& centroids, Bins& out) const {
+    const int nbins = out.nbins;
     const Vec3f extent = centroids.extent();
     const float nb = float(nbins);
     const Vec3f scale{extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
@@ -197,17 +221,16 @@ class Builder {
         }
       }
     };
-    if (end - begin < kParallelThreshold) {  // most nodes: no copies of the 3.5 KB of bins
-      Bins b(nbins);
-      scan_into({begin, end}, b);
-      return b;
+    if (end - begin < kParallelThreshold) {  // most nodes: no copies of the bins
+      scan_into({begin, end}, out);
+      return;
     }
     auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bins b) {
       scan_into(r, b);
       return b;
     };
-    return tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins(nbins), scan,
-                                [](Bins a, const Bins& b) { a.join(b); return a; });
+    out = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins(nbins), scan,
+                               [](Bins a, const Bins& b) { a.join(b); return a; });
   }
 
   /// Binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007):
@@ -217,7 +240,8 @@ class Builder {
     const uint32_t n = end - begin;
     const Vec3f extent = centroids.extent();
     const int nbins = bins_for(n);
-    const Bins bins = bin(begin, end, centroids, nbins);
+    Bins bins(nbins);
+    bin(begin, end, centroids, bins);
     float best_cost = std::numeric_limits<float>::infinity();
     int best_axis = -1, best_bin = 0;
     for (int axis = 0; axis < 3; ++axis) {
@@ -339,7 +363,7 @@ class Builder {
   /// user geometry has a box per primitive).
   bool may_leaf(const BuildNode& n) const { return n.count() <= opt_.max_leaf && (n.count() == 1 || !n.analytic); }
 
-  std::vector<PrimRef>& refs_;
+  RefArray& refs_;
   const BuildOptions& opt_;
   uint32_t first_analytic_;
 };
@@ -348,7 +372,7 @@ class Builder {
 /// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
-  Collapser(const Scene& scene, const std::vector<PrimRef>& refs, Bvh8& out, TriangleLayout layout)
+  Collapser(const Scene& scene, const RefArray& refs, Bvh8& out, TriangleLayout layout)
       : scene_(scene), refs_(refs), out_(out), layout_(layout) {}
 
   void root(const BuildNode& bn) {
@@ -462,7 +486,7 @@ class Collapser {
   }
 
   const Scene& scene_;
-  const std::vector<PrimRef>& refs_;
+  const RefArray& refs_;
   Bvh8& out_;
   TriangleLayout layout_;
   uint32_t next_ = 0;         ///< primitives placed so far
@@ -493,49 +517,48 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
            " must be in 1..8");
   const auto start = std::chrono::steady_clock::now();
-  // Triangle references in parallel, then the zero-area ones dropped in order.
-  std::vector<PrimRef> refs(scene.triangle_count());
-  std::vector<uint8_t> keep(scene.triangle_count());
+  // References in parallel (the array's pages first touched there), then the zero-area
+  // triangles, marked kInvalidId, dropped in order.
+  const uint32_t first_analytic = scene.sphere_base();
+  RefArray refs(scene.plane_base());  // triangles, then spheres, quadrics and polygons
+  std::atomic<size_t> degenerate{0};
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
     const TriangleMesh& mesh = scene.meshes()[m];
     const uint32_t base = scene.mesh_base(m);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
+      size_t zero_area = 0;
       for (uint32_t t = r.begin(); t < r.end(); ++t) {
         const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
         const Vec3f n = cross(b - a, c - a);
-        keep[base + t] = !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f);  // zero area: never hit
-        PrimRef& ref = refs[base + t];
-        ref.box = Box3f();
-        ref.box.extend(a);
-        ref.box.extend(b);
-        ref.box.extend(c);
-        ref.centroid = (a + b + c) * (1.0f / 3.0f);
-        ref.prim_id = base + t;
+        const bool keep = !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f);  // zero area: never hit
+        zero_area += !keep;
+        Box3f box;
+        box.extend(a);
+        box.extend(b);
+        box.extend(c);
+        refs[base + t] = PrimRef::make(box, (a + b + c) * (1.0f / 3.0f), keep ? base + t : kInvalidId);
       }
+      degenerate += zero_area;
     });
   }
-  size_t kept = 0;
-  for (size_t i = 0; i < refs.size(); ++i)
-    if (keep[i]) refs[kept++] = refs[i];
-  refs.resize(kept);
-  for (uint32_t id = scene.sphere_base(); id < scene.plane_base(); ++id) {
-    PrimRef r;
-    r.box = scene.prim_bounds(id);
-    r.centroid = r.box.center();
-    r.prim_id = id;
-    refs.push_back(r);
+  for (uint32_t id = first_analytic; id < scene.plane_base(); ++id) {
+    const Box3f box = scene.prim_bounds(id);
+    refs[id] = PrimRef::make(box, box.center(), id);
   }
+  if (degenerate > 0)
+    refs.erase(std::remove_if(refs.begin(), refs.end(), [](const PrimRef& r) { return r.prim_id == kInvalidId; }),
+               refs.end());
   Bvh8 out;
   out.stats.prims = uint32_t(refs.size());
   if (!refs.empty()) {
-    Builder builder(refs, options, scene.sphere_base());
+    Builder builder(refs, options, first_analytic);
     const std::unique_ptr<BuildNode> root = builder.build(0, uint32_t(refs.size()), 0);
     out.bounds = root->box;
     Collapser collapser(scene, refs, out, options.layout);
     collapser.root(*root);
     collapser.fill();
   }
-  out.first_analytic = scene.sphere_base();
+  out.first_analytic = first_analytic;
   out.has_analytic = scene.plane_base() > scene.sphere_base();
   out.stats.nodes = uint32_t(out.nodes.size());
   out.stats.sah_cost = sah_cost(out);
