@@ -24,9 +24,9 @@ namespace rp::bvh8 {
 namespace {
 
 /// A primitive's box and the point the splits sort it by (triangle centroid, the seeds'
-/// "centre of mass"; box centre for analytic primitives).
-/// Trivial, so that the build's array of them is allocated without a serial zeroing pass and
-/// first touched by the parallel loop that fills it (see RefArray).
+/// "centre of mass"; box centre for analytic primitives). Trivial, so that the build's array
+/// of them is allocated without a serial zeroing pass and first touched by the parallel loop
+/// that fills it (see RefArray).
 struct PrimRef {
   float lo[3], hi[3], centroid[3];
   uint32_t prim_id;
