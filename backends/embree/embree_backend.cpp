@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "engine/error.h"
+#include "engine/geometry/triangle.h"
 
 namespace rp::embree {
 
@@ -103,11 +104,44 @@ void user_bounds(const RTCBoundsFunctionArguments* a) {
   *a->bounds_o = {b.lo.x, b.lo.y, b.lo.z, 0.0f, b.hi.x, b.hi.y, b.hi.z, 0.0f};
 }
 
-inline Ray ray_from(RTCRayN* rays, unsigned n, unsigned i) {
-  return {{RTCRayN_org_x(rays, n, i), RTCRayN_org_y(rays, n, i), RTCRayN_org_z(rays, n, i)},
-          RTCRayN_tnear(rays, n, i),
-          {RTCRayN_dir_x(rays, n, i), RTCRayN_dir_y(rays, n, i), RTCRayN_dir_z(rays, n, i)},
-          RTCRayN_tfar(rays, n, i)};
+/// Embree's depth test is `absDen * tnear < T <= absDen * tfar` with rounded products, and its
+/// t is T * rcp(absDen) with an approximate reciprocal: t is a float or two off, and a surface
+/// exactly at either end of the interval can land on the wrong side (seen on the AVX2 kernels,
+/// default and robust). Embree therefore searches a slightly wider interval, [tnear * (1 -
+/// 2^-20), tfar * (1 + 2^-20)], and every triangle hit within kBand of either end of the
+/// caller's interval is decided by the scalar Möller–Trumbore of engine/geometry (the simd
+/// backend's default test, closed at both ends), which also gives its t, u, v: in
+/// occlusion_band_filter for any-hit queries, in EmbreeBackend::settle for closest hits. The
+/// callbacks find the caller's exact ray through QueryContext and the ray's `id` (its index).
+constexpr float kBand = 0x1p-20f;
+
+/// Embree's intersection context extended with the caller's rays (Embree passes the context
+/// it was given to every callback; `embree` must stay the first member).
+struct QueryContext {
+  RTCIntersectContext embree;
+  const Ray* rays;  ///< the caller's rays; an Embree ray's `id` is its index here
+};
+
+inline const Ray& caller_ray(const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i) {
+  return reinterpret_cast<const QueryContext*>(ctx)->rays[RTCRayN_id(rays, n, i)];
+}
+
+/// True when t lies within kBand of an end of the caller's interval [tnear, tfar].
+inline bool in_band(const Ray& r, float t) { return t <= r.tnear * (1.0f + kBand) || t >= r.tfar * (1.0f - kBand); }
+
+/// Triangle `prim_id` against `r` by the scalar Möller–Trumbore; a miss for other kinds.
+inline Intersection<float> scalar_triangle(const Scene& s, uint32_t prim_id, const Ray& r) {
+  const PrimRef ref = s.locate(prim_id);
+  if (ref.kind != PrimKind::triangle) return {};
+  const TriangleMesh& m = s.meshes()[ref.shape];
+  return intersect_triangle_mt_normal(r, m.vertex(ref.local, 0), m.vertex(ref.local, 1), m.vertex(ref.local, 2));
+}
+
+/// The caller's ray of lane i, its far end cut at Embree's current tfar (the closest hit so far).
+inline Ray query_ray(const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i) {
+  Ray r = caller_ray(ctx, rays, n, i);
+  r.tfar = std::min(r.tfar, RTCRayN_tfar(rays, n, i));
+  return r;
 }
 
 template <typename Kind>
@@ -117,7 +151,7 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   RTCHitN* hits = RTCRayHitN_HitN(a->rayhit, a->N);
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    const Intersection<float> h = s.intersect_analytic(Kind::base(s) + a->primID, ray_from(rays, a->N, i));
+    const Intersection<float> h = s.intersect_analytic(Kind::base(s) + a->primID, query_ray(a->context, rays, a->N, i));
     if (!h.hit) continue;
     RTCRayN_tfar(rays, a->N, i) = h.t;
     RTCHitN_u(hits, a->N, i) = h.u;
@@ -131,22 +165,24 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   }
 }
 
-/// Embree is given the float below the caller's tnear (see EmbreeBackend::embree_tnear); in
-/// occlusion queries, which are never retraced, this gives the caller's tnear back.
-/// (Ambiguous only for the single value tnear = FLT_MIN, which comes back one float higher.)
-inline float caller_tnear(float embree_tnear) {
-  return embree_tnear >= std::numeric_limits<float>::min()
-             ? std::nextafter(embree_tnear, std::numeric_limits<float>::infinity())
-             : embree_tnear;
-}
+/// What a triangle geometry's occlusion filter needs: the scene and the mesh's first prim_id.
+struct TriangleData {
+  const Scene* scene;
+  uint32_t prim_base;
+};
 
-/// Occlusion filter on triangle geometry: rejects a hit below the caller's tnear, which the
-/// lowered Embree tnear lets through. Embree sets the ray's tfar to the candidate hit's
-/// distance before calling a filter.
-void occlusion_tnear_filter(const RTCFilterFunctionNArguments* a) {
-  for (unsigned i = 0; i < a->N; ++i)
-    if (a->valid[i] != 0 && !(RTCRayN_tfar(a->ray, a->N, i) >= caller_tnear(RTCRayN_tnear(a->ray, a->N, i))))
+/// Occlusion filter on triangle geometry: a candidate within kBand of an end of the caller's
+/// interval counts only when the scalar test hits it too (see kBand). Embree sets the ray's
+/// tfar to the candidate's distance before calling a filter.
+void occlusion_band_filter(const RTCFilterFunctionNArguments* a) {
+  const TriangleData& d = *static_cast<const TriangleData*>(a->geometryUserPtr);
+  for (unsigned i = 0; i < a->N; ++i) {
+    if (a->valid[i] == 0) continue;
+    const Ray& r = caller_ray(a->context, a->ray, a->N, i);
+    if (in_band(r, RTCRayN_tfar(a->ray, a->N, i)) &&
+        !scalar_triangle(*d.scene, d.prim_base + RTCHitN_primID(a->hit, a->N, i), r).hit)
       a->valid[i] = 0;
+  }
 }
 
 template <typename Kind>
@@ -154,9 +190,7 @@ void user_occluded(const RTCOccludedFunctionNArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    Ray r = ray_from(a->ray, a->N, i);
-    r.tnear = caller_tnear(r.tnear);
-    if (s.intersect_analytic(Kind::base(s) + a->primID, r).hit)
+    if (s.intersect_analytic(Kind::base(s) + a->primID, caller_ray(a->context, a->ray, a->N, i)).hit)
       RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
   }
 }
@@ -188,12 +222,15 @@ class EmbreeBackend final : public Backend {
     rtcSetSceneFlags(scene_handle_, flags);
     rtcSetSceneBuildQuality(scene_handle_, quality);
 
+    triangle_data_.reserve(scene.meshes().size());  // never reallocated: Embree keeps pointers
     for (size_t m = 0; m < scene.meshes().size(); ++m) {
       const TriangleMesh& mesh = scene.meshes()[m];
       if (mesh.triangle_count() == 0) continue;
       RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
       rtcSetGeometryBuildQuality(g, quality);
-      rtcSetGeometryOccludedFilterFunction(g, occlusion_tnear_filter);
+      triangle_data_.push_back({&scene, scene.mesh_base(m)});
+      rtcSetGeometryUserData(g, &triangle_data_.back());
+      rtcSetGeometryOccludedFilterFunction(g, occlusion_band_filter);
       auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                              3 * sizeof(float), mesh.positions.size()));
       auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
@@ -221,10 +258,8 @@ class EmbreeBackend final : public Backend {
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     FlushDenormals ftz;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    QueryContext q = context(rays, coherence);
     if (coherence == Coherence::coherent) {
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
       for (size_t base = 0; base < rays.size(); base += 8) {
         const size_t n = std::min<size_t>(8, rays.size() - base);
         alignas(32) int valid[8];
@@ -232,33 +267,25 @@ class EmbreeBackend final : public Backend {
         for (size_t i = 0; i < 8; ++i) {
           const bool ok = i < n && valid_ray(rays[base + i]);
           valid[i] = ok ? -1 : 0;
-          set_lane(rh.ray, i, ok ? rays[base + i] : kDummy);
+          set_lane(rh.ray, i, ok ? rays[base + i] : kDummy, ok ? base + i : 0);
           rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
           rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         }
-        rtcIntersect8(valid, scene_handle_, &ctx, &rh);
-        for (size_t i = 0; i < n; ++i) {
-          const Ray& r = rays[base + i];
-          if (!valid[i]) hits[base + i] = Hit{};
-          else if (rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID && rh.ray.tfar[i] < r.tnear) hits[base + i] = intersect1(r, ctx, r.tnear);
-          else hits[base + i] = finish(r, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i]);
-        }
+        rtcIntersect8(valid, scene_handle_, &q.embree, &rh);
+        for (size_t i = 0; i < n; ++i)
+          hits[base + i] = valid[i] ? settle(q, base + i, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i],
+                                             rh.hit.u[i], rh.hit.v[i])
+                                    : Hit{};
       }
     } else {
-      for (size_t i = 0; i < rays.size(); ++i) {
-        const Ray& r = rays[i];
-        if (!valid_ray(r)) { hits[i] = Hit{}; continue; }
-        hits[i] = intersect1(r, ctx);
-      }
+      for (size_t i = 0; i < rays.size(); ++i) hits[i] = valid_ray(rays[i]) ? intersect1(q, i) : Hit{};
     }
   }
 
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     FlushDenormals ftz;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    QueryContext q = context(rays, coherence);
     if (coherence == Coherence::coherent) {
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
       for (size_t base = 0; base < rays.size(); base += 8) {
         const size_t n = std::min<size_t>(8, rays.size() - base);
         alignas(32) int valid[8];
@@ -266,9 +293,9 @@ class EmbreeBackend final : public Backend {
         for (size_t i = 0; i < 8; ++i) {
           const bool ok = i < n && valid_ray(rays[base + i]) && !hits_plane(rays[base + i]);
           valid[i] = ok ? -1 : 0;
-          set_lane(ray, i, ok ? rays[base + i] : kDummy);
+          set_lane(ray, i, ok ? rays[base + i] : kDummy, ok ? base + i : 0);
         }
-        rtcOccluded8(valid, scene_handle_, &ctx, &ray);
+        rtcOccluded8(valid, scene_handle_, &q.embree, &ray);
         for (size_t i = 0; i < n; ++i) {
           const Ray& r = rays[base + i];
           out[base + i] = valid[i] ? uint8_t(ray.tfar[i] < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
@@ -279,8 +306,8 @@ class EmbreeBackend final : public Backend {
         const Ray& r = rays[i];
         if (!valid_ray(r)) { out[i] = 0; continue; }
         if (hits_plane(r)) { out[i] = 1; continue; }
-        RTCRay ray = to_embree(r, embree_tnear(r.tnear));
-        rtcOccluded1(scene_handle_, &ctx, &ray);
+        RTCRay ray = to_embree(r, i);
+        rtcOccluded1(scene_handle_, &q.embree, &ray);
         out[i] = uint8_t(ray.tfar < 0.0f);
       }
     }
@@ -291,47 +318,72 @@ class EmbreeBackend final : public Backend {
  private:
   static constexpr Ray kDummy{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 0.0f};
 
-  /// Embree's triangle tests accept tnear < t <= tfar; raypack's convention closes the
-  /// interval at tnear too. Embree is therefore given the float just below tnear, and any hit
-  /// it returns below the caller's tnear is traced again with tnear itself; occlusion
-  /// queries instead reject such hits in a filter (occlusion_tnear_filter, and user_occluded
-  /// for analytic primitives). One case stays open: tnear == 0 (Embree requires tnear >= 0,
-  /// so a triangle hit at exactly t = 0, an origin lying on the triangle, is missed). A
-  /// tnear up to the smallest normal float is passed unchanged (open there).
-  static float embree_tnear(float tnear) {
-    return tnear > std::numeric_limits<float>::min() ? std::nextafter(tnear, 0.0f) : tnear;
+  static QueryContext context(std::span<const Ray> rays, Coherence coherence) {
+    QueryContext q;
+    rtcInitIntersectContext(&q.embree);
+    if (coherence == Coherence::coherent) q.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    q.rays = rays.data();
+    return q;
   }
 
-  /// `r` as an Embree ray with the given tnear.
-  static RTCRay to_embree(const Ray& r, float tnear) {
+  /// `r` as an Embree ray searching [tnear, tfar] widened by kBand (Embree requires tnear >=
+  /// 0, so a hit at exactly t = 0 stays open: an origin lying on a triangle), with id = `index`.
+  static RTCRay to_embree(const Ray& r, size_t index) {
     RTCRay e;
     e.org_x = r.org.x; e.org_y = r.org.y; e.org_z = r.org.z;
     e.dir_x = r.dir.x; e.dir_y = r.dir.y; e.dir_z = r.dir.z;
-    e.tnear = tnear; e.tfar = r.tfar;
-    e.time = 0.0f; e.mask = ~0u; e.id = 0; e.flags = 0;
+    e.tnear = r.tnear * (1.0f - kBand); e.tfar = r.tfar * (1.0f + kBand);
+    e.time = 0.0f; e.mask = ~0u; e.id = uint32_t(index); e.flags = 0;
     return e;
   }
 
-  /// Lane i of an Embree packet from `r` (tnear lowered as embree_tnear() says).
-  static void set_lane(RTCRay8& p, size_t i, const Ray& r) {
-    const RTCRay e = to_embree(r, embree_tnear(r.tnear));
+  /// Lane i of an Embree packet from `r` (see to_embree).
+  static void set_lane(RTCRay8& p, size_t i, const Ray& r, size_t index) {
+    const RTCRay e = to_embree(r, index);
     p.org_x[i] = e.org_x; p.org_y[i] = e.org_y; p.org_z[i] = e.org_z;
     p.dir_x[i] = e.dir_x; p.dir_y[i] = e.dir_y; p.dir_z[i] = e.dir_z;
     p.tnear[i] = e.tnear; p.tfar[i] = e.tfar;
     p.time[i] = e.time; p.mask[i] = e.mask; p.id[i] = e.id; p.flags[i] = e.flags;
   }
 
-  /// One ray through rtcIntersect1 with the given Embree tnear (default: one step lower);
-  /// a hit below the caller's tnear is retraced with tnear itself.
-  Hit intersect1(const Ray& r, RTCIntersectContext& ctx, float tnear_embree = -1.0f) const noexcept {
+  /// Ray `index` of the query through rtcIntersect1, Embree's tnear raised to `tnear_embree`
+  /// when given (a retrace past a rejected hit, see settle).
+  Hit intersect1(QueryContext& q, size_t index, float tnear_embree = -1.0f) const noexcept {
     RTCRayHit rh;
-    rh.ray = to_embree(r, tnear_embree >= 0.0f ? tnear_embree : embree_tnear(r.tnear));
+    rh.ray = to_embree(q.rays[index], index);
+    if (tnear_embree >= 0.0f) rh.ray.tnear = tnear_embree;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene_handle_, &ctx, &rh);
-    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.ray.tfar < r.tnear && tnear_embree < 0.0f)
-      return intersect1(r, ctx, r.tnear);
-    return finish(r, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
+    rtcIntersect1(scene_handle_, &q.embree, &rh);
+    return settle(q, index, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v, tnear_embree >= 0.0f);
+  }
+
+  /// The closest hit Embree returned for ray `index`, in the scene numbering and the caller's
+  /// interval (see kBand). A triangle hit within kBand of an end is decided by the scalar test
+  /// (its t, u, v are reported). When that test misses a hit near tnear, a closer-than-true t
+  /// hid the ray's real first hit beyond: the ray is traced again from Embree's t, raised a
+  /// step, once; a hit near tfar that the test misses means nothing lies in the interval. The
+  /// unbounded planes, which live beside the Embree scene, then take the hit when closer.
+  Hit settle(QueryContext& q, size_t index, unsigned geom, unsigned prim, float t, float u, float v,
+             bool retraced = false) const noexcept {
+    const Ray& r = q.rays[index];
+    Hit h;
+    if (geom != RTC_INVALID_GEOMETRY_ID) {
+      h = {t, geom_base_[geom] + prim, u, v};
+      if (in_band(r, t) && scene_.locate(h.prim_id).kind == PrimKind::triangle) {
+        if (const Intersection<float> s = scalar_triangle(scene_, h.prim_id, r); s.hit) {
+          h = {s.t, h.prim_id, s.u, s.v};
+        } else if (t < r.tnear * (1.0f + kBand) && !retraced) {
+          return intersect1(q, index, std::nextafter(std::max(t, r.tnear), std::numeric_limits<float>::infinity()));
+        } else {
+          h = Hit{};
+        }
+      } else if (!(t >= r.tnear && t <= r.tfar)) {
+        h = Hit{};  // outside the interval and not a triangle's: never reported
+      }
+    }
+    scene_.intersect_planes(r, h);
+    return h;
   }
 
   void attach(RTCGeometry g, uint32_t prim_base) {
@@ -370,6 +422,7 @@ class EmbreeBackend final : public Backend {
 
   const Scene& scene_;
   UserData user_;
+  std::vector<TriangleData> triangle_data_;  ///< one per triangle geometry, for its filter
   Device* device_ = nullptr;
   RTCScene scene_handle_ = nullptr;
   std::vector<uint32_t> geom_base_;
