@@ -6,8 +6,8 @@
 /// separate output; directions are never normalized. Backends return t/u/v/prim_id only;
 /// Scene::surface() derives positions and normals.
 ///
-/// Valid rays: finite origin and direction, direction not zero, 0 <= tnear <= tfar (tfar
-/// may be +inf). Any other ray is reported as a miss (and as not occluded) by every backend.
+/// Valid rays: rp::valid_ray (engine/ray.h), the one rule every backend, the reference and the
+/// renderer share. Any other ray is reported as a miss (and as not occluded) by every backend.
 
 #include <cstdint>
 #include <span>
@@ -49,11 +49,5 @@ class Backend {
 
   virtual const BackendInfo& info() const noexcept = 0;
 };
-
-/// True when every backend traces `r` (see the validity rule above).
-inline bool valid_ray(const Ray& r) {
-  return is_finite(r.org) && is_finite(r.dir) && (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) &&
-         r.tnear >= 0.0f && r.tnear <= r.tfar;  // also false for NaN tnear/tfar
-}
 
 }  // namespace rp

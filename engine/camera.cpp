@@ -1,5 +1,6 @@
 #include "engine/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/error.h"
@@ -11,6 +12,11 @@ Camera::Camera(const CameraDesc& d, int width, int height) : model_(d.model), wi
   RP_CHECK(d.vfov_degrees > 0.0f && d.vfov_degrees < 180.0f, "camera: vertical fov ", d.vfov_degrees,
            " degrees must be in (0, 180)");
   RP_CHECK(is_finite(d.eye) && is_finite(d.look_at) && is_finite(d.up), "camera: non-finite eye, look-at or up");
+  // The rays start at the eye (or on the lens around it): they must be valid rays (engine/ray.h).
+  RP_CHECK(in_coordinate_range(d.eye), "camera: eye (", d.eye.x, ", ", d.eye.y, ", ", d.eye.z,
+           ") is outside the supported coordinate range |x| <= 1073741824 (2^30)");
+  RP_CHECK(in_coordinate_range(d.look_at), "camera: look-at (", d.look_at.x, ", ", d.look_at.y, ", ", d.look_at.z,
+           ") is outside the supported coordinate range |x| <= 1073741824 (2^30)");
   const Vec3f view = d.look_at - d.eye;
   RP_CHECK(length(view) > 0.0f, "camera: eye and look-at coincide");
   w_ = normalize(view);
@@ -28,8 +34,10 @@ Camera::Camera(const CameraDesc& d, int width, int height) : model_(d.model), wi
   }
   if (model_ == CameraModel::thin_lens) {
     RP_CHECK(d.aperture >= 0.0f && std::isfinite(d.aperture), "camera: aperture ", d.aperture, " must be >= 0");
-    RP_CHECK(d.focus_distance >= 0.0f && std::isfinite(d.focus_distance), "camera: focus distance ",
-             d.focus_distance, " must be >= 0");
+    RP_CHECK(in_coordinate_range(abs(d.eye) + Vec3f(d.aperture)), "camera: aperture ", d.aperture,
+             " puts the lens outside the supported coordinate range |x| <= 1073741824 (2^30)");
+    RP_CHECK(d.focus_distance >= 0.0f && d.focus_distance <= kMaxDirection, "camera: focus distance ",
+             d.focus_distance, " must be in [0, 2147483648]");
     aperture_ = d.aperture;
     focus_ = d.focus_distance > 0.0f ? d.focus_distance : length(view);
   }
@@ -117,6 +125,9 @@ CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees) {
   const float dist = radius / std::sin(vfov_degrees * float(kPi) / 360.0f) * 1.05f;
   c.look_at = centre;
   c.eye = centre + normalize(Vec3f{0.0f, 0.35f, 1.0f}) * dist;
+  // A scene filling the coordinate range is seen from its edge (the eye must be in range).
+  for (int a = 0; a < 3; ++a) c.eye[a] = std::clamp(c.eye[a], -kMaxCoordinate, kMaxCoordinate);
+  if (c.eye == c.look_at) c.eye.z = c.look_at.z > 0.0f ? -kMaxCoordinate : kMaxCoordinate;
   return c;
 }
 

@@ -28,8 +28,10 @@ namespace rp {
 ///   Humphreys, PBRT 4th ed., 5.2.3). aperture 0 is the pinhole.
 class Camera {
  public:
-  /// Throws rp::Error for a degenerate placement (eye == look_at, up parallel to the view
-  /// direction), a field of view out of range, a negative aperture or focus distance.
+  /// Throws rp::Error for an eye or look-at point outside the coordinate range (engine/ray.h:
+  /// every ray it makes must be valid), a degenerate placement (eye == look_at, up parallel
+  /// to the view direction), a field of view out of range, an aperture that reaches outside
+  /// the range or a focus distance outside [0, 2^31].
   Camera(const CameraDesc& desc, int width, int height);
 
   /// Ray through image position (px, py) in pixels: (0, 0) is the top-left corner, pixel (i,
@@ -55,7 +57,8 @@ class Camera {
 };
 
 /// A pinhole camera that frames `bounds` from the front-above (+z, +y) with the given fov,
-/// used when a scene has none.
+/// used when a scene has none; the eye is kept within the coordinate range (a scene that
+/// fills the range is seen from its edge).
 CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees = 40.0f);
 
 }  // namespace rp

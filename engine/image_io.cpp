@@ -5,10 +5,9 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <system_error>
-#include <unistd.h>
 
 #include "engine/error.h"
+#include "engine/output_file.h"
 
 namespace rp {
 
@@ -21,20 +20,37 @@ float srgb_encode(float c) {
 
 }  // namespace
 
+namespace {
+
+/// Lower-case extension of `path` (".png"), or empty.
+std::string extension_of(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+/// Writes `spec` and `pixels` (of `format`, `stride` bytes per pixel or AutoStride) with the
+/// OIIO writer for the extension of `path`, by rp::OutputFile.
+void write_with_oiio(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
+                     const void* pixels, OIIO::stride_t stride = OIIO::AutoStride) {
+  OutputFile file(path);
+  auto out = OIIO::ImageOutput::create(file.temp_path());
+  RP_CHECK(out, "cannot write '", path, "': no image writer for extension '", extension_of(path), "'");
+  if (!(out->open(file.temp_path(), spec) && out->write_image(format, pixels, stride) && out->close())) {
+    const std::string err = out->geterror();
+    throw Error(cat("cannot write '", path, "': ", err.empty() ? "write failed" : err));
+  }
+  file.commit();
+}
+
+}  // namespace
+
 void write_image(const std::string& path, const Image& image) {
-  namespace fs = std::filesystem;
   RP_CHECK(image.width > 0 && image.height > 0 &&
                image.rgb.size() == size_t(image.width) * size_t(image.height) * 3,
            "write_image: image for '", path, "' has no pixels");
-  const fs::path target(path);
-  std::string ext = target.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = extension_of(path);
   RP_CHECK(!ext.empty(), "cannot write '", path, "': no file extension to choose the format (.png, .exr, ...)");
-  // Temporary name keeps the extension so OIIO picks the same writer.
-  const fs::path tmp = target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" +
-                                               target.filename().stem().string() + ext);
-  auto out = OIIO::ImageOutput::create(tmp.string());
-  RP_CHECK(out, "cannot write '", path, "': no image writer for extension '", ext, "'");
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff";
   OIIO::ImageSpec spec(image.width, image.height, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   // Same pixels, same bytes: no write time in the header (OIIO stamps EXR files otherwise).
@@ -44,41 +60,11 @@ void write_image(const std::string& path, const Image& image) {
     spec.attribute("oiio:ColorSpace", "sRGB");
     for (float& c : pixels) c = srgb_encode(c);
   }
-  bool ok = out->open(tmp.string(), spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) && out->close();
-  if (!ok) {
-    std::string err = out->geterror();
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", path, "': ", err.empty() ? "write failed" : err));
-  }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", path, "': ", ec.message()));
-  }
+  write_with_oiio(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
 }
-
-namespace {
-
-/// Moves a finished temporary file onto `target`, or removes it and throws.
-void commit_file(const std::filesystem::path& tmp, const std::string& target) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, target, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(cat("cannot write '", target, "': ", ec.message()));
-  }
-}
-
-}  // namespace
 
 void write_aovs(const std::string& path, const Aovs& a) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  std::string ext = target.extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  RP_CHECK(ext == ".exr", "cannot write AOVs to '", path, "': AOVs are written as OpenEXR (.exr)");
+  RP_CHECK(extension_of(path) == ".exr", "cannot write AOVs to '", path, "': AOVs are written as OpenEXR (.exr)");
   const size_t n = size_t(a.width) * size_t(a.height);
   RP_CHECK(n > 0 && a.depth.size() == n, "write_aovs: no pixels for '", path, "'");
   constexpr int kChannels = 10;
@@ -96,18 +82,7 @@ void write_aovs(const std::string& path, const Aovs& a) {
     std::memcpy(&pixels[p * 40], f, sizeof f);
     std::memcpy(&pixels[p * 40 + 36], &a.prim_id[p], 4);
   }
-  const fs::path tmp = target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + target.filename().string());
-  auto out = OIIO::ImageOutput::create(tmp.string());
-  RP_CHECK(out, "cannot write '", path, "': no OpenEXR writer");
-  const bool ok = out->open(tmp.string(), spec) &&
-                  out->write_image(OIIO::TypeDesc::UNKNOWN, pixels.data(), 40) && out->close();
-  if (!ok) {
-    const std::string err = out->geterror();
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", path, "': ", err.empty() ? "write failed" : err));
-  }
-  commit_file(tmp, path);
+  write_with_oiio(path, spec, OIIO::TypeDesc::UNKNOWN, pixels.data(), 40);
 }
 
 Image read_image(const std::string& path) {

@@ -10,13 +10,13 @@ namespace rp {
 
 /// Writes linear RGB `image` to `path`; the format follows the extension. 8-bit formats
 /// (PNG, JPEG, ...) get the sRGB transfer curve and are clamped to [0, 1]; float formats
-/// (EXR, HDR) are written linear. The file is written to a temporary name beside `path` and
-/// renamed, so `path` is never left half-written. Throws rp::Error naming the path.
+/// (EXR, HDR) are written linear. Written by rp::OutputFile (engine/output_file.h), so
+/// `path` is never left half-written. Throws rp::Error naming the path.
 void write_image(const std::string& path, const Image& image);
 
 /// Writes `aovs` as one multi-channel OpenEXR file (the extension must be .exr): channels
 /// Z (depth), Ng.X/Y/Z (geometric normal), N.X/Y/Z (shading normal), u, v (float) and
-/// primId (uint32, 0xffffffff where the ray missed). Written through a temporary name.
+/// primId (uint32, 0xffffffff where the ray missed). Written by rp::OutputFile.
 void write_aovs(const std::string& path, const Aovs& aovs);
 
 /// Reads an image as linear-as-stored float RGB (the first three channels; grey is

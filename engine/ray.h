@@ -5,6 +5,7 @@
 /// only when tnear <= t <= tfar (both ends closed). Directions are never normalized by
 /// raypack: t is in units of the direction's length.
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -24,6 +25,50 @@ struct RayT {
 };
 using Ray = RayT<float>;
 using Rayd = RayT<double>;
+
+/// The range every backend traces exactly, shared by the backends, the reference, the
+/// renderer and the scene loaders (README, "Valid rays and scenes"):
+/// - positions: every scene coordinate (vertices, sphere and quadric boxes, polygon
+///   vertices, plane offsets, lights, camera points) and every ray origin component lies in
+///   [-kMaxCoordinate, kMaxCoordinate], 2^30 = 1073741824;
+/// - directions: the largest |component| of a ray direction lies in [kMinDirection,
+///   kMaxDirection] = [2^-26, 2^31], so the difference of any two positions in range is a
+///   valid direction.
+/// Why these bounds: the float kernels are polynomials of degree 3 in the coordinates and
+/// divide by the direction's largest component, and every intermediate must stay finite.
+/// With positions <= 2^30 and directions in [2^-26, 2^31]: Möller–Trumbore's T = Ng.(v0 - o)
+/// stays below 2^97; the watertight test's scaled distance U * Az below 2^124 (Az <= 2P/d_min);
+/// the sphere's a * disc below 2^124; the quadric's terms below 2^75 once its coefficients
+/// and the direction are scaled by powers of two (exactly: quadric.h); all below float's
+/// 2^128. Embree asserts (and aborts) beyond 1.844e18; the rule stays far inside that.
+/// Scenes beyond the range are refused at load; rays beyond it are misses everywhere.
+inline constexpr float kMaxCoordinate = 0x1p30f;
+inline constexpr float kMinDirection = 0x1p-26f;
+inline constexpr float kMaxDirection = 0x1p31f;
+
+/// True when every component of p is finite and within [-kMaxCoordinate, kMaxCoordinate].
+template <typename T>
+constexpr bool in_coordinate_range(const Vec3<T>& p) {
+  return std::abs(p.x) <= T(kMaxCoordinate) && std::abs(p.y) <= T(kMaxCoordinate) &&
+         std::abs(p.z) <= T(kMaxCoordinate);  // false for NaN
+}
+
+/// True when the largest |component| of d is within [kMinDirection, kMaxDirection] (false
+/// for a zero, infinite or NaN component).
+template <typename T>
+constexpr bool in_direction_range(const Vec3<T>& d) {
+  const T m = std::max(std::abs(d.x), std::max(std::abs(d.y), std::abs(d.z)));
+  return m >= T(kMinDirection) && m <= T(kMaxDirection) && d.x == d.x && d.y == d.y && d.z == d.z;
+}
+
+/// The one validity rule (see above): origin in the coordinate range, direction in the
+/// direction range, 0 <= tnear <= tfar (tfar may be +inf; NaN ends are invalid). Every backend
+/// and the reference report any other ray as a miss and as not occluded, and never pass it
+/// to an engine.
+template <typename T>
+constexpr bool valid_ray(const RayT<T>& r) {
+  return in_coordinate_range(r.org) && in_direction_range(r.dir) && r.tnear >= T(0) && r.tnear <= r.tfar;
+}
 
 /// prim_id of a miss.
 inline constexpr uint32_t kInvalidId = 0xffffffffu;

@@ -1,10 +1,8 @@
 #include "engine/rayfile.h"
 
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cerrno>
 #include <charconv>
@@ -17,6 +15,9 @@
 #include <system_error>
 
 #include "engine/error.h"
+#include "engine/input_file.h"
+#include "engine/output_file.h"
+#include "engine/text.h"
 
 namespace rp {
 
@@ -53,19 +54,6 @@ bool is_csv(const std::string& path) {
   return ext == ".csv";
 }
 
-/// Text from a file safe to quote in a one-line message: non-printable bytes become '?',
-/// long text is cut to 32 characters and marked with "...".
-std::string printable(std::string_view s) {
-  constexpr size_t kMax = 32;
-  std::string out;
-  for (size_t i = 0; i < s.size() && i < kMax; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    out += (c >= 0x20 && c < 0x7f) ? char(c) : '?';
-  }
-  if (s.size() > kMax) out += "...";
-  return out;
-}
-
 /// count * k in decimal, exact even when the product does not fit in 64 bits.
 std::string times(uint64_t count, uint64_t k) {
   if (k == 0 || count <= UINT64_MAX / k) return std::to_string(count * k);
@@ -80,17 +68,25 @@ std::string times(uint64_t count, uint64_t k) {
   return digits;
 }
 
-/// An open file for reading, closed on scope exit. A directory is refused at open.
+/// An input opened for reading by the rule of engine/input_file.h (a regular file), or standard
+/// input for "-", read whole into memory first; closed on scope exit.
 class InputFile {
  public:
   explicit InputFile(const std::string& path) : path_(path) {
-    f_ = std::fopen(path.c_str(), "rb");
-    if (!f_) throw Error(cat(path, ": cannot open: ", errno_message(errno)));
-    struct stat st {};
-    if (::fstat(::fileno(f_), &st) != 0) throw Error(cat(path, ": cannot open: ", errno_message(errno)));
-    if (S_ISDIR(st.st_mode)) throw Error(cat(path, ": cannot open: ", errno_message(EISDIR)));
-    regular_ = S_ISREG(st.st_mode);
-    if (regular_) size_ = uint64_t(st.st_size);
+    if (path == "-") {
+      memory_ = read_file(path, /*allow_stdin=*/true);
+      f_ = ::fmemopen(memory_.data(), memory_.size(), "rb");
+      if (!f_) throw Error(cat("standard input: cannot read: ", errno_message(errno)));
+      size_ = memory_.size();
+      return;
+    }
+    const int fd = open_regular_file(path, size_);
+    f_ = ::fdopen(fd, "rb");
+    if (!f_) {
+      const int e = errno;
+      ::close(fd);
+      throw Error(cat(path, ": cannot open: ", errno_message(e)));
+    }
   }
   ~InputFile() {
     if (f_) std::fclose(f_);
@@ -100,9 +96,9 @@ class InputFile {
 
   std::FILE* get() const { return f_; }
   const std::string& path() const { return path_; }
-  /// Regular files report their size; pipes and devices do not.
-  bool regular() const { return regular_; }
   uint64_t size() const { return size_; }
+  /// The bytes of standard input ("-"); empty for a file.
+  const std::string& memory() const { return memory_; }
 
   /// Throws for a stream error after a short read at byte `offset`.
   [[noreturn]] void fail_read(uint64_t offset) const {
@@ -112,45 +108,34 @@ class InputFile {
 
  private:
   std::string path_;
+  std::string memory_;
   std::FILE* f_ = nullptr;
-  bool regular_ = false;
   uint64_t size_ = 0;
 };
 
-/// The bytes of a binary file with their total known up front: a regular file is read in
-/// place; a pipe or device is read to its end into memory first.
+/// True when `in` is CSV: by the extension of its path, or for standard input ("-") by its
+/// first line being `header`.
+bool is_csv(const InputFile& in, std::string_view header) {
+  if (in.path() == "-") return in.memory().starts_with(header);
+  return is_csv(in.path());
+}
+
+/// The bytes of a binary file, read in order; their total is known up front.
 class ByteSource {
  public:
-  explicit ByteSource(InputFile& in) : in_(in) {
-    if (in.regular()) {
-      size_ = in.size();
-      return;
-    }
-    unsigned char buf[1 << 16];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, in.get())) > 0) memory_.insert(memory_.end(), buf, buf + n);
-    if (std::ferror(in.get())) in.fail_read(memory_.size());
-    in_memory_ = true;
-    size_ = memory_.size();
-  }
+  explicit ByteSource(InputFile& in) : in_(in) {}
 
-  uint64_t size() const { return size_; }
+  uint64_t size() const { return in_.size(); }
 
   /// Reads the next n bytes; callers never ask past size().
   void read(unsigned char* dst, size_t n) {
-    if (in_memory_) {
-      std::memcpy(dst, memory_.data() + offset_, n);
-    } else if (std::fread(dst, 1, n, in_.get()) != n) {
-      in_.fail_read(offset_);
-    }
+    if (std::fread(dst, 1, n, in_.get()) != n) in_.fail_read(offset_);
     offset_ += n;
   }
 
  private:
   InputFile& in_;
-  std::vector<unsigned char> memory_;
-  bool in_memory_ = false;
-  uint64_t size_ = 0, offset_ = 0;
+  uint64_t offset_ = 0;
 };
 
 uint32_t load_u32(const unsigned char* p) {
@@ -166,8 +151,8 @@ uint64_t load_u64(const unsigned char* p) {
 
 /// Reads a binary file of `fmt`, decoding each record with decode(bytes, Record&).
 template <typename Record, typename Decode>
-std::vector<Record> read_binary(const std::string& path, const BinaryFormat& fmt, Decode decode) {
-  InputFile in(path);
+std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode decode) {
+  const std::string& path = in.path();
   ByteSource src(in);
   const uint64_t size = src.size();
   unsigned char header[kHeaderBytes] = {};
@@ -237,56 +222,9 @@ void encode_hit(const HitRecord& h, unsigned char* p) {
   std::memcpy(p + 24, &h.ng.z, 4);
 }
 
-/// A file written under a temporary name beside its target and renamed over it by commit().
-/// Until then the target is untouched; a writer destroyed without commit() removes the
-/// temporary. Every failure throws "<path>: cannot write: <reason>".
-class AtomicWriter {
- public:
-  explicit AtomicWriter(const std::string& path) : path_(path) {
-    namespace fs = std::filesystem;
-    static std::atomic<uint64_t> serial{0};
-    const fs::path target(path);
-    tmp_ = (target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + std::to_string(serial++) +
-                                    "-" + target.filename().string() + ".tmp"))
-               .string();
-    f_ = std::fopen(tmp_.c_str(), "wbx");  // x: never reuse a file someone else made
-    if (!f_) fail(errno_message(errno));
-    created_ = true;
-  }
-  ~AtomicWriter() {
-    if (f_) std::fclose(f_);
-    if (created_ && !committed_) std::remove(tmp_.c_str());
-  }
-  AtomicWriter(const AtomicWriter&) = delete;
-  AtomicWriter& operator=(const AtomicWriter&) = delete;
-
-  void write(const void* data, size_t n) {
-    if (n != 0 && std::fwrite(data, 1, n, f_) != n) fail(errno_message(errno));
-  }
-
-  /// Flushes to the disk, closes, and renames the temporary over the target.
-  void commit() {
-    if (std::fflush(f_) != 0 || ::fsync(::fileno(f_)) != 0) fail(errno_message(errno));
-    std::FILE* f = f_;
-    f_ = nullptr;
-    if (std::fclose(f) != 0) fail(errno_message(errno));
-    std::error_code ec;
-    std::filesystem::rename(tmp_, path_, ec);
-    if (ec) fail(ec.message());
-    committed_ = true;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& reason) const { throw Error(cat(path_, ": cannot write: ", reason)); }
-
-  std::string path_, tmp_;
-  std::FILE* f_ = nullptr;
-  bool created_ = false, committed_ = false;
-};
-
 template <typename Record, typename Encode>
 void write_binary(const std::string& path, const BinaryFormat& fmt, std::span<const Record> records, Encode encode) {
-  AtomicWriter out(path);
+  OutputFile out(path);
   unsigned char header[kHeaderBytes];
   std::memcpy(header, fmt.magic, 4);
   std::memcpy(header + 4, &kVersion, 4);
@@ -360,8 +298,8 @@ uint32_t parse_prim_id(const CsvPlace& at, std::string_view s) {
 /// Reads a CSV file whose line 1 is `header` and whose other lines hold N values each, turned
 /// into a Record by make(place, values).
 template <size_t N, typename Record, typename Make>
-std::vector<Record> read_csv(const std::string& path, std::string_view header, Make make) {
-  InputFile in(path);
+std::vector<Record> read_csv(InputFile& in, std::string_view header, Make make) {
+  const std::string& path = in.path();
   LineReader lines(in);
   std::string_view line;
   if (!lines.next(line) || line != header)
@@ -404,7 +342,7 @@ void append_float(std::string& s, float x) {
 /// Writes `header` and one line per record, formed by line(record, text).
 template <typename Record, typename Line>
 void write_csv(const std::string& path, std::string_view header, std::span<const Record> records, Line line) {
-  AtomicWriter out(path);
+  OutputFile out(path);
   std::string text(header);
   text += '\n';
   for (const Record& r : records) {
@@ -422,8 +360,9 @@ void write_csv(const std::string& path, std::string_view header, std::span<const
 }  // namespace
 
 std::vector<Ray> read_rays(const std::string& path) {
-  if (!is_csv(path)) return read_binary<Ray>(path, kRayFormat, decode_ray);
-  return read_csv<8, Ray>(path, kRayCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+  InputFile in(path);
+  if (!is_csv(in, kRayCsvHeader)) return read_binary<Ray>(in, kRayFormat, decode_ray);
+  return read_csv<8, Ray>(in, kRayCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
     Ray r;
     r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
     r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
@@ -445,8 +384,9 @@ void write_rays(const std::string& path, std::span<const Ray> rays) {
 }
 
 std::vector<HitRecord> read_hits(const std::string& path) {
-  if (!is_csv(path)) return read_binary<HitRecord>(path, kHitFormat, decode_hit);
-  return read_csv<7, HitRecord>(path, kHitCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+  InputFile in(path);
+  if (!is_csv(in, kHitCsvHeader)) return read_binary<HitRecord>(in, kHitFormat, decode_hit);
+  return read_csv<7, HitRecord>(in, kHitCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
     HitRecord h;
     h.t = parse_float(at, s[0]);
     h.prim_id = parse_prim_id(at, s[1]);

@@ -4,6 +4,10 @@
 ///
 /// Two formats each, chosen by the extension: `.csv` (any case: `.CSV`, `.Csv`) is text,
 /// every other extension (or none) is binary. Both are described byte for byte below.
+/// Reading follows engine/input_file.h (regular files only); the name "-" reads standard
+/// input, CSV when it starts with the CSV header line, else binary. Writing follows
+/// engine/output_file.h (complete or absent; devices such as /dev/null written into, never
+/// replaced).
 ///
 /// Binary ray file (extension not .csv): a 16-byte header, then `count` 32-byte records.
 /// Every field is little-endian; floats are IEEE-754 binary32 stored bit for bit (-0, inf,
@@ -76,17 +80,16 @@ struct HitRecord {
 std::vector<Ray> read_rays(const std::string& path);
 
 /// Writes `rays` to `path` in the format the extension selects (.csv, any case: CSV; else
-/// binary). The data goes to a temporary file beside `path` (`.raypack-<pid>-<n>-<name>.tmp`)
-/// that is renamed over `path` when complete, so `path` is never half-written; on failure the
-/// temporary is removed and rp::Error `<path>: cannot write: <reason>` is thrown.
+/// binary), by rp::OutputFile: `path` is never half-written; on failure rp::Error
+/// `<path>: cannot write: <reason>` is thrown and no temporary file is left.
 void write_rays(const std::string& path, std::span<const Ray> rays);
 
 /// Reads hits from `path`: CSV when the extension is .csv (case-insensitive), else the binary
 /// format. Reads only; errors as read_rays (a ray file is rejected by its magic 'RPRY').
 std::vector<HitRecord> read_hits(const std::string& path);
 
-/// Writes `hits` to `path` in the format the extension selects, through a temporary file and
-/// a rename exactly as write_rays; prim_id kInvalidId is written -1 in CSV.
+/// Writes `hits` to `path` in the format the extension selects, by rp::OutputFile exactly as
+/// write_rays; prim_id kInvalidId is written -1 in CSV.
 void write_hits(const std::string& path, std::span<const HitRecord> hits);
 
 }  // namespace rp

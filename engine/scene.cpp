@@ -33,6 +33,12 @@ static Vec3f project_to_plane(const Vec3f& p, const Vec3f& n, float d) {
   return p - n * ((dot(n, p) + d) / dot(n, n));
 }
 
+/// "(x, y, z)" for messages.
+static std::string show(const Vec3f& v) { return cat("(", v.x, ", ", v.y, ", ", v.z, ")"); }
+
+/// The coordinate range as messages state it.
+static const char* const kRangeText = "the supported coordinate range |x| <= 1073741824 (2^30)";
+
 static void check_material(const std::vector<Material>& materials, uint32_t id, const std::string& what) {
   RP_CHECK(id < materials.size(), what, ": material index ", id, " out of range (", materials.size(),
            " materials)");
@@ -42,8 +48,11 @@ void Scene::add_mesh(TriangleMesh mesh) {
   const std::string what = "mesh '" + mesh.name + "'";
   RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
   const size_t nv = mesh.positions.size();
-  for (size_t i = 0; i < nv; ++i)
+  for (size_t i = 0; i < nv; ++i) {
     RP_CHECK(is_finite(mesh.positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
+    RP_CHECK(in_coordinate_range(mesh.positions[i]), what, ": vertex ", i, " ", show(mesh.positions[i]),
+             " is outside ", kRangeText);
+  }
   for (size_t i = 0; i < mesh.indices.size(); ++i)
     RP_CHECK(mesh.indices[i] < nv, what, ": triangle ", i / 3, " uses vertex ", mesh.indices[i], " of ", nv);
   RP_CHECK(mesh.normals.empty() || mesh.normals.size() == nv, what, ": ", mesh.normals.size(),
@@ -61,8 +70,10 @@ void Scene::add_mesh(TriangleMesh mesh) {
 }
 
 void Scene::add_sphere(const Sphere& s) {
-  RP_CHECK(is_finite(s.center) && std::isfinite(s.radius) && s.radius > 0.0f, "sphere at (", s.center.x, ", ",
-           s.center.y, ", ", s.center.z, ") radius ", s.radius, ": needs a finite centre and radius > 0");
+  RP_CHECK(is_finite(s.center) && std::isfinite(s.radius) && s.radius > 0.0f, "sphere at ", show(s.center),
+           " radius ", s.radius, ": needs a finite centre and radius > 0");
+  RP_CHECK(in_coordinate_range(s.center - Vec3f(s.radius)) && in_coordinate_range(s.center + Vec3f(s.radius)),
+           "sphere at ", show(s.center), " radius ", s.radius, ": its box is outside ", kRangeText);
   check_material(materials_, s.material, "sphere");
   spheres_.push_back(s);
 }
@@ -70,13 +81,24 @@ void Scene::add_sphere(const Sphere& s) {
 void Scene::add_quadric(const QuadricShape& q) {
   const Box3f b = q.quadric.clip;
   RP_CHECK(!b.empty() && is_finite(b.lo) && is_finite(b.hi), "quadric: clipping box must be finite and non-empty");
+  RP_CHECK(in_coordinate_range(b.lo) && in_coordinate_range(b.hi) && in_coordinate_range(q.quadric.center),
+           "quadric: clipping box ", show(b.lo), " - ", show(b.hi), " or centre ", show(q.quadric.center),
+           " is outside ", kRangeText);
   check_material(materials_, q.material, "quadric");
-  quadrics_.push_back(q);
+  const Quadricf& c = q.quadric;
+  for (float t : {c.A, c.B, c.C, c.D, c.E, c.F, c.G, c.H, c.I, c.J})
+    RP_CHECK(std::isfinite(t), "quadric: coefficient ", t, " is not finite");
+  QuadricShape scaled = q;
+  scaled.quadric = c.normalized();
+  quadrics_.push_back(scaled);
 }
 
 void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
   RP_CHECK(vertices.size() >= 3, "polygon: needs at least 3 vertices, got ", vertices.size());
-  for (const Vec3f& v : vertices) RP_CHECK(is_finite(v), "polygon: non-finite vertex");
+  for (const Vec3f& v : vertices) {
+    RP_CHECK(is_finite(v), "polygon: non-finite vertex");
+    RP_CHECK(in_coordinate_range(v), "polygon: vertex ", show(v), " is outside ", kRangeText);
+  }
   check_material(materials_, material, "polygon");
   PolygonShape p;
   p.first = uint32_t(polygon_vertices_.size());
@@ -92,8 +114,25 @@ void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
 void Scene::add_plane(const Plane& p) {
   RP_CHECK(is_finite(p.normal) && length(p.normal) > 0.0f && std::isfinite(p.d),
            "plane: needs a finite non-zero normal and finite offset");
+  RP_CHECK(std::abs(p.d) / length(p.normal) <= kMaxCoordinate, "plane: its distance from the origin, ",
+           std::abs(p.d) / length(p.normal), ", is outside ", kRangeText);
   check_material(materials_, p.material, "plane");
   planes_.push_back(p);
+}
+
+void Scene::add_light(const PointLight& l) {
+  RP_CHECK(in_coordinate_range(l.position), "point light at ", show(l.position), ": outside ", kRangeText);
+  RP_CHECK(is_finite(l.intensity) && min_component(l.intensity) >= 0.0f, "point light at ", show(l.position),
+           ": intensity ", show(l.intensity), " must be finite and >= 0");
+  point_lights_.push_back(l);
+}
+
+void Scene::add_light(const DirectionalLight& l) {
+  RP_CHECK(is_finite(l.direction) && length(l.direction) > 0.0f, "directional light: direction ", show(l.direction),
+           " must be finite and non-zero");
+  RP_CHECK(is_finite(l.irradiance) && min_component(l.irradiance) >= 0.0f, "directional light: irradiance ",
+           show(l.irradiance), " must be finite and >= 0");
+  directional_lights_.push_back(l);
 }
 
 PrimRef Scene::locate(uint32_t id) const {

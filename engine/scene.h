@@ -133,16 +133,24 @@ class Scene {
   Scene() { materials_.push_back(Material{.name = "default"}); }
   /// Adds a material and returns its index.
   uint32_t add_material(Material m);
-  /// Validates (indices in range, finite positions, matching attribute sizes, material ids)
-  /// and appends; throws rp::Error naming the mesh on bad data.
+  /// Validates (indices in range, positions within the coordinate range of engine/ray.h,
+  /// matching attribute sizes, material ids) and appends; throws rp::Error naming the mesh on
+  /// bad data. Every add_* refuses geometry outside the coordinate range, where the float
+  /// kernels could overflow.
   void add_mesh(TriangleMesh mesh);
   void add_sphere(const Sphere& s);
+  /// The coefficients are stored scaled by a power of two so that the largest |A..J| lies in
+  /// [1, 2): the same surface, every computed value scaled exactly, and no overflow for any
+  /// valid ray (engine/ray.h). The clip box must be finite and within the coordinate range.
   void add_quadric(const QuadricShape& q);
   /// Polygon from >= 3 coplanar vertices; convexity is detected.
   void add_polygon(std::span<const Vec3f> vertices, uint32_t material);
   void add_plane(const Plane& p);
-  void add_light(const PointLight& l) { point_lights_.push_back(l); }
-  void add_light(const DirectionalLight& l) { directional_lights_.push_back(l); }
+  /// Throws rp::Error for a position outside the coordinate range (rp::in_coordinate_range) or
+  /// a negative or non-finite intensity.
+  void add_light(const PointLight& l);
+  /// Throws rp::Error for a direction that is not finite and non-zero.
+  void add_light(const DirectionalLight& l);
   void set_camera(const CameraDesc& c) { camera_ = c; }
 
   const std::vector<Material>& materials() const { return materials_; }

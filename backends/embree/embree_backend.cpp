@@ -26,8 +26,22 @@ struct Device {
 
 thread_local std::string t_last_error;
 
+/// Embree's name of an error code.
+const char* error_name(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "RTC_ERROR_NONE";
+    case RTC_ERROR_UNKNOWN: return "RTC_ERROR_UNKNOWN";
+    case RTC_ERROR_INVALID_ARGUMENT: return "RTC_ERROR_INVALID_ARGUMENT";
+    case RTC_ERROR_INVALID_OPERATION: return "RTC_ERROR_INVALID_OPERATION";
+    case RTC_ERROR_OUT_OF_MEMORY: return "RTC_ERROR_OUT_OF_MEMORY";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "RTC_ERROR_UNSUPPORTED_CPU";
+    case RTC_ERROR_CANCELLED: return "RTC_ERROR_CANCELLED";
+  }
+  return "an unknown error code";
+}
+
 void on_error(void*, RTCError code, const char* message) {
-  t_last_error = cat("embree error ", int(code), ": ", message ? message : "(no message)");
+  t_last_error = cat(message ? message : "(no message)", " (", error_name(code), ")");
 }
 
 bool on_memory(void* user, ssize_t bytes, bool) {
@@ -38,7 +52,7 @@ bool on_memory(void* user, ssize_t bytes, bool) {
 void check(RTCDevice device, const char* what) {
   const RTCError code = rtcGetDeviceError(device);
   if (code != RTC_ERROR_NONE) {
-    std::string msg = t_last_error.empty() ? cat("embree error ", int(code)) : t_last_error;
+    std::string msg = t_last_error.empty() ? std::string(error_name(code)) : t_last_error;
     t_last_error.clear();
     throw Error(cat(what, ": ", msg));
   }
@@ -56,7 +70,7 @@ Device& device_for(const std::string& config) {
     created->handle = rtcNewDevice(config.empty() ? nullptr : config.c_str());
     if (!created->handle) {
       RTCError code = rtcGetDeviceError(nullptr);
-      throw Error(cat("embree: cannot create a device with config '", config, "' (error ", int(code), ")"));
+      throw Error(cat("embree: cannot create a device with config '", config, "' (", error_name(code), ")"));
     }
     rtcSetDeviceErrorFunction(created->handle, on_error, nullptr);
     rtcSetDeviceMemoryMonitorFunction(created->handle, on_memory, created.get());

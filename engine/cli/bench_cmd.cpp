@@ -1,7 +1,4 @@
 #include "engine/cli/bench_cmd.h"
-#include "engine/cli/plot.h"
-
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -18,8 +15,12 @@
 #include <tbb/info.h>
 
 #include "backends/registry.h"
+#include "engine/cli/plot.h"
 #include "engine/diff.h"
 #include "engine/error.h"
+#include "engine/input_file.h"
+#include "engine/json_text.h"
+#include "engine/output_file.h"
 #include "engine/loaders/load.h"
 #include "engine/raygen.h"
 #include "engine/reference.h"
@@ -201,98 +202,88 @@ int run_bench(const BenchArgs& a) {
                   be["bytes"].get<size_t>(), be["bytes_per_prim"].get<double>());
     out["scenes"].push_back(js);
   }
-  if (!a.json.empty()) write_atomically(a.json, [&](const std::string& tmp) {
-    std::ofstream f(tmp);
-    f << out.dump(2) << "\n";
-    f.close();
-    return f.good();
-  });
-  if (!a.chart.empty()) {
-    const std::string tmp = a.json.empty() ? (std::filesystem::temp_directory_path() /
-                                              ("raypack-bench-" + std::to_string(::getpid()) + ".json")).string()
-                                           : a.json;
-    if (a.json.empty()) std::ofstream(tmp) << out.dump(2) << "\n";
-    draw_charts(tmp, a.chart);
-    if (a.json.empty()) std::filesystem::remove(tmp);
-  }
+  if (!a.json.empty()) write_file(a.json, out.dump(2) + "\n");
+  if (!a.chart.empty()) draw_charts(out, a.chart);
   return 0;
 }
 
 void draw_charts(const std::string& json_path, const std::string& chart) {
-  std::ifstream in(json_path);
-  RP_CHECK(in, json_path, ": cannot open");
+  const std::string text = read_file(json_path);
+  check_json_depth(json_path, text);
   Json j;
   try {
-    j = Json::parse(in);
-  } catch (const std::exception& e) {
-    throw Error(cat(json_path, ": not a raypack bench file: ", e.what()));
+    j = Json::parse(text);
+  } catch (const Json::exception& e) {
+    throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
   }
-  RP_CHECK(j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty(), json_path,
-           ": not a raypack bench file (no \"scenes\")");
-  require_gnuplot();
+  try {
+    draw_charts(j, chart);
+  } catch (const Json::exception& e) {  // a value of the wrong type or a missing key
+    throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
+  }
+}
+
+void draw_charts(const Json& j, const std::string& chart) {
   namespace fs = std::filesystem;
-  const fs::path png(chart);
-  const fs::path base = png.parent_path() / png.stem();
-  const fs::path dir = fs::temp_directory_path() / ("raypack-chart-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  if (!(j.is_object() && j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty()))
+    throw Error("not a raypack bench file (no \"scenes\")");
+  chart_format(chart);  // an unknown format is refused before anything is drawn
+  const fs::path file(chart);
+  const std::string scaling = ((file.parent_path() / file.stem()).string() + "-scaling") + file.extension().string();
   constexpr double kFloor = 1e-7;  // where a zero mismatch rate is drawn
   const char* kinds[3] = {"primary", "shadow", "diffuse"};
-  const auto& machine = j["machine"];
+  const Json& machine = j.contains("machine") ? j["machine"] : Json::object();
   const std::string title = cat("cpu ", machine.value("cpu", std::string("?")), ", ", machine.value("threads", 0),
                                 " threads, ", machine.value("date", std::string("?")));
-  // One data file per scene and kind: Mrays/s, drawn rate, label.
-  const size_t n_scenes = j["scenes"].size();
+  const Json& scenes = j["scenes"];
+  const size_t n_scenes = scenes.size();
+
+  // Speed against accuracy: one panel per scene and kind, each an inline data block of
+  // "Mrays/s drawn-rate label".
+  std::ostringstream g;
   for (size_t s = 0; s < n_scenes; ++s)
     for (int k = 0; k < 3; ++k) {
-      std::ofstream f(dir / cat("s", s, "k", k, ".dat"));
-      for (const Json& r : j["scenes"][s]["results"])
+      g << "$s" << s << "k" << k << " << EOD\n";
+      for (const Json& r : scenes[s]["results"])
         if (r["kind"] == kinds[k])
-          f << r["mrays_per_s"].get<double>() << ' ' << std::max(kFloor, r["mismatch_rate"].get<double>()) << " \""
-            << r["method"].get<std::string>() << "\"\n";
+          g << r["mrays_per_s"].get<double>() << ' ' << std::max(kFloor, r["mismatch_rate"].get<double>()) << " \""
+            << gnuplot_label(r["method"].get<std::string>()) << "\"\n";
+      g << "EOD\n";
     }
-  auto plot = [&](const std::string& terminal, const fs::path& file, bool scaling) {
-    std::ostringstream g;
-    if (!scaling) {
-      g << "set multiplot layout " << n_scenes << ",3 title '" << "raypack bench: speed against accuracy (" << title
-        << ")' font ',12'\n";
-      g << "set logscale y\nset yrange [" << kFloor / 3 << ":1]\nset format y '%.0e'\nset grid\nset key off\n";
-      g << "set ytics add ('0 (floor)' " << kFloor << ")\nset xlabel 'Mrays/s'\nset ylabel 'mismatch rate vs reference'\n";
-      for (size_t s = 0; s < n_scenes; ++s)
-        for (int k = 0; k < 3; ++k) {
-          g << "set title '" << j["scenes"][s]["scene"].get<std::string>() << ": " << kinds[k] << " rays'\n";
-          g << "set offsets graph 0.1, graph 0.45, 0, 0\n";
-          const fs::path dat = dir / cat("s", s, "k", k, ".dat");
-          g << "plot '" << dat.string() << "' using 1:2:($0+1) with points pt 7 ps 1.5 lc variable, '' using 1:2:3 with labels "
-            << "rotate by 40 left offset 0.4,0.5 font ',8'\n";
-        }
-      g << "unset multiplot\n";
-    } else {
-      g << "set title \"raypack bench: cost against scene size, diffuse rays\\n" << title << "\"\n";
-      g << "set logscale x\nset grid\nset key outside right\nset xlabel 'triangles'\nset ylabel 'Mrays/s'\n";
-      std::vector<std::string> labels;
-      for (const Json& r : j["scenes"][0]["results"])
-        if (r["kind"] == "diffuse") labels.push_back(r["method"].get<std::string>());
-      for (size_t m = 0; m < labels.size(); ++m) {
-        std::ofstream f(dir / cat("m", m, ".dat"));
-        for (const Json& sc : j["scenes"])
-          for (const Json& r : sc["results"])
-            if (r["kind"] == "diffuse" && r["method"] == labels[m])
-              f << std::max<double>(1.0, sc["triangles"].get<double>()) << ' ' << r["mrays_per_s"].get<double>() << "\n";
-      }
-      g << "plot ";
-      for (size_t m = 0; m < labels.size(); ++m)
-        g << (m ? ", " : "") << "'" << (dir / cat("m", m, ".dat")).string() << "' using 1:2 with linespoints title '"
-          << labels[m] << "'";
-      g << "\n";
+  g << "set multiplot layout " << n_scenes << ",3 title "
+    << gnuplot_string("raypack bench: speed against accuracy (" + title + ")") << " font ',12'\n";
+  g << "set logscale y\nset yrange [" << kFloor / 3 << ":1]\nset format y '%.0e'\nset grid\nset key off\n";
+  g << "set ytics add ('0 (floor)' " << kFloor << ")\nset xlabel 'Mrays/s'\nset ylabel 'mismatch rate vs reference'\n";
+  for (size_t s = 0; s < n_scenes; ++s)
+    for (int k = 0; k < 3; ++k) {
+      g << "set title " << gnuplot_string(scenes[s]["scene"].get<std::string>() + ": " + kinds[k] + " rays") << "\n";
+      g << "set offsets graph 0.1, graph 0.45, 0, 0\n";
+      g << "plot $s" << s << "k" << k << " using 1:2:($0+1) with points pt 7 ps 1.5 lc variable, '' using 1:2:3 "
+        << "with labels rotate by 40 left offset 0.4,0.5 font ',8'\n";
     }
-    plot_to(terminal, g.str(), file.string(), dir);
-  };
-  const int h = 380 * int(n_scenes) + 60;
-  plot(cat("pngcairo size 1500,", h, " noenhanced"), png, false);
-  plot(cat("svg size 1500,", h, " noenhanced"), base.string() + ".svg", false);
-  plot("pngcairo size 900,500 noenhanced", base.string() + "-scaling.png", true);
-  plot("svg size 900,500 noenhanced", base.string() + "-scaling.svg", true);
-  fs::remove_all(dir);
+  g << "unset multiplot\n";
+  plot_to(chart, cat(1500, ",", 380 * int(n_scenes) + 60), g.str());
+
+  // Cost against scene size: Mrays/s on diffuse rays against triangles, a line per method.
+  std::ostringstream c;
+  std::vector<std::string> labels;
+  for (const Json& r : scenes[0]["results"])
+    if (r["kind"] == "diffuse") labels.push_back(r["method"].get<std::string>());
+  for (size_t m = 0; m < labels.size(); ++m) {
+    c << "$m" << m << " << EOD\n";
+    for (const Json& sc : scenes)
+      for (const Json& r : sc["results"])
+        if (r["kind"] == "diffuse" && r["method"] == labels[m])
+          c << std::max<double>(1.0, sc["triangles"].get<double>()) << ' ' << r["mrays_per_s"].get<double>() << "\n";
+    c << "EOD\n";
+  }
+  c << "set title " << gnuplot_string("raypack bench: cost against scene size, diffuse rays; " + title) << "\n";
+  c << "set logscale x\nset grid\nset key outside right\nset xlabel 'triangles'\nset ylabel 'Mrays/s'\n";
+  if (labels.empty()) c << "plot 1 notitle\n";
+  for (size_t m = 0; m < labels.size(); ++m)
+    c << (m ? ", " : "plot ") << "$m" << m << " using 1:2 with linespoints title " << gnuplot_string(labels[m])
+      << (m + 1 == labels.size() ? "\n" : "");
+  plot_to(scaling, "900,500", c.str());
 }
 
 }  // namespace rp::cli

@@ -2,6 +2,7 @@
 // `raypack bench` and `raypack chart`: every backend method on identical rays, speed beside
 // accuracy against the double-precision reference, as a table, JSON and gnuplot charts.
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,12 @@ struct BenchArgs {
 /// Runs the benchmark, prints the table, writes JSON and charts when asked. Returns 0.
 int run_bench(const BenchArgs& args);
 
-/// Draws `chart` (PNG, plus an SVG beside it, plus <name>-scaling.png/svg) from saved JSON.
+/// Draws `chart` (Mrays/s against mismatch rate, a panel per scene and ray kind) and, beside
+/// it, <name>-scaling.<ext> (Mrays/s against triangle count), both in the format of the
+/// extension (.png or .svg), from a saved bench JSON file. Throws rp::Error naming the file.
 void draw_charts(const std::string& json_path, const std::string& chart);
+
+/// The same from the bench results in memory.
+void draw_charts(const nlohmann::ordered_json& results, const std::string& chart);
 
 }  // namespace rp::cli

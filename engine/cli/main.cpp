@@ -10,8 +10,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -23,16 +21,22 @@
 #include "engine/error.h"
 #include "engine/image_io.h"
 #include "engine/cli/bench_cmd.h"
+#include "engine/cli/out_of_memory.h"
+#include "engine/cli/plot.h"
 #include "engine/cli/stability_cmd.h"
 #include "engine/diff.h"
 #include "engine/loaders/load.h"
+#include "engine/output_file.h"
 #include "engine/rayfile.h"
 #include "engine/raygen.h"
 #include "engine/reference.h"
 #include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/text.h"
 
 namespace {
+
+using rp::cli::with_memory_context;
 
 /// A user error in the flags: reported like CLI11's own parse errors, exit status 2.
 struct UsageError : rp::Error {
@@ -76,26 +80,17 @@ void check_backend(const std::string& name, const std::string& variant) {
   throw UsageError(rp::cat("--backend: unknown backend '", name, "' (available: ", names, ")"));
 }
 
-/// Writes `text` to `path` through a temporary name beside it, then renames.
-void write_text_file(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path tmp = target.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + target.filename().string());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw rp::Error(rp::cat("cannot write '", path, "'"));
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw rp::Error(rp::cat("cannot write '", path, "': ", ec.message()));
+/// The backend `name`/`variant` built over `scene` (loaded from `scene_name`), with an
+/// out-of-memory failure named as such.
+std::unique_ptr<rp::Backend> build_backend(const std::string& name, const std::string& variant, const rp::Scene& scene,
+                                           const std::string& scene_name) {
+  const std::string what =
+      rp::cat("building the ", name, "/", variant, " structure of ", scene_name, " (", scene.prim_count(), " primitives)");
+  try {
+    return with_memory_context(what, [&] { return rp::make_backend(name, scene, {.variant = variant, .device_config = {}}); });
+  } catch (const rp::Error& e) {
+    if (std::string_view(e.what()).starts_with("out of memory")) throw;
+    throw rp::Error(rp::cat(what, ": ", e.what()));
   }
 }
 
@@ -118,6 +113,14 @@ rp::Vec3f parse_vec3(const std::string& flag, const std::string& text) {
   return v;
 }
 
+/// "x,y,z" as a point, which must lie in the coordinate range every backend traces (engine/ray.h).
+rp::Vec3f parse_point(const std::string& flag, const std::string& text) {
+  const rp::Vec3f p = parse_vec3(flag, text);
+  if (!rp::in_coordinate_range(p))
+    throw UsageError(rp::cat(flag, ": '", text, "' is outside the supported coordinate range |x| <= 1073741824 (2^30)"));
+  return p;
+}
+
 /// Camera overrides on the command line; each one replaces the scene's value.
 struct CameraArgs {
   std::string model, eye, look_at, up;
@@ -131,13 +134,16 @@ struct CameraArgs {
       else if (model == "thin-lens") c.model = rp::CameraModel::thin_lens;
       else throw UsageError(rp::cat("--camera: '", model, "' is not pinhole, panoramic, fisheye or thin-lens"));
     }
-    if (!eye.empty()) c.eye = parse_vec3("--eye", eye);
-    if (!look_at.empty()) c.look_at = parse_vec3("--look-at", look_at);
+    if (!eye.empty()) c.eye = parse_point("--eye", eye);
+    if (!look_at.empty()) c.look_at = parse_point("--look-at", look_at);
     if (!up.empty()) c.up = parse_vec3("--up", up);
     if (fov > 0) c.vfov_degrees = fov;
     if (fisheye_fov > 0) c.fisheye_fov_degrees = fisheye_fov;
     if (aperture >= 0) c.aperture = aperture;
     if (focus_distance >= 0) c.focus_distance = focus_distance;
+    if (aperture >= 0 && c.model == rp::CameraModel::thin_lens && !rp::in_coordinate_range(abs(c.eye) + rp::Vec3f(aperture)))
+      throw UsageError(rp::cat("--aperture: ", aperture, " puts the lens around the eye (", c.eye.x, ", ", c.eye.y, ", ",
+                               c.eye.z, ") outside the supported coordinate range |x| <= 1073741824 (2^30)"));
     return c;
   }
 
@@ -149,9 +155,15 @@ struct CameraArgs {
     app->add_option("--fov", fov, "Vertical field of view, degrees")->check(CLI::Range(0.001, 179.999));
     app->add_option("--fisheye-fov", fisheye_fov, "Fisheye field of view across the image circle, degrees")
         ->check(CLI::Range(0.001, 360.0));
-    app->add_option("--aperture", aperture, "Thin lens radius, world units")->check(CLI::Range(0.0, 1e30));
+    app->add_option("--aperture", aperture, "Thin lens radius, world units")->check(CLI::Range(0.0, 1073741824.0));
     app->add_option("--focus-distance", focus_distance, "Distance in focus (0: the look-at point)")
-        ->check(CLI::Range(0.0, 1e30));
+        ->check(CLI::Range(0.0, 2147483648.0));
+  }
+
+  /// True when any flag changes the scene's camera.
+  bool any() const {
+    return !model.empty() || !eye.empty() || !look_at.empty() || !up.empty() || fov > 0 || fisheye_fov > 0 ||
+           aperture >= 0 || focus_distance >= 0;
   }
 };
 
@@ -232,7 +244,7 @@ int run_render(const RenderArgs& a) {
   check_backend(a.backend, a.variant);
 
   auto t = clock::now();
-  rp::Scene scene = rp::load_scene(a.scene);
+  rp::Scene scene = with_memory_context("loading " + a.scene, [&] { return rp::load_scene(a.scene); });
   for (const std::string& l : a.lights) {
     static const std::regex re(R"(^(.*),([^,]+)$)");
     std::smatch m;
@@ -248,23 +260,24 @@ int run_render(const RenderArgs& a) {
       }
     }
     if (!ok) throw UsageError(rp::cat("--light: '", l, "' is not x,y,z,intensity with intensity > 0"));
-    scene.add_light(rp::PointLight{parse_vec3("--light", m[1].str()), rp::Vec3f(intensity)});
+    scene.add_light(rp::PointLight{parse_point("--light", m[1].str()), rp::Vec3f(intensity)});
   }
   const double load_s = seconds_since(t);
   const rp::CameraDesc desc = a.camera.apply(scene.camera().value_or(rp::frame_bounds(scene.bounds())));
   std::optional<rp::Camera> camera_or;
   try {
     camera_or.emplace(desc, res.width, res.height);
-  } catch (const rp::Error& e) {  // a placement the camera flags made impossible
-    throw UsageError(e.what());
+  } catch (const rp::Error& e) {
+    if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
+    throw rp::Error(rp::cat(a.scene, ": ", e.what()));
   }
   const rp::Camera& camera = *camera_or;
-  const std::unique_ptr<rp::Backend> backend =
-      rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
+  const std::unique_ptr<rp::Backend> backend = build_backend(a.backend, a.variant, scene, a.scene);
 
   ProgressBar bar;
-  const rp::RenderResult r =
-      rp::render(scene, *backend, camera, settings, a.quiet ? rp::ProgressFn{} : rp::ProgressFn(std::ref(bar)));
+  const rp::RenderResult r = with_memory_context(rp::cat("rendering ", res.width, "x", res.height), [&] {
+    return rp::render(scene, *backend, camera, settings, a.quiet ? rp::ProgressFn{} : rp::ProgressFn(std::ref(bar)));
+  });
   bar.finish();
   t = clock::now();
   rp::write_image(a.output, r.image);
@@ -318,19 +331,27 @@ int run_trace(const TraceArgs& a) {
   const rp::Coherence coherence = parse_coherence(a.coherence);
   std::optional<tbb::global_control> limit;
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
-  const rp::Scene scene = rp::load_scene(a.scene);
-  const std::vector<rp::Ray> rays = rp::read_rays(a.rays);
-  const auto backend = rp::make_backend(a.backend, scene, {.variant = a.variant, .device_config = {}});
-  std::vector<rp::Hit> hits(rays.size());
+  const rp::Scene scene = with_memory_context("loading " + a.scene, [&] { return rp::load_scene(a.scene); });
+  const std::vector<rp::Ray> rays = with_memory_context("reading " + a.rays, [&] { return rp::read_rays(a.rays); });
+  const auto backend = build_backend(a.backend, a.variant, scene, a.scene);
+  std::vector<rp::Hit> hits;
   const auto start = std::chrono::steady_clock::now();
-  rp::intersect_parallel(*backend, rays, hits, coherence);
+  with_memory_context(rp::cat("tracing ", rays.size(), " rays"), [&] {
+    hits.resize(rays.size());
+    rp::intersect_parallel(*backend, rays, hits, coherence);
+  });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  rp::write_hits(a.output, to_records(scene, rays, hits));
+  with_memory_context("writing " + a.output, [&] { rp::write_hits(a.output, to_records(scene, rays, hits)); });
   if (!a.quiet) {
     const size_t n_hit = size_t(std::count_if(hits.begin(), hits.end(), [](const rp::Hit& h) { return h.hit(); }));
+    const size_t invalid = size_t(std::count_if(rays.begin(), rays.end(), [](const rp::Ray& r) { return !rp::valid_ray(r); }));
     std::fprintf(stderr, "raypack: traced %zu rays (%zu hits) with %s/%s in %.3f s (%.2f Mrays/s); wrote %s\n",
                  rays.size(), n_hit, a.backend.c_str(), a.variant.c_str(), seconds,
                  seconds > 0 ? double(rays.size()) / seconds * 1e-6 : 0.0, a.output.c_str());
+    if (invalid > 0)
+      rp::warn(rp::cat(a.rays, ": ", invalid, " of ", rays.size(), " rays are outside the valid-ray rule (finite, origin "
+                       "|x| <= 2^30, largest direction component in [2^-26, 2^31], 0 <= tnear <= tfar) and were "
+                       "reported as misses"));
   }
   return 0;
 }
@@ -361,7 +382,7 @@ int run_diff(const DiffArgs& a) {
   if (a.threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
   if (a.count == 0 || a.count > (size_t(1) << 28))
     throw UsageError(rp::cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
-  const rp::Scene scene = rp::load_scene(a.scene);
+  const rp::Scene scene = with_memory_context("loading " + a.scene, [&] { return rp::load_scene(a.scene); });
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
@@ -402,7 +423,7 @@ int run_diff(const DiffArgs& a) {
   } else if (a.rays == "random") {
     set = rp::random_rays(scene, a.count, a.seed);
   } else {
-    set.rays = rp::read_rays(a.rays);
+    set.rays = with_memory_context("reading " + a.rays, [&] { return rp::read_rays(a.rays); });
   }
   if (!a.coherence.empty()) coherence = parse_coherence(a.coherence);
 
@@ -418,8 +439,9 @@ int run_diff(const DiffArgs& a) {
       for (size_t i = 0; i < ref.size(); ++i)
         if (ref[i].hit()) s.hits[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
     } else {
-      const auto backend = rp::make_backend(name, scene, {.variant = variant, .device_config = {}});
-      rp::intersect_parallel(*backend, set.rays, s.hits, coherence);
+      const auto backend = build_backend(name, variant, scene, a.scene);
+      with_memory_context(rp::cat("tracing ", set.rays.size(), " rays"),
+                          [&] { rp::intersect_parallel(*backend, set.rays, s.hits, coherence); });
     }
     return s;
   };
@@ -435,7 +457,7 @@ int run_diff(const DiffArgs& a) {
   std::printf("(%.2f s)\n", seconds);
   if (!a.json.empty()) {
     const std::string text = rp::to_json(d, a.scene, a.rays, sa.label, sb.label, options);
-    write_text_file(a.json, text);
+    rp::write_file(a.json, text);
   }
   if (!a.image.empty()) rp::write_image(a.image, rp::mismatch_image(d, set, sa.hits));
   if (100.0 * d.agreement() < a.min_agreement) {
@@ -453,7 +475,7 @@ struct InfoArgs {
 /// Counts, bounds, degenerate triangles and the bytes of the scene and of each backend.
 int run_info(const InfoArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
-  const rp::Scene scene = rp::load_scene(a.scene);
+  const rp::Scene scene = with_memory_context("loading " + a.scene, [&] { return rp::load_scene(a.scene); });
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   size_t vertices = 0, with_normals = 0, with_uvs = 0;
   for (const rp::TriangleMesh& m : scene.meshes()) {
@@ -484,11 +506,16 @@ int run_info(const InfoArgs& a) {
       std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
       continue;
     }
-    const auto backend = rp::make_backend(e.name, scene);
+    const auto backend = build_backend(e.name, "default", scene, a.scene);
     const rp::BackendInfo& i = backend->info();
     std::printf("%-8s %-8s %10.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
                 double(i.bytes) / prims);
-    for (const auto& [key, value] : i.stats) std::printf("  %s=%g", key.c_str(), value);
+    for (const auto& [key, value] : i.stats) {
+      if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
+        std::printf("  %s=%lld", key.c_str(), (long long)value);
+      else
+        std::printf("  %s=%g", key.c_str(), value);
+    }
     std::printf("\n");
   }
   return 0;
@@ -508,6 +535,7 @@ int run_backends() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  rp::install_signal_cleanup();
   CLI::App app{"raypack: 8-wide SIMD ray casting beside Intel Embree"};
   app.set_version_flag("--version", std::string("raypack ") + RAYPACK_VERSION);
   app.require_subcommand(1);
@@ -633,10 +661,20 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "raypack: " << e.what() << " (see raypack --help)\n";
+    std::cerr << "raypack: " << rp::one_line(e.what()) << " (see raypack --help)\n";
     return 2;
   }
   try {
+    // A chart format the extension does not name is a bad flag, found before any work.
+    for (const auto& [flag, file] : {std::pair{"--chart", ba.chart}, std::pair{"--chart", sa.chart},
+                                     std::pair{"-o", *chart ? chart_out : std::string()}}) {
+      if (file.empty()) continue;
+      try {
+        rp::cli::chart_format(file);
+      } catch (const rp::Error& e) {
+        throw UsageError(rp::cat(flag, ": ", e.what()));
+      }
+    }
     if (*render) return run_render(ra);
     if (*trace) return run_trace(ta);
     if (*diff) return run_diff(da);
@@ -659,13 +697,16 @@ int main(int argc, char** argv) {
     }
     return run_backends();
   } catch (const UsageError& e) {
-    std::cerr << "raypack: " << e.what() << '\n';
+    std::cerr << "raypack: " << rp::one_line(e.what()) << '\n';
     return 2;
   } catch (const rp::Error& e) {
-    std::cerr << "raypack: " << e.what() << '\n';
+    std::cerr << "raypack: " << rp::one_line(e.what()) << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "raypack: out of memory: an allocation of " << rp::cli::failed_allocation_bytes() << " bytes failed\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "raypack: internal error: " << e.what() << '\n';
+    std::cerr << "raypack: internal error: " << rp::one_line(e.what()) << '\n';
     return 1;
   }
 }

@@ -1,58 +1,37 @@
 #pragma once
-// Output helpers shared by the CLI commands that write files and charts: atomic writes, and
-// gnuplot run on a script whose output goes to a temporary file renamed into place.
+// gnuplot for the CLI's charts, run without a shell: the program by its argument vector, the
+// script on its standard input, the picture from its standard output into the chart file (by
+// rp::OutputFile). No file name ever appears in a script, and text from files (scene names,
+// method labels) goes in only through gnuplot_string / gnuplot_label, so nothing a user
+// writes can become a gnuplot or shell command. Data travels inside the script as inline
+// data blocks, so no temporary data files exist.
 
-#include <unistd.h>
-
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <string>
-
-#include "engine/error.h"
+#include <string_view>
 
 namespace rp::cli {
 
-/// Writes `target` through `write(tmp)` to a temporary name beside it, then renames, so the
-/// target is never left half-written.
-template <typename Write>
-void write_atomically(const std::string& target, Write&& write) {
-  namespace fs = std::filesystem;
-  const fs::path t(target);
-  const fs::path tmp = t.parent_path() / (".raypack-" + std::to_string(::getpid()) + "-" + t.filename().string());
-  std::error_code ec;
-  if (!write(tmp.string())) {
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", target, "'"));
-  }
-  fs::rename(tmp, t, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error(cat("cannot write '", target, "': ", ec.message()));
-  }
-}
+/// The chart formats by the output's extension: ".png" (pngcairo) or ".svg".
+enum class ChartFormat { png, svg };
 
-/// Fails with the install hint when gnuplot is not on PATH.
-inline void require_gnuplot() {
-  RP_CHECK(std::system("command -v gnuplot >/dev/null 2>&1") == 0,
-           "chart: gnuplot is not installed (apt-get install gnuplot-nox; .ci/setup.sh does it)");
-}
+/// The format for `file` by its extension (case-insensitive); rp::Error naming the file and
+/// the extension for anything else.
+ChartFormat chart_format(const std::string& file);
 
-/// Runs gnuplot with `terminal` on `script` (everything after `set terminal` and `set output`)
-/// to draw `file` atomically; `work` is a scratch folder. Throws with gnuplot's first error line.
-inline void plot_to(const std::string& terminal, const std::string& script, const std::string& file,
-                    const std::filesystem::path& work) {
-  write_atomically(file, [&](const std::string& tmp) {
-    const std::filesystem::path gp = work / "plot.gp", err = work / "err.txt";
-    std::ofstream(gp) << "set terminal " << terminal << "\nset output '" << tmp << "'\n" << script;
-    if (std::system(cat("gnuplot '", gp.string(), "' 2>'", err.string(), "'").c_str()) == 0) return true;
-    std::ifstream e(err);
-    std::string first;
-    std::getline(e, first);
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw Error(cat("chart: gnuplot failed for '", file, "': ", first));
-  });
-}
+/// Throws rp::Error with the install hint when no gnuplot is on PATH.
+void require_gnuplot();
+
+/// `text` as a gnuplot single-quoted string (quotes included): a quote is doubled, control
+/// characters become '?'. gnuplot does no substitution of any kind inside single quotes.
+std::string gnuplot_string(std::string_view text);
+
+/// `text` for a double-quoted label inside an inline data block: quotes, backslashes and
+/// control characters become '?', so a label can neither end its field nor its line.
+std::string gnuplot_label(std::string_view text);
+
+/// Draws `file` with gnuplot: `script` (without `set terminal` and `set output`) run after
+/// `set terminal <terminal size> noenhanced`, the terminal chosen by the file's extension.
+/// Throws rp::Error with gnuplot's first error line; `file` is then left as it was.
+void plot_to(const std::string& file, const std::string& size, const std::string& script);
 
 }  // namespace rp::cli

@@ -1,12 +1,8 @@
 #include "engine/cli/stability_cmd.h"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -15,6 +11,7 @@
 #include "engine/cli/plot.h"
 #include "engine/error.h"
 #include "engine/loaders/load.h"
+#include "engine/output_file.h"
 #include "engine/stability.h"
 
 namespace rp::cli {
@@ -23,11 +20,8 @@ namespace {
 
 /// The chart users look for: failure rate against translation magnitude per backend method
 /// (left), and the share of rays leaving a surface that hit it again, raw and offset (right).
+/// The format follows the extension of `chart` (.png or .svg).
 void draw_chart(const std::vector<stability::Result>& results, const std::string& scene, const std::string& chart) {
-  require_gnuplot();
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("raypack-stability-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
   constexpr double kFloor = 1e-5;  // where a zero rate is drawn
   // series name -> data lines "k rate"
   std::map<std::string, std::ostringstream> left, right;
@@ -40,32 +34,29 @@ void draw_chart(const std::vector<stability::Result>& results, const std::string
       right[r.family.substr(8) + " " + r.method] << r.exponent << ' ' << rate << '\n';
   }
   std::ostringstream g;
-  g << "set multiplot layout 1,2 title 'raypack stability: " << scene << "' font ',12'\n";
-  g << "set logscale y\nset yrange [" << kFloor / 2 << ":1.5]\nset format y '%.0e'\nset grid\n";
-  g << "set ytics add ('0' " << kFloor << ")\nset xlabel 'translation 10^k: k'\nset xrange [-0.3:7.3]\n";
-  g << "set key below font ',9' maxrows 3\n";
+  int block = 0;
+  std::ostringstream plots;
   auto panel = [&](const char* title, const char* ylabel, std::map<std::string, std::ostringstream>& series) {
-    g << "set title '" << title << "'\nset ylabel '" << ylabel << "'\n";
+    plots << "set title " << gnuplot_string(title) << "\nset ylabel " << gnuplot_string(ylabel) << "\n";
     if (series.empty()) {
-      g << "plot 2 notitle\n";  // an empty panel (nothing selected), axes only
+      plots << "plot 2 notitle\n";  // an empty panel (nothing selected), axes only
       return;
     }
-    g << "plot ";
+    plots << "plot ";
     int i = 0;
     for (auto& [name, data] : series) {
-      const fs::path dat = dir / cat("s", i, title[0] == 'f' ? 'l' : 'r', ".dat");
-      std::ofstream(dat) << data.str();
-      g << (i++ ? ", " : "") << "'" << dat.string() << "' using 1:2 with linespoints lw 2 title '" << name << "'";
+      g << "$d" << block << " << EOD\n" << data.str() << "EOD\n";  // inline data, no files
+      plots << (i++ ? ", " : "") << "$d" << block++ << " using 1:2 with linespoints lw 2 title " << gnuplot_string(name);
     }
-    g << "\n";
+    plots << "\n";
   };
   panel("failures on the moved scene (leaks, false hits, t errors)", "failure rate", left);
   panel("rays leaving a surface that hit it again", "self-hit rate", right);
-  g << "unset multiplot\n";
-  const fs::path png(chart);
-  plot_to("pngcairo size 1400,620 noenhanced", g.str(), png.string(), dir);
-  plot_to("svg size 1400,620 noenhanced", g.str(), (png.parent_path() / png.stem()).string() + ".svg", dir);
-  fs::remove_all(dir);
+  g << "set multiplot layout 1,2 title " << gnuplot_string("raypack stability: " + scene) << " font ',12'\n";
+  g << "set logscale y\nset yrange [" << kFloor / 2 << ":1.5]\nset format y '%.0e'\nset grid\n";
+  g << "set ytics add ('0' " << kFloor << ")\nset xlabel 'translation 10^k: k'\nset xrange [-0.3:7.3]\n";
+  g << "set key below font ',9' maxrows 3\n" << plots.str() << "unset multiplot\n";
+  plot_to(chart, "1400,620", g.str());
 }
 
 }  // namespace
@@ -112,12 +103,7 @@ int run_stability(const StabilityArgs& a) {
               a.scene.c_str(), a.rays, (unsigned long long)a.seed, a.t_tolerance);
   stability::print_table(stdout, results);
   std::printf("(%.1f s)\n", seconds);
-  if (!a.json.empty())
-    write_atomically(a.json, [&](const std::string& tmp) {
-      std::ofstream f(tmp);
-      f << stability::to_json(results, a.scene, o);
-      return bool(f.flush());
-    });
+  if (!a.json.empty()) write_file(a.json, stability::to_json(results, a.scene, o));
   if (!a.chart.empty()) {
     draw_chart(results, a.scene, a.chart);
     std::fprintf(stderr, "raypack: wrote %s\n", a.chart.c_str());

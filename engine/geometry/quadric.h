@@ -65,6 +65,22 @@ struct Quadric {
   /// World-space bounds of the clipped surface: the clip box.
   constexpr Box3<T> bounds() const { return clip; }
 
+  /// The same surface with every coefficient multiplied by the power of two that brings the
+  /// largest |A..J| into [1, 2): each value the tests compute is scaled exactly, and the
+  /// products of a valid ray (engine/ray.h) cannot overflow. A quadric whose coefficients
+  /// are all 0 (or not finite) is returned unchanged.
+  Quadric normalized() const {
+    Quadric q = *this;
+    T* terms[] = {&q.A, &q.B, &q.C, &q.D, &q.E, &q.F, &q.G, &q.H, &q.I, &q.J};
+    T largest = 0;
+    for (const T* t : terms) largest = std::max(largest, std::abs(*t));
+    if (!(largest > T(0)) || !std::isfinite(largest)) return q;
+    int exponent = 0;
+    std::frexp(largest, &exponent);  // largest = m 2^exponent, m in [0.5, 1)
+    for (T* t : terms) *t = std::ldexp(*t, 1 - exponent);
+    return q;
+  }
+
   /// Ellipsoid (x/rx)^2 + (y/ry)^2 + (z/rz)^2 = 1 around center, radii = (rx, ry, rz).
   /// Clip: center +- radii (the natural bounds). No axis parameter: radii name every axis.
   static Quadric ellipsoid(const Vec3<T>& center, const Vec3<T>& radii) {
@@ -211,6 +227,31 @@ struct Quadric {
 using Quadricf = Quadric<float>;
 using Quadricd = Quadric<double>;
 
+/// A ray whose direction is divided by the power of two `scale` that brings its largest
+/// |component| into [1, 2), with tnear and tfar multiplied by it: the same points at the
+/// scaled parameters, and every product with the direction scaled exactly (no rounding
+/// changes unless a value leaves float's normal range).
+template <typename T>
+struct ScaledRay {
+  RayT<T> ray;
+  T scale;
+  /// A hit of the scaled ray as a hit of the caller's: t divided back, exactly.
+  Intersection<T> unscaled(Intersection<T> h) const {
+    if (h.hit) h.t /= scale;
+    return h;
+  }
+};
+
+template <typename T>
+ScaledRay<T> direction_scaled(const RayT<T>& r) {
+  const T largest = std::max(std::abs(r.dir.x), std::max(std::abs(r.dir.y), std::abs(r.dir.z)));
+  if (!(largest > T(0)) || !std::isfinite(largest)) return {r, T(1)};
+  int exponent = 0;
+  std::frexp(largest, &exponent);  // largest = m 2^exponent, m in [0.5, 1)
+  const T scale = std::ldexp(T(1), exponent - 1);
+  return {{r.org, r.tnear * scale, r.dir / scale, r.tfar * scale}, scale};
+}
+
 /// Coefficients of a t^2 + b t + c = 0 for r against q, with the origin in the quadric's
 /// coordinates (org - center). Lecture notes, "Ray-Quadric Surface Intersection": substitute
 /// P(t) = o + t d into the quadric:
@@ -240,8 +281,13 @@ Intersection<T> quadric_pick_root(const RayT<T>& r, const Quadric<T>& q, T t0, T
 /// the larger one. Miss: no such root, a ray lying in a degenerate direction of the surface
 /// (a == b == 0), or NaN anywhere. The ray origin is moved into the quadric's coordinates
 /// (org - center) first, so precision follows the shape's size rather than its position.
+/// The direction is scaled by a power of two (direction_scaled): b^2 - 4ac then stays finite
+/// for every valid ray (engine/ray.h) while every computed value is the unscaled one's,
+/// scaled exactly.
 template <typename T>
-Intersection<T> intersect_quadric(const RayT<T>& r, const Quadric<T>& q) {
+Intersection<T> intersect_quadric(const RayT<T>& ray, const Quadric<T>& q) {
+  const ScaledRay<T> sr = direction_scaled(ray);
+  const RayT<T>& r = sr.ray;
   const auto [a, b, c] = quadric_coefficients(r, q);
   T t0, t1;
   if (a == T(0)) {
@@ -264,25 +310,27 @@ Intersection<T> intersect_quadric(const RayT<T>& r, const Quadric<T>& q) {
       if (t1 < t0) std::swap(t0, t1);
     }
   }
-  return quadric_pick_root(r, q, t0, t1);
+  return sr.unscaled(quadric_pick_root(r, q, t0, t1));
 }
 
 /// The same test with the textbook roots (-b -+ sqrt(b^2 - 4ac)) / 2a (the seeds' algebraic
 /// method): cancellation when b^2 >> 4ac loses the near root of a far or grazing ray. Kept as
 /// the baseline `raypack stability` measures; raypack renders with intersect_quadric.
 template <typename T>
-Intersection<T> intersect_quadric_naive(const RayT<T>& r, const Quadric<T>& q) {
+Intersection<T> intersect_quadric_naive(const RayT<T>& ray, const Quadric<T>& q) {
+  const ScaledRay<T> sr = direction_scaled(ray);
+  const RayT<T>& r = sr.ray;
   const auto [a, b, c] = quadric_coefficients(r, q);
   if (a == T(0)) {
     if (b == T(0)) return {};
-    return quadric_pick_root(r, q, -c / b, -c / b);
+    return sr.unscaled(quadric_pick_root(r, q, -c / b, -c / b));
   }
   const T disc = b * b - T(4) * a * c;
   if (!(disc >= T(0))) return {};
   const T s = std::sqrt(disc);
   T t0 = (-b - s) / (T(2) * a), t1 = (-b + s) / (T(2) * a);
   if (t1 < t0) std::swap(t0, t1);
-  return quadric_pick_root(r, q, t0, t1);
+  return sr.unscaled(quadric_pick_root(r, q, t0, t1));
 }
 
 }  // namespace rp

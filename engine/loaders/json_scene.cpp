@@ -101,10 +101,6 @@
 ///   <path>.file: <resolved path>: the file has no triangles
 ///   <path>: <a Scene check's message>                              (kept as a safety net)
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -120,6 +116,8 @@
 #include <vector>
 
 #include "engine/error.h"
+#include "engine/input_file.h"
+#include "engine/json_text.h"
 #include "engine/loaders/load.h"
 
 namespace rp {
@@ -131,55 +129,6 @@ using Json = nlohmann::ordered_json;
 
 constexpr size_t kShownChars = 40;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-/// The whole file; "<path>: cannot open: <strerror>" when it can't be read (a directory too).
-std::string read_text(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
-  struct stat st {};
-  int err = ::fstat(fd, &st) != 0 ? errno : (S_ISDIR(st.st_mode) ? EISDIR : 0);
-  std::string text;
-  char buffer[1 << 16];
-  while (err == 0) {
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n > 0)
-      text.append(buffer, size_t(n));
-    else if (n == 0)
-      break;
-    else if (errno != EINTR)
-      err = errno;
-  }
-  ::close(fd);
-  if (err != 0) throw Error(cat(path, ": cannot open: ", std::strerror(err)));
-  return text;
-}
-
-/// 1-based line and column of the character nlohmann's parse_error::byte points at (byte is
-/// 1-based; byte = size + 1 is the end of input). Columns count bytes.
-struct TextPosition {
-  size_t line, column;
-};
-TextPosition position_of(const std::string& text, size_t byte) {
-  const size_t at = std::min(byte == 0 ? 0 : byte - 1, text.size());
-  const size_t line = 1 + size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(at), '\n'));
-  const size_t nl = at == 0 ? std::string::npos : text.rfind('\n', at - 1);
-  const size_t line_start = nl == std::string::npos ? 0 : nl + 1;
-  return {line, at - line_start + 1};
-}
-
-/// nlohmann's message without "[json.exception.<kind>.<id>] " and "parse error at ...: ".
-std::string reason_of(const std::string& what) {
-  std::string s = what;
-  if (!s.empty() && s[0] == '[') {
-    const size_t close = s.find("] ");
-    if (close != std::string::npos) s.erase(0, close + 2);
-  }
-  if (s.rfind("parse error", 0) == 0) {
-    const size_t colon = s.find(": ");
-    if (colon != std::string::npos) s.erase(0, colon + 2);
-  }
-  return s;
-}
 
 /// A value as the file has it, compact, at most kShownChars characters (cut with "...",
 /// never inside a UTF-8 sequence).
@@ -469,6 +418,17 @@ class SceneReader {
     c.aperture = number(v, path, "aperture", c.aperture, kNonNegative);
     c.focus_distance = number(v, path, "focus_distance", c.focus_distance, kNonNegative);
     // The placement checks of Camera's constructor (engine/camera.cpp), in the same float arithmetic.
+    for (const char* key : {"eye", "look_at"}) {
+      const Json* p = find(v, key);
+      if (p != nullptr && !in_coordinate_range(key[0] == 'e' ? c.eye : c.look_at))
+        fail(member(path, key), cat(show(*p), " is out of range (must be within the supported coordinate range |x| <= "
+                                              "1073741824 = 2^30)"));
+    }
+    if (c.model == CameraModel::thin_lens && !in_coordinate_range(abs(c.eye) + Vec3f(c.aperture)))
+      fail(member(path, "aperture"), cat(show(*find(v, "aperture")), " is out of range (the lens must stay within the "
+                                                                       "supported coordinate range |x| <= 1073741824 = 2^30)"));
+    if (!(c.focus_distance <= kMaxDirection))
+      fail(member(path, "focus_distance"), cat(show(*find(v, "focus_distance")), " is out of range (must be <= 2147483648)"));
     const Vec3f view = c.look_at - c.eye;
     if (!(length(view) > 0.0f)) {
       const bool at = find(v, "look_at") != nullptr;
@@ -493,13 +453,13 @@ class SceneReader {
       PointLight l;
       l.position = vector(require(v, path, "position"), member(path, "position"));
       l.intensity = colour(v, path, "intensity", l.intensity);
-      scene_.add_light(l);
+      add(path, [&] { scene_.add_light(l); });
     } else {
       check_keys(v, path, kDirectionalLightKeys);
       DirectionalLight l;
       l.direction = Vec3f(direction(v, path, "direction", Vec3d(l.direction)));
       l.irradiance = colour(v, path, "irradiance", l.irradiance);
-      scene_.add_light(l);
+      add(path, [&] { scene_.add_light(l); });
     }
   }
 
@@ -702,16 +662,17 @@ class SceneReader {
 }  // namespace
 
 void load_json_scene(const std::string& path, Scene& scene) {
-  const std::string text = read_text(path);
+  const std::string text = read_file(path);
+  check_json_depth(path, text);  // messages print values recursively: the depth is bounded first
   Json root;
   try {
     root = Json::parse(text, nullptr, true, /*ignore_comments=*/false);
   } catch (const Json::parse_error& e) {
     const TextPosition at = position_of(text, e.byte);
-    throw Error(cat(path, ": line ", at.line, ", column ", at.column, ": ", reason_of(e.what())));
+    throw Error(cat(path, ": line ", at.line, ", column ", at.column, ": ", json_reason(e.what())));
   } catch (const Json::exception& e) {
     // out_of_range.406, a number too large for a double: nlohmann gives no position.
-    throw Error(cat(path, ": ", reason_of(e.what())));
+    throw Error(cat(path, ": ", json_reason(e.what())));
   }
   SceneReader(path, scene).read(root);
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "engine/error.h"
+#include "engine/text.h"
 
 namespace rp {
 
@@ -21,7 +22,9 @@ static void add_default_lights(Scene& scene) {
   float r = b.empty() ? 0.0f : 0.5f * length(b.extent());
   if (!(r > 0.0f) || !std::isfinite(r)) r = 1.0f;
   const Vec3f offset = Vec3f(0.5f, 1.5f, 2.0f) * r;
-  scene.add_light(PointLight{.position = c + offset, .intensity = Vec3f(0.8f * dot(offset, offset))});
+  Vec3f position = c + offset;  // kept within the coordinate range of engine/ray.h
+  for (int a = 0; a < 3; ++a) position[a] = std::clamp(position[a], -kMaxCoordinate, kMaxCoordinate);
+  scene.add_light(PointLight{.position = position, .intensity = Vec3f(0.8f * dot(offset, offset))});
   scene.add_light(DirectionalLight{.direction = normalize(Vec3f(1.0f, -1.0f, -1.0f)), .irradiance = Vec3f(0.3f)});
 }
 
@@ -52,8 +55,8 @@ Scene load_scene(const std::string& path) {
   if (scene.point_lights().empty() && scene.directional_lights().empty()) add_default_lights(scene);
   // Zero-area triangles are kept (the numbering stays the file's) but can never be hit.
   if (const size_t degenerate = scene.degenerate_triangle_count(); degenerate > 0)
-    std::fprintf(stderr, "raypack: warning: %s: %zu zero-area triangle%s kept; no ray can hit %s\n", path.c_str(),
-                 degenerate, degenerate == 1 ? "" : "s", degenerate == 1 ? "it" : "them");
+    warn(cat(path, ": ", degenerate, " zero-area triangle", degenerate == 1 ? "" : "s", " kept; no ray can hit ",
+             degenerate == 1 ? "it" : "them"));
   return scene;
 }
 

@@ -9,41 +9,152 @@
 /// overlaps triangles). So tinyobj returns whole faces (triangulate = false) and each polygon is
 /// ear-clipped in its own plane into exactly n - 2 triangles.
 
-#include <fcntl.h>
 #include <sys/stat.h>
-#include <unistd.h>
-
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
-#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
+#include <cstdlib>
+#include <istream>
+#include <limits>
 #include <map>
 #include <span>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "engine/error.h"
+#include "engine/input_file.h"
 #include "engine/loaders/load.h"
+#include "engine/text.h"
 
 namespace rp {
 namespace {
 
-/// Throws "<path>: cannot open: <strerror>" unless `path` is a readable regular file (tinyobj
-/// itself only says "Cannot open file", and reads a directory as an empty OBJ).
-void check_readable(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
-  struct stat st {};
-  const int err = ::fstat(fd, &st) != 0 ? errno : (S_ISDIR(st.st_mode) ? EISDIR : 0);
-  ::close(fd);
-  if (err != 0) throw Error(cat(path, ": cannot open: ", std::strerror(err)));
+// ---- strict numbers ----------------------------------------------------------------------
+// tinyobjloader reads a number that does not parse as 0 ("v 1 abc 0"), stops at the first
+// non-digit ("1x" is 1) and reads indices with atoi (4294967299 wraps to 3). Every line it
+// takes numbers from is therefore checked here first, split into lines and fields exactly as
+// tinyobj splits them, with the line number in the message.
+
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+/// The grammar tinyobj accepts, required to cover the whole field: an optional sign, digits
+/// with an optional fraction (or a fraction alone), an optional exponent. A finite float is
+/// returned; anything else throws naming the line.
+float strict_number(const std::string& path, size_t line, std::string_view field) {
+  size_t i = 0, digits = 0;
+  if (i < field.size() && (field[i] == '+' || field[i] == '-')) ++i;
+  for (; i < field.size() && std::isdigit(static_cast<unsigned char>(field[i])); ++i) ++digits;
+  if (i < field.size() && field[i] == '.')
+    for (++i; i < field.size() && std::isdigit(static_cast<unsigned char>(field[i])); ++i) ++digits;
+  bool ok = digits > 0;
+  if (ok && i < field.size() && (field[i] == 'e' || field[i] == 'E')) {
+    ++i;
+    if (i < field.size() && (field[i] == '+' || field[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    for (; i < field.size() && std::isdigit(static_cast<unsigned char>(field[i])); ++i) ++exponent_digits;
+    ok = exponent_digits > 0;
+  }
+  const std::string shown = printable(field);
+  if (!ok || i != field.size()) throw Error(cat(path, ": line ", line, ": '", shown, "' is not a number"));
+  std::string_view digits_only = field[0] == '+' ? field.substr(1) : field;
+  double value = 0.0;
+  const auto r = std::from_chars(digits_only.data(), digits_only.data() + digits_only.size(), value);
+  if (r.ec == std::errc::result_out_of_range) value = std::strtod(std::string(digits_only).c_str(), nullptr);
+  if (!(std::abs(value) <= double(std::numeric_limits<float>::max())))
+    throw Error(cat(path, ": line ", line, ": '", shown, "' is out of the float range"));
+  return float(value);
+}
+
+/// An index field of a face, line or point ("i", "i/j", "i//k", "i/j/k"): each present index a
+/// non-zero 32-bit integer; a negative (relative) one must reach back no further than the
+/// first element read so far. `count` is what has been read of v, vt, vn; the largest
+/// absolute index of each is kept with its line, for the check against the file's totals.
+struct IndexCheck {
+  size_t count[3] = {0, 0, 0};      ///< v, vt, vn read so far
+  int64_t largest[3] = {0, 0, 0};   ///< largest absolute index of each
+  size_t largest_line[3] = {0, 0, 0};
+};
+constexpr const char* kAttributeNames[3] = {"vertex", "texture coordinate", "normal"};
+constexpr const char* kAttributePlurals[3] = {"vertices", "texture coordinates", "normals"};
+
+void check_index_field(const std::string& path, size_t line, std::string_view field, IndexCheck& c) {
+  int slot = 0;
+  size_t start = 0;
+  for (;;) {
+    const size_t slash = field.find('/', start);
+    const std::string_view part = field.substr(start, slash == std::string_view::npos ? slash : slash - start);
+    if (!(part.empty() && slot == 1 && slash != std::string_view::npos)) {  // "i//k": no texture coordinate
+      int64_t value = 0;
+      const std::string_view digits = !part.empty() && part[0] == '+' ? part.substr(1) : part;
+      const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+      if (digits.empty() || r.ptr != digits.data() + digits.size() || r.ec == std::errc::invalid_argument)
+        throw Error(cat(path, ": line ", line, ": '", printable(field), "' is not an index (i, i/j, i//k or i/j/k)"));
+      if (r.ec == std::errc::result_out_of_range || value == 0 || value > INT32_MAX || value < -int64_t(INT32_MAX))
+        throw Error(cat(path, ": line ", line, ": ", kAttributeNames[slot], " index ", printable(part),
+                        value == 0 && r.ec == std::errc() ? " is 0 (OBJ counts from 1)" : " is out of range"));
+      if (value < 0 && size_t(-value) > c.count[slot])
+        throw Error(cat(path, ": line ", line, ": relative ", kAttributeNames[slot], " index ", value, " reaches before the first (",
+                        c.count[slot], " read so far)"));
+      if (value > c.largest[slot]) {
+        c.largest[slot] = value;
+        c.largest_line[slot] = line;
+      }
+    }
+    if (slash == std::string_view::npos) break;
+    if (++slot > 2) throw Error(cat(path, ": line ", line, ": '", printable(field), "' has more than 3 indices"));
+    start = slash + 1;
+  }
+}
+
+/// Checks every number tinyobj would read from `text` (see above). Lines end at "\n", "\r"
+/// or "\r\n" and at a NUL byte, as tinyobj reads them.
+void check_obj_numbers(const std::string& path, std::string_view text) {
+  IndexCheck c;
+  std::vector<std::string_view> fields;
+  size_t line = 0;
+  for (size_t pos = 0; pos < text.size();) {
+    size_t end = pos;
+    while (end < text.size() && text[end] != '\n' && text[end] != '\r') ++end;
+    std::string_view l = text.substr(pos, end - pos);
+    pos = end < text.size() && text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n' ? end + 2 : end + 1;
+    ++line;
+    if (const size_t nul = l.find('\0'); nul != std::string_view::npos) l = l.substr(0, nul);
+    while (!l.empty() && is_blank(l.front())) l.remove_prefix(1);
+    if (l.size() < 2) continue;
+    const bool v = l[0] == 'v' && is_blank(l[1]);
+    const bool vn = l.size() > 2 && l[0] == 'v' && l[1] == 'n' && is_blank(l[2]);
+    const bool vt = l.size() > 2 && l[0] == 'v' && l[1] == 't' && is_blank(l[2]);
+    const bool indices = (l[0] == 'f' || l[0] == 'l' || l[0] == 'p') && is_blank(l[1]);
+    if (!v && !vn && !vt && !indices) continue;
+    split_fields(l.substr(v || indices ? 2 : 3), is_blank, fields);
+    if (indices) {
+      for (std::string_view f : fields) check_index_field(path, line, f, c);
+      continue;
+    }
+    const size_t lo = v ? 3 : vn ? 3 : 1, hi = v ? 7 : vn ? 3 : 3;
+    const char* what = v ? "a vertex ('v')" : vn ? "a normal ('vn')" : "a texture coordinate ('vt')";
+    if (fields.size() < lo || fields.size() > hi)
+      throw Error(cat(path, ": line ", line, ": ", what, " takes ", lo == hi ? cat(lo) : cat(lo, " to ", hi),
+                      " numbers, got ", fields.size()));
+    for (size_t k = 0; k < fields.size(); ++k) {
+      const float x = strict_number(path, line, fields[k]);
+      if (v && k < 3 && !(std::abs(x) <= kMaxCoordinate))
+        throw Error(cat(path, ": line ", line, ": vertex coordinate ", printable(fields[k]),
+                        " is outside the supported coordinate range |x| <= 1073741824 (2^30)"));
+    }
+    ++c.count[v ? 0 : vt ? 1 : 2];
+  }
+  for (int k = 0; k < 3; ++k)
+    if (size_t(c.largest[k]) > c.count[k])
+      throw Error(cat(path, ": line ", c.largest_line[k], ": ", kAttributeNames[k], " index ", c.largest[k],
+                      " is past the file's ", c.count[k], " ", kAttributePlurals[k]));
 }
 
 std::string first_line(const std::string& text) {
@@ -192,9 +303,10 @@ struct CornerKeyHash {
 };
 
 /// Reads the `mtllib` files of an OBJ from the OBJ's folder as tinyobj's MaterialFileReader
-/// does (same warning for a missing file), but opens only regular files: tinyobj's reader opens
-/// whatever the name reaches, so "mtllib ../../dev/zero" read one endless line until memory ran
-/// out, and a FIFO or a terminal blocked the load. Such a file is skipped with a warning.
+/// does (same warning for a missing file), but by the rule of engine/input_file.h: tinyobj's
+/// reader opens whatever the name reaches, so "mtllib ../../dev/zero" read one endless line
+/// until memory ran out, and a FIFO or a terminal blocked the load. Such a file is skipped
+/// with a warning.
 class RegularMtlReader final : public tinyobj::MaterialReader {
  public:
   explicit RegularMtlReader(std::string dir) : dir_(std::move(dir)) {}
@@ -203,15 +315,19 @@ class RegularMtlReader final : public tinyobj::MaterialReader {
                   std::map<std::string, int>* ids, std::string* warn, std::string* err) override {
     const std::string file = dir_ + name;
     struct stat st {};
-    if (::stat(file.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
-      if (warn) *warn += cat("Material file [ ", name, " ] is not a regular file: ", file, "\n");
-      return false;
-    }
-    std::ifstream in(file);
-    if (!in) {
+    if (::stat(file.c_str(), &st) != 0) {
       if (warn) *warn += cat("Material file [ ", name, " ] not found in a path : ", dir_, "\n");
       return false;
     }
+    std::string text;
+    try {
+      text = read_file(file);
+    } catch (const Error& e) {
+      if (warn) *warn += cat("Material file [ ", name, " ] not read: ", e.what(), "\n");
+      return false;
+    }
+    MemoryStreambuf buffer(text.data(), text.size());
+    std::istream in(&buffer);
     tinyobj::LoadMtl(ids, materials, &in, warn, err);
     return true;
   }
@@ -223,9 +339,10 @@ class RegularMtlReader final : public tinyobj::MaterialReader {
 }  // namespace
 
 void load_obj(const std::string& path, Scene& scene) {
-  check_readable(path);
-  std::ifstream in(path);
-  if (!in) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
+  const std::string text = read_file(path);
+  check_obj_numbers(path, text);
+  MemoryStreambuf buffer(text.data(), text.size());
+  std::istream in(&buffer);
   const size_t slash = path.find_last_of('/');
   RegularMtlReader mtl_reader(slash == std::string::npos ? std::string() : path.substr(0, slash + 1));
   tinyobj::attrib_t attrib;
@@ -340,7 +457,7 @@ void load_obj(const std::string& path, Scene& scene) {
   }
 
   if (!warning.empty())
-    std::fprintf(stderr, "raypack: warning: %s: %s\n", path.c_str(), one_line_warning(warning).c_str());
+    warn(cat(path, ": ", one_line_warning(warning)));
 }
 
 }  // namespace rp

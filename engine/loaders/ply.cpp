@@ -3,17 +3,12 @@
 /// graph with a copy of every array, while 871k-triangle binary scans want a path that copies
 /// straight from the file bytes into the mesh arrays.
 ///
-/// The file is mapped once (mmap); the header is parsed line by line; before anything is
+/// The file is mapped once (rp::MappedFile: regular files only); the header is parsed line by line; before anything is
 /// allocated, the bytes every element needs at the least are checked against the bytes after
 /// the header (so "element vertex 4000000000" in a small file is refused, not allocated). The
 /// common binary layout (native-endian float x y z among scalar properties; faces as one list
 /// with a one-byte count and 32-bit indices) is copied with memcpy; any other layout goes
 /// through a general reader. Numbers in messages count from 0, as PLY indices do.
-
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <bit>
@@ -30,7 +25,9 @@
 #include <vector>
 
 #include "engine/error.h"
+#include "engine/input_file.h"
 #include "engine/loaders/load.h"
+#include "engine/text.h"
 
 namespace rp {
 namespace {
@@ -74,52 +71,7 @@ struct Element {
 
 enum class Format { ascii, binary_little_endian, binary_big_endian };
 
-/// A read-only mapping of a whole file; empty files map to no bytes.
-class MappedFile {
- public:
-  explicit MappedFile(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw Error(cat(path, ": cannot open: ", std::strerror(errno)));
-    struct stat st {};
-    int err = ::fstat(fd, &st) != 0 ? errno : (S_ISDIR(st.st_mode) ? EISDIR : 0);
-    if (err == 0 && st.st_size > 0) {
-      void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-      if (p == MAP_FAILED)
-        err = errno;
-      else {
-        data_ = static_cast<const char*>(p);
-        size_ = size_t(st.st_size);
-      }
-    }
-    ::close(fd);
-    if (err != 0) throw Error(cat(path, ": cannot open: ", std::strerror(err)));
-  }
-  ~MappedFile() {
-    if (data_) ::munmap(const_cast<char*>(data_), size_);
-  }
-  MappedFile(const MappedFile&) = delete;
-  MappedFile& operator=(const MappedFile&) = delete;
-  const char* data() const { return data_; }
-  size_t size() const { return size_; }
-
- private:
-  const char* data_ = nullptr;
-  size_t size_ = 0;
-};
-
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
-
-/// Splits a header line at blanks into `out`.
-void split(std::string_view line, std::vector<std::string_view>& out) {
-  out.clear();
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_space(line[i])) ++i;
-    const size_t start = i;
-    while (i < line.size() && !is_space(line[i])) ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-}
 
 template <typename T>
 T load(const char* p, bool swap) {
@@ -207,7 +159,7 @@ class PlyReader {
     bool have_format = false;
     for (;;) {
       if (!next_line(text)) fail_line(line, "end of file before 'end_header'");
-      split(text, tokens);
+      split_fields(text, is_space, tokens);
       if (tokens.empty() || tokens[0] == "comment" || tokens[0] == "obj_info") continue;
       const std::string_view key = tokens[0];
       if (key == "end_header") break;

@@ -230,12 +230,23 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
                           "\"build_seconds\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
-  for (const fs::path& p : {chart, dir_ / "c.svg", dir_ / "c-scaling.png", dir_ / "c-scaling.svg"})
+  for (const fs::path& p : {chart, dir_ / "c-scaling.png"})
     EXPECT_GT(fs::exists(p) ? fs::file_size(p) : 0u, 1000u) << p;
+  EXPECT_FALSE(fs::exists(dir_ / "c.svg")) << "a .png chart is drawn as PNG only";
   EXPECT_EQ(rp::read_image(chart.string()).width, 1500);
   r = run("chart " + json.string() + " -o " + again.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(again));
+  // The format follows the extension: an SVG named .svg, the PNG beside it untouched.
+  const std::string png_bytes = file_bytes(chart);
+  r = run("chart " + json.string() + " -o " + (dir_ / "c.svg").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(file_bytes(dir_ / "c.svg").rfind("<?xml", 0), 0u);
+  EXPECT_EQ(file_bytes(dir_ / "c-scaling.svg").rfind("<?xml", 0), 0u);
+  EXPECT_EQ(file_bytes(chart), png_bytes);
+  r = run("chart " + json.string() + " -o " + (dir_ / "c.jpg").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown chart format '.jpg'"), std::string::npos) << r.output;
   std::ofstream(dir_ / "bad.json") << "{\"not\": 1}";
   r = run("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
   EXPECT_EQ(r.status, 1) << r.output;

@@ -181,23 +181,57 @@ TEST(RayFileBinary, LayoutIsHeaderThenOrgDirTnearTfar) {
     }
 }
 
-TEST(RayFileBinary, ReadsFromAPipe) {
+TEST(RayFileRead, AFifoOrADeviceIsRefusedWithoutBlocking) {
   TempDir tmp;
-  const std::string path = tmp / "pipe";
-  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0);
+  const std::string fifo = tmp / "rays.bin";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // No writer ever opens the FIFO: a reader that opened it for real would block here forever.
+  EXPECT_EQ(error_of([&] { read_rays(fifo); }), fifo + ": cannot read: not a regular file (a FIFO)");
+  EXPECT_EQ(error_of([&] { read_hits("/dev/zero"); }), "/dev/zero: cannot read: not a regular file (a character device)");
+  // A symlink is followed to what it names.
+  const std::string link = tmp / "zero.csv";
+  fs::create_symlink("/dev/zero", link);
+  EXPECT_EQ(error_of([&] { read_rays(link); }), link + ": cannot read: not a regular file (a character device)");
+}
+
+/// Runs f with standard input reading `bytes` from a pipe (fed by a thread), then restores it.
+template <typename F>
+void with_stdin(const std::string& bytes, F&& f) {
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const int saved = ::dup(STDIN_FILENO);
+  ::dup2(fds[0], STDIN_FILENO);
+  ::close(fds[0]);
+  std::thread writer([&] {
+    size_t at = 0;
+    while (at < bytes.size()) {
+      const ssize_t n = ::write(fds[1], bytes.data() + at, bytes.size() - at);
+      if (n <= 0) break;
+      at += size_t(n);
+    }
+    ::close(fds[1]);
+  });
+  f();
+  writer.join();
+  ::dup2(saved, STDIN_FILENO);
+  ::close(saved);
+}
+
+TEST(RayFileRead, DashReadsStandardInputInEitherFormat) {
   const std::vector<Ray> rays = random_rays(3000);
   std::string bytes = header("RPRY", 1, rays.size());
   for (const Ray& r : rays) {
     const float f[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
     bytes.append(reinterpret_cast<const char*>(f), 32);
   }
-  std::thread writer([&] { write_bytes(path, bytes); });
   std::vector<Ray> back;
-  const std::string error = error_of([&] { back = read_rays(path); });
-  writer.join();
-  EXPECT_EQ(error, "(no rp::Error thrown)");
+  with_stdin(bytes, [&] { EXPECT_EQ(error_of([&] { back = read_rays("-"); }), "(no rp::Error thrown)"); });
   ASSERT_EQ(back.size(), rays.size());
   for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(bits(back[i]), bits(rays[i])) << "ray " << i;
+  with_stdin("ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,7\n", [&] { back = read_rays("-"); });
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_EQ(back[0].dir.z, 6.0f);
+  with_stdin("RPRY", [&] { EXPECT_EQ(error_of([&] { read_rays("-"); }), "-: truncated: 4 bytes, the header needs 16"); });
 }
 
 TEST(HitFileBinary, RoundTripIsBitExact) {
@@ -331,8 +365,8 @@ TEST(RayFileErrors, MissingFileOrDirectoryCannotBeOpened) {
     EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": cannot open: No such file or directory");
   }
   fs::create_directory(tmp / "dir.csv");
-  EXPECT_EQ(error_of([&] { read_rays(tmp / "dir.csv"); }), tmp / "dir.csv" + ": cannot open: Is a directory");
-  EXPECT_EQ(error_of([&] { read_hits(tmp.dir.string()); }), tmp.dir.string() + ": cannot open: Is a directory");
+  EXPECT_EQ(error_of([&] { read_rays(tmp / "dir.csv"); }), tmp / "dir.csv" + ": cannot read: not a regular file (a directory)");
+  EXPECT_EQ(error_of([&] { read_hits(tmp.dir.string()); }), tmp.dir.string() + ": cannot read: not a regular file (a directory)");
 }
 
 TEST(RayFileErrors, WrongMagicIsNamedWithNonPrintablesAsQuestionMarks) {
@@ -507,15 +541,14 @@ TEST(RayFileWrite, UnwritableDirectoryGivesTheWriteErrorAndLeavesNoFile) {
   EXPECT_TRUE(fs::is_empty(tmp / "ro"));
 }
 
-TEST(RayFileWrite, FailedRenameRemovesTheTemporaryAndKeepsTheTarget) {
+TEST(RayFileWrite, ADirectoryTargetIsRefusedAndNothingIsLeft) {
   TempDir tmp;
-  // The target is a directory: the temporary is written, the rename fails.
   fs::create_directory(tmp / "taken.bin");
   fs::create_directory(tmp / "taken.csv");
   EXPECT_EQ(error_of([&] { write_rays(tmp / "taken.bin", std::vector<Ray>(3)); }),
-            tmp / "taken.bin" + ": cannot write: Is a directory");
+            tmp / "taken.bin" + ": cannot write: it is a directory");
   EXPECT_EQ(error_of([&] { write_hits(tmp / "taken.csv", std::vector<HitRecord>(3)); }),
-            tmp / "taken.csv" + ": cannot write: Is a directory");
+            tmp / "taken.csv" + ": cannot write: it is a directory");
   EXPECT_EQ(tmp.entries(), (std::set<std::string>{"taken.bin", "taken.csv"}));
   EXPECT_TRUE(fs::is_directory(tmp / "taken.bin"));
 }

@@ -62,7 +62,9 @@ void expect_near(const Vec3f& a, const Vec3f& b, float tolerance, const char* wh
       << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") vs (" << b.x << ", " << b.y << ", " << b.z << ")";
 }
 
-void expect_same_quadric(const Quadricf& a, const Quadricf& b) {
+/// a as the scene stores it (coefficients normalized) against b as constructed.
+void expect_same_quadric(const Quadricf& a, const Quadricf& constructed) {
+  const Quadricf b = constructed.normalized();
   EXPECT_EQ(a.A, b.A);
   EXPECT_EQ(a.B, b.B);
   EXPECT_EQ(a.C, b.C);
@@ -535,7 +537,7 @@ TEST(JsonSceneErrors, MeshFileProblemsCarryTheLoadersMessage) {
             "scene.json: $.objects[0]: mesh 'tri': vertex 1 has a non-finite coordinate");
   write_file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "bad.obj"})")),
-            "scene.json: $.objects[0].file: bad.obj: face 1 uses vertex 9 of 3");
+            "scene.json: $.objects[0].file: bad.obj: line 4: vertex index 9 is past the file's 3 vertices");
 }
 
 }  // namespace

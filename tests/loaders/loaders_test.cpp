@@ -347,14 +347,14 @@ TEST(ObjLoader, DegenerateTrianglesAreKept) {
 TEST(ObjLoader, BadFilesThrowOneLineErrors) {
   const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   EXPECT_EQ(obj_error("nonfinite.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"),
-            path_of("nonfinite.obj") + ": vertex 2 has a non-finite coordinate");
-  EXPECT_EQ(obj_error("range.obj", tri + "f 1 2 3\nf 1 2 9\n"), path_of("range.obj") + ": face 2 uses vertex 9 of 3");
+            path_of("nonfinite.obj") + ": line 2: '1e999' is out of the float range");
+  EXPECT_EQ(obj_error("range.obj", tri + "f 1 2 3\nf 1 2 9\n"), path_of("range.obj") + ": line 5: vertex index 9 is past the file's 3 vertices");
   EXPECT_EQ(obj_error("normal.obj", tri + "vn 0 0 1\nf 1//1 2//1 3//7\n"),
-            path_of("normal.obj") + ": face 1 uses normal 7 of 1");
+            path_of("normal.obj") + ": line 5: normal index 7 is past the file's 1 normals");
   EXPECT_EQ(obj_error("uv.obj", tri + "vt 0 0\nf 1/1 2/4 3/1\n"),
-            path_of("uv.obj") + ": face 1 uses texture coordinate 4 of 1");
+            path_of("uv.obj") + ": line 5: texture coordinate index 4 is past the file's 1 texture coordinates");
   EXPECT_EQ(obj_error("zero.obj", tri + "f 0 1 2\n"),
-            path_of("zero.obj") + ": Failed parse `f' line(e.g. zero value for face index. line 4.)");
+            path_of("zero.obj") + ": line 4: vertex index 0 is 0 (OBJ counts from 1)");
   std::string big = "g disc\n";
   for (int i = 0; i < 300; ++i) big += cat("v ", std::cos(i * 2 * kPi / 300), " ", std::sin(i * 2 * kPi / 300), " 0\n");
   big += "f";
@@ -375,7 +375,7 @@ TEST(ObjLoader, BadFilesThrowOneLineErrors) {
               Scene s;
               load_obj(path_of("folder.obj"), s);
             }),
-            path_of("folder.obj") + ": cannot open: Is a directory");
+            path_of("folder.obj") + ": cannot read: not a regular file (a directory)");
 }
 
 // --- PLY ---------------------------------------------------------------------------------------

@@ -1,0 +1,155 @@
+#include "engine/cli/plot.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "engine/error.h"
+#include "engine/output_file.h"
+
+extern char** environ;
+
+namespace rp::cli {
+
+namespace {
+
+/// A descriptor closed on scope exit.
+struct Fd {
+  int fd = -1;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+/// The first line of what gnuplot wrote to `fd` (an unlinked scratch file) with something on
+/// it besides blanks and gnuplot's "^" marker; control characters become '?'.
+std::string first_error_line(int fd) {
+  char buffer[1024];
+  const ssize_t n = ::pread(fd, buffer, sizeof buffer, 0);
+  const std::string_view text(buffer, n > 0 ? size_t(n) : 0);
+  for (size_t start = 0; start < text.size();) {
+    size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view l = text.substr(start, end - start);
+    start = end + 1;
+    while (!l.empty() && (l.front() == ' ' || l.front() == '\t' || l.front() == '\r')) l.remove_prefix(1);
+    while (!l.empty() && (l.back() == ' ' || l.back() == '\t' || l.back() == '\r')) l.remove_suffix(1);
+    if (l.empty() || l == "^") continue;
+    std::string line(l);
+    for (char& c : line)
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+    return line;
+  }
+  return "no message";
+}
+
+}  // namespace
+
+ChartFormat chart_format(const std::string& file) {
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png") return ChartFormat::png;
+  if (ext == ".svg") return ChartFormat::svg;
+  throw Error(cat("chart: '", file, "': unknown chart format '", ext, "' (.png or .svg)"));
+}
+
+void require_gnuplot() {
+  const char* path = std::getenv("PATH");
+  const std::string dirs = path ? path : "/usr/bin:/bin";
+  for (size_t start = 0; start <= dirs.size();) {
+    size_t end = dirs.find(':', start);
+    if (end == std::string::npos) end = dirs.size();
+    const std::string dir = end > start ? dirs.substr(start, end - start) : ".";
+    if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return;
+    start = end + 1;
+  }
+  throw Error("chart: gnuplot is not installed (apt-get install gnuplot-nox; .ci/setup.sh does it)");
+}
+
+std::string gnuplot_string(std::string_view text) {
+  std::string out = "'";
+  for (const char c : text) {
+    if (c == '\'') out += "''";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += '?';
+    else out += c;
+  }
+  return out + "'";
+}
+
+std::string gnuplot_label(std::string_view text) {
+  std::string out;
+  for (const char c : text)
+    out += (static_cast<unsigned char>(c) < 0x20 || c == 0x7f || c == '"' || c == '\\') ? '?' : c;
+  return out;
+}
+
+void plot_to(const std::string& file, const std::string& size, const std::string& script) {
+  const ChartFormat format = chart_format(file);
+  require_gnuplot();
+  OutputFile out(file);
+  const std::string program =
+      cat("set terminal ", format == ChartFormat::png ? "pngcairo" : "svg", " size ", size, " noenhanced\n", script,
+          "\nunset output\n");
+
+  // gnuplot's standard error goes to an unlinked scratch file: read after it exits, it can
+  // never fill a pipe while the script is still being written.
+  Fd err;
+  {
+    std::error_code ec;
+    std::filesystem::path dir = std::filesystem::temp_directory_path(ec);
+    if (ec) dir = "/tmp";
+    err.fd = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);  // never has a name
+    if (err.fd < 0) {  // a file system without O_TMPFILE: a named file, unlinked at once
+      std::string name = (dir / "raypack-gnuplot-XXXXXX").string();
+      err.fd = ::mkostemp(name.data(), O_CLOEXEC);
+      if (err.fd < 0) throw Error(cat("chart: cannot make a scratch file: ", std::strerror(errno)));
+      ::unlink(name.c_str());
+    }
+  }
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw Error(cat("chart: cannot make a pipe: ", std::strerror(errno)));
+  Fd script_read{pipe_fds[0]}, script_write{pipe_fds[1]};
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, script_read.fd, STDIN_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, out.fd(), STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, err.fd, STDERR_FILENO);
+  char arg0[] = "gnuplot";
+  char* argv[] = {arg0, nullptr};
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) throw Error(cat("chart: cannot run gnuplot: ", std::strerror(spawned)));
+  ::close(script_read.fd);
+  script_read.fd = -1;
+
+  // The script; a gnuplot that stops reading early (an error) makes this fail with EPIPE
+  // (SIGPIPE is ignored by the CLI), which its exit status then explains.
+  const char* p = program.data();
+  size_t left = program.size();
+  while (left > 0) {
+    const ssize_t w = ::write(script_write.fd, p, left);
+    if (w < 0 && errno == EINTR) continue;
+    if (w < 0) break;
+    p += w;
+    left -= size_t(w);
+  }
+  ::close(script_write.fd);
+  script_write.fd = -1;
+
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) throw Error(cat("chart: waiting for gnuplot: ", std::strerror(errno)));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || left > 0)
+    throw Error(cat("chart: gnuplot failed for '", file, "': ", first_error_line(err.fd)));
+  out.commit();
+}
+
+}  // namespace rp::cli

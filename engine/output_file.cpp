@@ -1,0 +1,200 @@
+#include "engine/output_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <climits>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "engine/error.h"
+
+namespace rp {
+
+namespace {
+
+// ---- temporary files the signal handler removes ----------------------------------------------
+// A fixed table, so the handler touches no allocator: a slot is claimed (0 -> 1), filled, then
+// published (2); the handler unlinks every published path. unlink, signal and raise are
+// async-signal-safe.
+
+constexpr int kSlots = 64;
+struct Slot {
+  std::atomic<int> state{0};  ///< 0 free, 1 being filled, 2 holds a path
+  char path[PATH_MAX];
+};
+Slot g_slots[kSlots];
+static_assert(std::atomic<int>::is_always_lock_free);
+
+int claim_slot(const std::string& path) {
+  if (path.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = 0;
+    if (!g_slots[i].state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(g_slots[i].path, path.c_str(), path.size() + 1);
+    g_slots[i].state.store(2);
+    return i;
+  }
+  return -1;  // more than kSlots outputs at once: this one is removed by its destructor only
+}
+
+void release_slot(int i) {
+  if (i >= 0) g_slots[i].state.store(0);
+}
+
+extern "C" void remove_temporaries_and_reraise(int sig) {
+  for (Slot& s : g_slots)
+    if (s.state.load() == 2) ::unlink(s.path);
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+std::atomic<uint64_t> g_serial{0};
+
+std::string temp_name(const std::string& file_name) {
+  return cat(".raypack-", ::getpid(), "-", g_serial.fetch_add(1), "-", file_name);
+}
+
+/// Writes all n bytes to fd; returns errno on failure, 0 on success.
+int write_all(int fd, const char* data, size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, data, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    data += w;
+    n -= size_t(w);
+  }
+  return 0;
+}
+
+}  // namespace
+
+OutputFile::OutputFile(const std::string& path) : path_(path) {
+  namespace fs = std::filesystem;
+  if (path.empty()) throw Error("cannot write to an empty file name");
+  struct stat st {};
+  bool device = false;
+  mode_t replace_mode = 0;
+  bool replaces = false;
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) fail("it is a directory");
+    if (S_ISREG(st.st_mode)) {
+      struct stat link {};
+      if (::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) {
+        char* resolved = ::realpath(path.c_str(), nullptr);
+        if (!resolved) fail(cat("cannot resolve the symbolic link: ", std::strerror(errno)));
+        target_ = resolved;
+        std::free(resolved);
+      } else {
+        target_ = path;
+      }
+      replaces = true;
+      replace_mode = st.st_mode & 07777;
+    } else {
+      device = true;  // character or block device, FIFO, socket: written into, never replaced
+    }
+  } else {
+    const int e = errno;
+    struct stat link {};
+    if (e == ENOENT && ::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode))
+      fail("it is a symbolic link to a missing file (not followed)");
+    if (e != ENOENT) fail(std::strerror(e));
+    target_ = path;
+  }
+
+  const fs::path name = fs::path(path).filename();
+  if (device) {
+    std::error_code ec;
+    const fs::path dir = fs::temp_directory_path(ec);
+    temp_ = ((ec ? fs::path("/tmp") : dir) / temp_name(name.empty() ? std::string("output") : name.string())).string();
+  } else {
+    const fs::path t(target_);
+    temp_ = (t.parent_path() / temp_name(t.filename().string())).string();
+  }
+  slot_ = claim_slot(temp_);
+  fd_ = ::open(temp_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    const int e = errno;
+    release_slot(slot_);
+    slot_ = -1;
+    fail(std::strerror(e));
+  }
+  if (replaces) ::fchmod(fd_, replace_mode);  // best effort: the new file keeps the old one's mode
+}
+
+OutputFile::~OutputFile() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !temp_.empty()) ::unlink(temp_.c_str());
+  release_slot(slot_);
+}
+
+void OutputFile::fail(const std::string& reason) const { throw Error(cat(path_, ": cannot write: ", reason)); }
+
+void OutputFile::write(const void* data, size_t n) {
+  if (committed_) fail("already committed");
+  if (const int e = write_all(fd_, static_cast<const char*>(data), n)) fail(std::strerror(e));
+}
+
+void OutputFile::commit() {
+  if (committed_) fail("already committed");
+  if (target_.empty()) {
+    // A device: copy the finished temporary into it, then drop the temporary.
+    const int out = ::open(path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+    if (out < 0) fail(std::strerror(errno));
+    char buffer[1 << 16];
+    off_t at = 0;
+    for (;;) {
+      const ssize_t n = ::pread(fd_, buffer, sizeof buffer, at);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        const int e = errno;
+        ::close(out);
+        fail(std::strerror(e));
+      }
+      if (n == 0) break;
+      if (const int e = write_all(out, buffer, size_t(n))) {
+        ::close(out);
+        fail(std::strerror(e));
+      }
+      at += n;
+    }
+    if (::close(out) != 0 && errno != EINTR) fail(std::strerror(errno));
+    ::close(fd_);
+    fd_ = -1;
+    ::unlink(temp_.c_str());
+  } else {
+    if (::fsync(fd_) != 0) fail(std::strerror(errno));
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) fail(std::strerror(errno));
+    if (::rename(temp_.c_str(), target_.c_str()) != 0) fail(std::strerror(errno));
+  }
+  committed_ = true;
+  release_slot(slot_);
+  slot_ = -1;
+}
+
+void write_file(const std::string& path, std::string_view bytes) {
+  OutputFile out(path);
+  out.write(bytes.data(), bytes.size());
+  out.commit();
+}
+
+void install_signal_cleanup() {
+  struct sigaction sa {};
+  sa.sa_handler = remove_temporaries_and_reraise;
+  sigemptyset(&sa.sa_mask);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+  // A closed pipe on standard output is an error to report (and clean up after), not a
+  // silent death by SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
+}  // namespace rp

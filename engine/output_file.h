@@ -1,0 +1,67 @@
+#pragma once
+/// Writing what raypack produces (images, AOVs, hit and ray files, JSON, charts): one rule for
+/// every writer, so an output is complete or absent and never replaces what it should not.
+///
+/// By what `path` names when the output is opened:
+/// - a regular file, or nothing yet: the data goes to a temporary file beside it,
+///   ".raypack-<pid>-<n>-<name>" (the name keeps the target's extension, which some writers
+///   go by; the mode of a file it replaces), and commit() flushes it to the disk and renames
+///   it over `path`. Readers see the old file or the whole new one, never a part.
+/// - a symlink: followed, and the rule applied to what it points to (the link stays a link,
+///   its target gets the new bytes); a link to nothing is refused, not followed.
+/// - a character or block device, a FIFO or a socket (/dev/null, /dev/stdout on a pipe or
+///   a terminal, a named pipe): never replaced. The data goes to a private temporary file in
+///   the temporary folder ($TMPDIR or /tmp), and commit() copies it into the device, so a
+///   run that fails writes nothing there either.
+/// - a directory, or a path whose folder does not exist: rp::Error naming the path.
+/// Until commit(), the destructor removes the temporary file, and so does the handler that
+/// install_signal_cleanup() sets for SIGINT, SIGTERM and SIGHUP (an interrupted run leaves
+/// nothing behind). Every failure throws rp::Error "<path>: cannot write: <reason>".
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace rp {
+
+class OutputFile {
+ public:
+  explicit OutputFile(const std::string& path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  /// The path as given.
+  const std::string& path() const { return path_; }
+  /// The temporary file, for writers that open a file by name (it exists, empty, until they
+  /// write it; its name ends with the target's extension).
+  const std::string& temp_path() const { return temp_; }
+  /// The temporary file, open for reading and writing at offset 0, for writers that take a
+  /// descriptor (a child process's standard output, say).
+  int fd() const { return fd_; }
+
+  /// Appends n bytes to the temporary file.
+  void write(const void* data, size_t n);
+  /// Makes the output appear at path() (see the top of this header); at most once.
+  void commit();
+
+  [[noreturn]] void fail(const std::string& reason) const;
+
+ private:
+  std::string path_;    ///< as given
+  std::string target_;  ///< what a rename replaces (symlinks resolved); empty for a device
+  std::string temp_;
+  int fd_ = -1;
+  int slot_ = -1;       ///< the signal-cleanup slot holding temp_
+  bool committed_ = false;
+};
+
+/// Writes `bytes` to `path` by the rule above.
+void write_file(const std::string& path, std::string_view bytes);
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every uncommitted temporary
+/// file of every live OutputFile, then end the process by the same signal (so the exit
+/// status says which). Call once, early in main().
+void install_signal_cleanup();
+
+}  // namespace rp
