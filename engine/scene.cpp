@@ -261,6 +261,13 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
       break;
     }
   }
+  // A shape much smaller than the rounding of a far-away hit point (a unit sphere or quadric
+  // seen from 2^30 away) can put the computed point at its centre, where the gradient is 0:
+  // the normal then faces the ray rather than being zero.
+  if (!(dot(sp.geometric_normal, sp.geometric_normal) > 0.5f)) {
+    sp.geometric_normal = sp.shading_normal = -normalize(ray.dir);
+    if (!is_finite(sp.position)) sp.position = ray.at(hit.t);
+  }
   return sp;
 }
 

@@ -190,7 +190,9 @@ class Scene {
   }
   /// True when any plane is hit within [tnear, tfar].
   bool occluded_by_planes(const Ray& ray) const { return !planes_.empty() && occluded_by_any_plane(ray); }
-  /// Position, normals and material of a hit of `ray` (hit.hit() must be true).
+  /// Position, normals and material of a hit of `ray` (hit.hit() must be true). The geometric
+  /// normal is always unit length: where rounding leaves no direction (a point computed at a
+  /// tiny shape's centre from far away), it is -normalize(ray.dir).
   SurfacePoint surface(const Ray& ray, const Hit& hit) const;
   /// Number of triangles with zero area (kept: they never produce hits).
   size_t degenerate_triangle_count() const;

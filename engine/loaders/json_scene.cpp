@@ -78,6 +78,7 @@
 /// $.a["not an identifier"]; values as the file has them, compact, cut to 40 characters
 /// with "..."):
 ///   line L, column C: <nlohmann's reason>                          JSON syntax (columns in bytes)
+///   line L, column C: nesting deeper than 64 levels                 checked before parsing
 ///   number overflow parsing '1e999'                                a number beyond double
 ///   <path>.<key>: unknown key (expected one of: <keys>)
 ///   <path>: missing key "<key>"

@@ -131,8 +131,12 @@ class PlyReader {
       else
         read_binary(e, offset);
     }
-    for (size_t i = 0; i < mesh_.positions.size(); ++i)
-      RP_CHECK(is_finite(mesh_.positions[i]), path_, ": vertex ", i, " has a non-finite coordinate");
+    for (size_t i = 0; i < mesh_.positions.size(); ++i) {
+      const Vec3f& p = mesh_.positions[i];
+      RP_CHECK(is_finite(p), path_, ": vertex ", i, " has a non-finite coordinate");
+      RP_CHECK(in_coordinate_range(p), path_, ": vertex ", i, " (", p.x, ", ", p.y, ", ", p.z,
+               ") is outside the supported coordinate range |x| <= 1073741824 (2^30)");
+    }
     return std::move(mesh_);
   }
 

@@ -295,13 +295,21 @@ TEST_P(Conformance, HitCountsOnlyWithinClosedInterval) {
 }
 
 TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
+  // NaN and infinite components, a zero direction, tnear outside [0, tfar], and finite rays
+  // beyond the range of engine/ray.h (Embree aborts from 1.844e18 up): misses everywhere,
+  // never passed to an engine, however squarely they aim at the geometry.
   const Scene scene = analytic_scene();
   auto backend = make_param_backend(GetParam(), scene);
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const float past = std::nextafter(kMaxCoordinate, 2 * kMaxCoordinate);
   const std::vector<Ray> rays = {
       {{nan, 0, 4}, 0, {0, 0, -1}, inf}, {{0, 0, 4}, 0, {0, nan, -1}, inf}, {{0, 0, 4}, nan, {0, 0, -1}, inf},
       {{0, 0, 4}, 0, {0, 0, -1}, nan},   {{0, 0, 4}, 5, {0, 0, -1}, 1},     {{0, 0, 4}, 0, {0, 0, 0}, inf},
       {{inf, 0, 4}, 0, {0, 0, -1}, inf}, {{0, 0, 4}, 0, {0, 0, -inf}, inf}, {{0, 0, 4}, -1, {0, 0, -1}, inf},
+      {{0, 0, 1e19f}, 0, {0, 0, -1}, inf},           {{0, 0, past}, 0, {0, 0, -1}, inf},
+      {{0, 0, 4}, 0, {0, 0, -1e19f}, inf},           {{0, 0, 4}, 0, {0, 0, -2 * kMaxDirection}, inf},
+      {{0, 0, 4}, 0, {0, 0, -1e-30f}, inf},          {{0, 0, 4}, 0, {0, 0, -0.5f * kMinDirection}, inf},
+      {{0, 0, 4}, 0, {1e-40f, 1e-40f, -1e-39f}, inf}, {{-3e38f, 0, 4}, 0, {3e38f, 0, -4}, inf},
   };
   std::vector<Hit> hits(rays.size());
   std::vector<uint8_t> occ(rays.size(), 1);
@@ -313,6 +321,88 @@ TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
       EXPECT_EQ(occ[i], 0) << "ray " << i;
     }
   }
+}
+
+TEST_P(Conformance, DirectionsAtTheEndsOfTheRangeAreTraced) {
+  // The largest component at 2^31 and at 2^-26; origins at the range's edge: ExtremeScales...
+  const Scene scene = analytic_scene();
+  auto backend = make_param_backend(GetParam(), scene);
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<Ray> inside = {{{0, 0, 4}, 0, {0, 0, -kMaxDirection}, inf}, {{0, 0, 4}, 0, {0, 0, -kMinDirection}, inf}};
+  std::vector<Hit> in_hits(inside.size());
+  for (Coherence coh : {Coherence::coherent, Coherence::incoherent}) {
+    backend->intersect(inside, in_hits, coh);
+    for (size_t i = 0; i < inside.size(); ++i) EXPECT_EQ(in_hits[i].prim_id, scene.sphere_base()) << "ray " << i;
+  }
+}
+
+/// Geometry at the edges of the coordinate range: a triangle spanning the whole range, a small
+/// one in a corner, a sphere, an ellipsoid and a polygon far out.
+Scene extreme_scene() {
+  constexpr float R = kMaxCoordinate;
+  Scene s;
+  TriangleMesh m;
+  m.name = "extreme";
+  m.positions = {{-R, -R, 0.5f * R}, {R, -R, 0.5f * R}, {0, R, 0.5f * R},  // spans the range at z = 2^29
+                 {R - 0x1p23f, R - 0x1p23f, -R + 0x1p22f}, {R - 0x1p22f, R - 0x1p23f, -R + 0x1p23f},
+                 {R - 0x1p23f, R - 0x1p22f, -R + 0x1p22f}};  // a small one near a corner
+  m.indices = {0, 1, 2, 3, 4, 5};
+  s.add_mesh(m);
+  s.add_sphere({{-0.5f * R, 0.5f * R, 0}, 0.25f * R, 0});
+  s.add_quadric({Quadricf::ellipsoid({0.5f * R, -0.5f * R, 0}, {0.125f * R, 0.0625f * R, 0.125f * R}), 0});
+  const std::vector<Vec3f> polygon{{-0.875f * R, -0.875f * R, -0.875f * R}, {-0.625f * R, -0.875f * R, -0.875f * R},
+                                   {-0.625f * R, -0.625f * R, -0.875f * R}, {-0.875f * R, -0.625f * R, -0.875f * R}};
+  s.add_polygon(polygon, 0);
+  // A general quadric with cross terms at the origin: seen from a corner along the diagonal
+  // with a 2^31 direction, b^2 of its quadratic overflows float unless the direction is scaled.
+  Quadricf q;
+  q.A = q.B = q.C = q.D = q.E = q.F = 1;
+  q.J = -1;
+  q.clip = {Vec3f(-2.0f), Vec3f(2.0f)};
+  s.add_quadric({q, 0});
+  return s;
+}
+
+TEST_P(Conformance, ExtremeScalesWithinTheRangeGiveTheOraclesHits) {
+  // Origins at the range's corners, aimed at the middle of each primitive, with directions
+  // whose largest component is 2^31, 1 and 2^-26: no kernel may overflow into a miss, a false
+  // hit or a zero normal (the far-from-origin failures of hostile input round two).
+  const Scene scene = extreme_scene();
+  auto backend = make_param_backend(GetParam(), scene);
+  constexpr float R = kMaxCoordinate;
+  const std::vector<Vec3f> targets = {{0, -0x1p28f, 0.5f * R},  // the centroids and centres
+                                      (scene.meshes()[0].vertex(1, 0) + scene.meshes()[0].vertex(1, 1) +
+                                       scene.meshes()[0].vertex(1, 2)) * (1.0f / 3.0f),
+                                      {-0.5f * R, 0.5f * R, 0},
+                                      {0.5f * R, -0.5f * R, 0},
+                                      {-0.75f * R, -0.75f * R, -0.875f * R},
+                                      {0, 0, 0}};
+  std::vector<Ray> rays;
+  for (float x : {-1.0f, 1.0f})
+    for (float y : {-1.0f, 1.0f})
+      for (float z : {-1.0f, 1.0f})
+        for (const Vec3f& t : targets)
+          for (float largest : {kMaxDirection, 1.0f, kMinDirection}) {
+            const Vec3f o = Vec3f{x, y, z} * kMaxCoordinate;
+            Vec3f d = t - o;
+            d = d * (largest / max_component(abs(d)));
+            rays.push_back({o, 0.0f, d, std::numeric_limits<float>::infinity()});
+          }
+  std::vector<Hit> hits(rays.size());
+  int checked = 0;
+  for (Coherence coh : {Coherence::coherent, Coherence::incoherent}) {
+    backend->intersect(rays, hits, coh);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const OracleHit o = oracle_intersect(scene, rays[i]);
+      ASSERT_EQ(hits[i].prim_id, o.prim_id) << "ray " << i;
+      if (!o.hit()) continue;
+      ++checked;
+      EXPECT_NEAR(double(hits[i].t) / o.t, 1.0, 1e-4) << "ray " << i;
+      const SurfacePoint sp = scene.surface(rays[i], hits[i]);
+      EXPECT_NEAR(length(Vec3d(sp.geometric_normal)), 1.0, 1e-4) << "ray " << i << ": normal not unit";
+    }
+  }
+  EXPECT_GE(checked, 2 * 70);
 }
 
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +12,8 @@
 #include <string>
 
 #include "engine/image_io.h"
+#include "engine/rayfile.h"
+#include "engine/text.h"
 
 namespace {
 
@@ -20,8 +24,9 @@ struct Result {
   std::string output;  // stdout and stderr
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(RAYPACK_EXE) + " " + args + " 2>&1";
+/// Runs `raypack <args>` through the shell, after `prefix` (shell commands such as a ulimit).
+Result run(const std::string& args, const std::string& prefix = "") {
+  const std::string cmd = prefix + std::string(RAYPACK_EXE) + " " + args + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return {-1, "popen failed"};
   std::string out;
@@ -263,6 +268,195 @@ TEST_F(Cli, HelpAndVersion) {
   r = run("backends");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("embree"), std::string::npos);
+}
+
+
+// ---- hostile input, round two -----------------------------------------------------------
+
+TEST_F(Cli, CameraAndLightFlagsOutsideTheCoordinateRangeAreBadFlags) {
+  const std::string out = " --resolution 16x16 -o " + (dir_ / "x.png").string();
+  // Embree aborted the process (SIGABRT) on these before the range rule.
+  Result r = run("render --eye 0,0,1e19 --look-at 0,0,0" + out);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: --eye: '0,0,1e19' is outside the supported coordinate range |x| <= 1073741824 (2^30)\n");
+  r = run("render --eye 0,0,3e38" + out);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output.find("parallel"), std::string::npos) << r.output;
+  r = run("render --camera thin-lens --eye 0,0,1e9 --aperture 1e9" + out);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output.rfind("raypack: --aperture: 1e+09 puts the lens around the eye", 0), 0u) << r.output;
+  r = run("render --light 0,0,1e19,5" + out);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output.rfind("raypack: --light: '0,0,1e19' is outside the supported coordinate range", 0), 0u) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, AFileOutsideTheCoordinateRangeNamesTheFileAndLineNotTheCamera) {
+  const fs::path scene = dir_ / "far.obj";
+  std::ofstream(scene) << "v 1e38 0 0\nv 0 0 0\nv 0 1 0\nf 1 2 3\n";
+  const std::string expected = "raypack: " + scene.string() +
+                               ": line 1: vertex coordinate 1e38 is outside the supported coordinate range |x| <= "
+                               "1073741824 (2^30)\n";
+  for (const std::string& cmd : {"render -o " + (dir_ / "x.png").string(), std::string("diff --count 64"),
+                                std::string("info")}) {
+    const Result r = run(cmd + " --scene " + scene.string());
+    EXPECT_EQ(r.status, 1) << cmd << ": " << r.output;
+    EXPECT_EQ(r.output, expected) << cmd;
+  }
+}
+
+TEST_F(Cli, RaysOutsideTheRangeAreTracedAsMissesWithAWarning) {
+  const fs::path rays = dir_ / "rays.csv", hits = dir_ / "hits.csv";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n"
+                      << "0,1e19,0,0,-1,0,0,inf\n"      // Embree asserts on this origin
+                      << "5,10,5,0,-1e19,0,0,inf\n"     // and on this direction
+                      << "5,10,5,0,-1e-30,0,0,inf\n"    // too short to trace without overflow
+                      << "5,10,5,0,-1,0,0,inf\n";       // an ordinary ray onto the ground plane
+  for (const char* backend : {"embree", "simd"}) {
+    const Result r = run(std::string("trace --backend ") + backend + " --rays " + rays.string() + " -o " + hits.string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("warning: " + rays.string() + ": 3 of 4 rays are outside the valid-ray rule"),
+              std::string::npos)
+        << r.output;
+    const std::vector<rp::HitRecord> h = rp::read_hits(hits.string());
+    ASSERT_EQ(h.size(), 4u);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(h[i].prim_id, rp::kInvalidId) << backend << " ray " << i;
+    EXPECT_EQ(h[3].t, 10.0f) << backend;
+  }
+  const Result r = run("diff --rays " + rays.string() + " -a embree -b simd --min-agreement 100");
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
+TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
+  const fs::path rays = dir_ / "rays.csv";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n";
+  struct stat before {}, after {};
+  ASSERT_EQ(::stat("/dev/null", &before), 0);
+  Result r = run("trace --rays " + rays.string() + " -o /dev/null -q");
+  EXPECT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(::stat("/dev/null", &after), 0);
+  EXPECT_TRUE(S_ISCHR(after.st_mode)) << "/dev/null was replaced";
+  EXPECT_EQ(after.st_ino, before.st_ino);
+  // Standard output on a pipe: the bytes arrive there.
+  r = run("trace --rays " + rays.string() + " -o /dev/stdout -q");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.output.size(), 16u + 28u);
+  EXPECT_EQ(r.output.substr(0, 4), "RPHT");
+  // A symlink stays a link; the file it names gets the image.
+  fs::create_directory(dir_ / "store");
+  std::ofstream(dir_ / "store" / "render.png") << "old";
+  fs::create_symlink(dir_ / "store" / "render.png", dir_ / "latest.png");
+  r = run("render --resolution 16x16 -q -o " + (dir_ / "latest.png").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::is_symlink(dir_ / "latest.png"));
+  EXPECT_EQ(rp::read_image((dir_ / "store" / "render.png").string()).width, 16);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_ / "store"), fs::directory_iterator()), 1);
+}
+
+TEST_F(Cli, AFailingImageWriterLeavesNoTemporaryBehind) {
+  // OIIO has no writer for .xyz: the error comes after the output file was opened.
+  const Result r = run("render --resolution 16x16 -q -o " + (dir_ / "image.xyz").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("no image writer for extension '.xyz'"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::is_empty(dir_)) << "left " << fs::directory_iterator(dir_)->path();
+}
+
+TEST_F(Cli, SpecialInputFilesAreRefusedAtOnce) {
+  const fs::path fifo = dir_ / "x.obj";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  fs::create_symlink("/dev/zero", dir_ / "zero.ply");
+  fs::create_symlink("/dev/zero", dir_ / "zero.bin");
+  // `timeout` turns a hang (the old blocking open of a FIFO) into a failure, not a stuck suite.
+  Result r = run("info " + fifo.string(), "timeout 20 ");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: " + fifo.string() + ": cannot read: not a regular file (a FIFO)\n");
+  r = run("info " + (dir_ / "zero.ply").string(), "timeout 20 ");
+  EXPECT_EQ(r.output, "raypack: " + (dir_ / "zero.ply").string() + ": cannot read: not a regular file (a character device)\n");
+  r = run("trace --rays " + (dir_ / "zero.bin").string() + " -o " + (dir_ / "h.bin").string(), "timeout 20 ");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("not a regular file (a character device)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "h.bin"));
+}
+
+TEST_F(Cli, DeepJsonIsAOneLineError) {
+  const fs::path scene = dir_ / "deep.json", bench = dir_ / "deep-bench.json";
+  std::ofstream(scene) << "{\"objects\": " << std::string(70000, '[') << std::string(70000, ']') << "}";
+  std::ofstream(bench) << std::string(70000, '{');
+  Result r = run("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: " + scene.string() + ": line 1, column 76: nesting deeper than 64 levels\n");
+  r = run("chart " + bench.string() + " -o " + (dir_ / "c.png").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: " + bench.string() + ": line 1, column 65: nesting deeper than 64 levels\n");
+}
+
+TEST_F(Cli, MessagesAreOneLineOfValidUtf8) {
+  const fs::path scene = dir_ / "bad.json";
+  // An unknown key with invalid UTF-8 and a newline and an escape sequence in it.
+  std::ofstream(scene) << "{\"objects\": [], \"k\xff\xfe\\n\\u001b[31m\": 1}";
+  Result r = run("render --scene " + scene.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_EQ(rp::one_line(r.output.substr(0, r.output.size() - 1)), r.output.substr(0, r.output.size() - 1)) << r.output;
+  // A syntax error whose "last read" text holds raw bytes.
+  std::ofstream(scene) << "{\"objects\": [\xc3\x28\x1b]}";
+  r = run("render --scene " + scene.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_EQ(rp::one_line(r.output.substr(0, r.output.size() - 1)), r.output.substr(0, r.output.size() - 1)) << r.output;
+}
+
+TEST_F(Cli, ChartFileNamesAndLabelsAreDataNeverCommands) {
+  const fs::path json = dir_ / "b.json";
+  Result r = run("bench --size 8 --min-runs 1 --max-runs 1 --json " + json.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  // A name that closed gnuplot's quotes ran `system` through the old shell-and-script route.
+  const fs::path odd = dir_ / "a'; system 'touch X'; x='.png";
+  r = run("chart " + json.string() + " -o \"" + odd.string() + "\"");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(odd));
+  EXPECT_FALSE(fs::exists(dir_ / "X"));
+  EXPECT_FALSE(fs::exists("X"));
+  // Scene names and method labels from the JSON file cannot break out of their strings.
+  std::string text = file_bytes(json);
+  const std::string evil_scene = "\"scene\": \"evil' . system('touch Y') . '\\nset output 'Z'\"";
+  text.replace(text.find("\"scene\": \"default\""), std::string("\"scene\": \"default\"").size(), evil_scene);
+  const size_t method = text.find("\"method\": \"");
+  text.insert(method + 11, "m\\\"\\nEOD\\nsystem(\\\"touch W\\\")\\n");
+  std::ofstream(dir_ / "evil.json") << text;
+  r = run("chart " + (dir_ / "evil.json").string() + " -o " + (dir_ / "evil.svg").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const char* made : {"Y", "Z", "W"}) EXPECT_FALSE(fs::exists(dir_ / made) || fs::exists(made)) << made;
+  EXPECT_EQ(file_bytes(dir_ / "evil.svg").rfind("<?xml", 0), 0u);
+  // Nothing temporary is left beside the charts.
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_NE(e.path().filename().string().rfind(".raypack-", 0), 0u) << e.path();
+}
+
+TEST_F(Cli, InfoPrintsCountsAsIntegers) {
+  const fs::path scene = dir_ / "grid.obj";
+  std::ofstream f(scene);
+  for (int y = 0; y <= 60; ++y)
+    for (int x = 0; x <= 60; ++x) f << "v " << x << " " << y << " " << (x * y % 7) << "\n";
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x) f << "f " << y * 61 + x + 1 << " " << y * 61 + x + 2 << " " << (y + 1) * 61 + x + 2 << "\n";
+  f.close();
+  const Result r = run("info " + scene.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("prims=3600"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("e+"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
+#else
+  const Result r = run("render --resolution 20000x10000 -q -o " + (dir_ / "x.png").string(), "ulimit -v 1500000; ");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output.rfind("raypack: out of memory while rendering 20000x10000: an allocation of ", 0), 0u) << r.output;
+  EXPECT_NE(r.output.find(" bytes failed\n"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+#endif
 }
 
 }  // namespace

@@ -1067,6 +1067,51 @@ TEST(QuadricProperty, HitsLieOnTheSurfaceInsideClipAndMatchOracle) {
   EXPECT_GE(checked, 10000);
 }
 
+TEST(QuadricProperty, ScalingTheDirectionByAPowerOfTwoScalesTExactly) {
+  // intersect_quadric traces a power-of-two-scaled direction internally: t must scale by the
+  // inverse power exactly, and extreme valid directions (engine/ray.h) must not overflow.
+  std::mt19937 rng(99);
+  const Quadricf q = Quadricf::ellipsoid({0.5f, -0.25f, 0.0f}, {1.0f, 2.0f, 0.75f}).normalized();
+  int hits = 0;
+  for (int i = 0; i < 2000; ++i) {
+    std::uniform_real_distribution<float> u(-4.0f, 4.0f), w(-0.5f, 0.5f);
+    const Vec3f o{u(rng), u(rng), u(rng)};
+    const Vec3f d = Vec3f{w(rng), w(rng), w(rng)} - o * 0.25f;
+    const Ray r{o, 0.0f, d, std::numeric_limits<float>::infinity()};
+    const Intersection<float> h = intersect_quadric(r, q);
+    hits += h.hit;
+    for (int e : {-20, -7, 3, 25}) {
+      const float s = std::ldexp(1.0f, e);
+      const Intersection<float> hs = intersect_quadric(Ray{o, 0.0f, d * s, r.tfar}, q);
+      ASSERT_EQ(hs.hit, h.hit) << i << " 2^" << e;
+      if (h.hit) {
+        EXPECT_EQ(hs.t, h.t / s) << i << " 2^" << e;
+      }
+    }
+  }
+  EXPECT_GT(hits, 500);
+  // b^2 of a quadric with cross terms, seen along the diagonal from 2^30 with a 2^31
+  // direction, is 2^131: only the scaled direction keeps it finite.
+  Quadricf cross;
+  cross.A = cross.B = cross.C = cross.D = cross.E = cross.F = 1;
+  cross.J = -1;
+  cross.clip = {Vec3f(-2.0f), Vec3f(2.0f)};
+  const Intersection<float> diagonal =
+      intersect_quadric(Ray{Vec3f(0x1p30f), 0.0f, Vec3f(-0x1p31f), std::numeric_limits<float>::infinity()}, cross);
+  ASSERT_TRUE(diagonal.hit);
+  EXPECT_NEAR(diagonal.t, (0x1p30 - 1.0 / std::sqrt(6.0)) / 0x1p31, 1e-7);
+  // At the range's corners: an origin 2^30 away, directions of largest component 2^31 and 2^-26.
+  const Quadricf far = Quadricf::ellipsoid({0x1p29f, 0x1p29f, 0x1p29f}, {0x1p28f, 0x1p28f, 0x1p28f}).normalized();
+  const Vec3f corner{-0x1p30f, -0x1p30f, -0x1p30f};
+  for (float m : {0x1p31f, 0x1p-26f}) {
+    const Vec3f dir = normalize(far.center - corner) * (m / normalize(far.center - corner).x);
+    const Intersection<float> h = intersect_quadric(Ray{corner, 0.0f, dir, std::numeric_limits<float>::infinity()}, far);
+    ASSERT_TRUE(h.hit) << m;
+    const double expected = (length(Vec3d(far.center) - Vec3d(corner)) - 0x1p28) / length(Vec3d(dir));
+    EXPECT_NEAR(h.t / expected, 1.0, 1e-5) << m;
+  }
+}
+
 TEST(QuadricProperty, EqualRadiiEllipsoidMatchesSphere) {
   std::mt19937 rng(64);
   int hits = 0;

@@ -24,33 +24,16 @@
 
 #include "engine/error.h"
 #include "engine/rayfile.h"
+#include "tests/support/error_of.h"
+#include "tests/support/temp_dir.h"
 
 namespace rp {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_of;
 
-/// A fresh directory under the system temp dir, removed with everything in it.
-struct TempDir {
-  fs::path dir;
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "rayfile_test-XXXXXX").string();
-    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
-    dir = tmpl;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::permissions(dir, fs::perms::owner_all, fs::perm_options::add, ec);
-    fs::remove_all(dir, ec);
-  }
-  std::string operator/(const std::string& name) const { return (dir / name).string(); }
-  /// Names of the entries in the directory, temporaries included.
-  std::set<std::string> entries() const {
-    std::set<std::string> names;
-    for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
-    return names;
-  }
-};
+using test::TempDir;
 
 uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
 float from_bits(uint32_t b) { return std::bit_cast<float>(b); }
@@ -80,16 +63,6 @@ std::string header(const char* magic, uint32_t version, uint64_t count) {
   std::memcpy(h.data() + 4, &version, 4);
   std::memcpy(h.data() + 8, &count, 8);
   return h;
-}
-
-/// what() of the rp::Error that f throws, or a note that it threw none.
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no rp::Error thrown)";
 }
 
 /// Float bit patterns a file must carry unchanged: signed zeros, denormals, extremes,
@@ -225,7 +198,7 @@ TEST(RayFileRead, DashReadsStandardInputInEitherFormat) {
     bytes.append(reinterpret_cast<const char*>(f), 32);
   }
   std::vector<Ray> back;
-  with_stdin(bytes, [&] { EXPECT_EQ(error_of([&] { back = read_rays("-"); }), "(no rp::Error thrown)"); });
+  with_stdin(bytes, [&] { EXPECT_EQ(error_of([&] { back = read_rays("-"); }), test::kNoError); });
   ASSERT_EQ(back.size(), rays.size());
   for (size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(bits(back[i]), bits(rays[i])) << "ray " << i;
   with_stdin("ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,7\n", [&] { back = read_rays("-"); });

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "engine/error.h"
 #include "engine/scene.h"
 
@@ -69,6 +72,58 @@ TEST(SceneValidation, BadMeshesAreRejectedWithTheReason) {
   const std::vector<Vec3f> line{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
   expect_error([&] { s.add_polygon(line, 0); }, "polygon: vertices are collinear (zero area)");
   EXPECT_EQ(s.prim_count(), 0u);
+}
+
+TEST(SceneValidation, GeometryOutsideTheCoordinateRangeIsRefused) {
+  // engine/ray.h: every scene coordinate within 2^30; one float past it is refused.
+  const float edge = kMaxCoordinate, past = std::nextafter(kMaxCoordinate, 2 * kMaxCoordinate);
+  const std::string range = " is outside the supported coordinate range |x| <= 1073741824 (2^30)";
+  Scene s;
+  TriangleMesh m = two_triangles("far");
+  m.positions[3] = {1, edge, -edge};
+  s.add_mesh(m);  // at the edge: fine
+  m.positions[3] = {1, past, 0};
+  expect_error([&] { s.add_mesh(m); }, "mesh 'far': vertex 3 (1, 1.07374e+09, 0)" + range);
+  s.add_sphere({{0, edge - 256, 0}, 256, 0});  // floats are 64 apart below 2^30, 128 above
+  expect_error([&] { s.add_sphere({{0, edge - 128, 0}, 256, 0}); },
+               "sphere at (0, 1.07374e+09, 0) radius 256: its box" + range);
+  const std::vector<Vec3f> far_polygon{{0, 0, 0}, {past, 0, 0}, {0, 1, 0}};
+  expect_error([&] { s.add_polygon(far_polygon, 0); }, "polygon: vertex (1.07374e+09, 0, 0)" + range);
+  expect_error([&] { s.add_plane({{0, 2, 0}, -2 * past, 0}); },
+               "plane: its distance from the origin, 1.07374e+09, is outside the supported coordinate range |x| <= "
+               "1073741824 (2^30)");
+  s.add_plane({{0, 2, 0}, -2 * edge, 0});
+  Quadricf q;
+  q.A = q.B = q.C = 1;
+  q.J = -1;
+  q.clip = {{-1, -1, -1}, {past, 1, 1}};
+  expect_error([&] { s.add_quadric({q, 0}); },
+               "quadric: clipping box (-1, -1, -1) - (1.07374e+09, 1, 1) or centre (0, 0, 0)" + range);
+  expect_error([&] { s.add_light(PointLight{{0, 0, -1e19f}, Vec3f(1.0f)}); }, "point light at (0, 0, -1e+19): outside "
+                                                                             "the supported coordinate range |x| <= "
+                                                                             "1073741824 (2^30)");
+  expect_error([&] { s.add_light(DirectionalLight{{0, 0, 0}, Vec3f(1.0f)}); },
+               "directional light: direction (0, 0, 0) must be finite and non-zero");
+  EXPECT_EQ(s.prim_count(), 2u + 1 + 1);  // the two triangles, the sphere and the plane at the edge
+}
+
+TEST(SceneValidation, QuadricsAreStoredWithPowerOfTwoNormalizedCoefficients) {
+  Scene s;
+  const Quadricf small = Quadricf::ellipsoid({5, 0, 0}, {1e-3f, 2e-3f, 3e-3f});  // A = 1e6
+  s.add_quadric({small, 0});
+  const Quadricf& q = s.quadrics()[0].quadric;
+  const float scale = q.A / small.A;
+  EXPECT_EQ(scale, std::exp2(std::round(std::log2(scale)))) << "a power of two";
+  for (auto [stored, given] : {std::pair{q.A, small.A}, std::pair{q.B, small.B}, std::pair{q.C, small.C},
+                                std::pair{q.J, small.J}})
+    EXPECT_EQ(stored, given * scale);
+  EXPECT_GE(std::max({std::abs(q.A), std::abs(q.B), std::abs(q.C), std::abs(q.J)}), 1.0f);
+  EXPECT_LT(std::max({std::abs(q.A), std::abs(q.B), std::abs(q.C), std::abs(q.J)}), 2.0f);
+  // The same surface: the same hits, bit for bit.
+  const Ray r{{5, 0, -0.01f}, 0, {0, 0, 1}, 10};
+  const Intersection<float> a = intersect_quadric(r, small), b = s.intersect_analytic(s.quadric_base(), r);
+  ASSERT_TRUE(a.hit);
+  EXPECT_EQ(a.t, b.t);
 }
 
 TEST(SceneSurface, TrianglePointAndNormalFromBarycentrics) {

@@ -6,14 +6,55 @@
 /// so the seeds begin with the printable '0' (binary rays), '1' (CSV rays), '2' (binary hits)
 /// or '3' (CSV hits). An empty input selects nothing and returns. Seeds: corpus/fuzz_rayfile/,
 /// dictionary: rayfile.dict.
+///
+/// The rays a file yields are then traced (the first 64, both coherence hints, closest and any
+/// hit) through every available backend variant and the double-precision reference over the
+/// embedded default scene: a ray value that reaches an engine's assert (Embree aborts on
+/// coordinates from 1.844e18 up) or a sanitizer report is a finding like a reader's crash.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "backends/registry.h"
 #include "engine/rayfile.h"
+#include "engine/reference.h"
 #include "tests/fuzz/fuzz_file.h"
+
+namespace {
+
+/// The first 64 of `rays` through every backend variant and the reference (see the top).
+void trace_everywhere(std::span<const rp::Ray> rays) {
+  static const rp::Scene scene = rp::make_default_scene();
+  static const std::vector<std::unique_ptr<rp::Backend>> backends = [] {
+    std::vector<std::unique_ptr<rp::Backend>> all;
+    for (const rp::BackendEntry& e : rp::list_backends())
+      if (e.available)
+        for (const std::string& v : e.variants) all.push_back(rp::make_backend(e.name, scene, {.variant = v, .device_config = {}}));
+    return all;
+  }();
+  static const rp::Reference reference(scene);
+  rays = rays.first(std::min<size_t>(rays.size(), 64));
+  std::vector<rp::Hit> hits(rays.size());
+  std::vector<uint8_t> occluded(rays.size());
+  size_t ids = 0;  // uses every answer, so no trace is optimised away
+  for (const auto& b : backends)
+    for (rp::Coherence c : {rp::Coherence::coherent, rp::Coherence::incoherent}) {
+      b->intersect(rays, hits, c);
+      b->occluded(rays, occluded, c);
+      for (size_t i = 0; i < rays.size(); ++i) ids += hits[i].prim_id + occluded[i];
+    }
+  std::vector<rp::ReferenceHit> reference_hits(rays.size());
+  reference.intersect(rays, reference_hits);
+  for (const rp::ReferenceHit& h : reference_hits) ids += h.prim_id;
+  rp::fuzz::sink_count = ids;
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
@@ -25,6 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } else {
       const std::vector<rp::Ray> rays = rp::read_rays(path);
       rp::fuzz::touch(rays);
+      trace_everywhere(rays);
     }
   });
 }

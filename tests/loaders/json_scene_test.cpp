@@ -415,6 +415,33 @@ TEST(JsonSceneErrors, VectorsNeedThreeFiniteFloats) {
             "scene.json: $.objects[0].vertices[2]: expected 3 numbers, got [0,1]");
 }
 
+TEST(JsonSceneErrors, PositionsOutsideTheCoordinateRangeNameTheirPath) {
+  EXPECT_EQ(json_error(R"({"camera": {"eye": [0, 0, 1e19]}, "objects": []})"),
+            "scene.json: $.camera.eye: [0,0,1e+19] is out of range (must be within the supported coordinate range "
+            "|x| <= 1073741824 = 2^30)");
+  EXPECT_EQ(json_error(R"({"camera": {"look_at": [3e38, 0, 0]}, "objects": []})"),
+            "scene.json: $.camera.look_at: [3e+38,0,0] is out of range (must be within the supported coordinate range "
+            "|x| <= 1073741824 = 2^30)");
+  EXPECT_EQ(json_error(R"({"camera": {"model": "thin_lens", "aperture": 2e9}, "objects": []})"),
+            "scene.json: $.camera.aperture: 2000000000.0 is out of range (the lens must stay within the supported "
+            "coordinate range |x| <= 1073741824 = 2^30)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "center": [2e9, 0, 0]})")),
+            "scene.json: $.objects[0]: sphere at (2e+09, 0, 0) radius 1: its box is outside the supported coordinate "
+            "range |x| <= 1073741824 (2^30)");
+  EXPECT_EQ(json_error(R"({"lights": [{"type": "point", "position": [0, -2e9, 0]}], "objects": []})"),
+            "scene.json: $.lights[0]: point light at (0, -2e+09, 0): outside the supported coordinate range |x| <= "
+            "1073741824 (2^30)");
+}
+
+TEST(JsonSceneErrors, NestingDeeperThan64LevelsIsRefusedBeforeParsing) {
+  // 70,000 levels overflowed the stack when the error path printed the value recursively.
+  const std::string deep = R"({"objects": )" + std::string(70000, '[') + std::string(70000, ']') + "}";
+  EXPECT_EQ(json_error(deep), "scene.json: line 1, column 76: nesting deeper than 64 levels");
+  // Brackets inside strings do not count, escaped quotes do not end a string.
+  const std::string in_string = R"({"materials": {"a\"[[[": {}}, "x": ")" + std::string(100, '[') + R"("})";
+  EXPECT_EQ(json_error(in_string).find("nesting"), std::string::npos) << json_error(in_string);
+}
+
 TEST(JsonSceneErrors, OutOfRangeValuesNameTheRange) {
   EXPECT_EQ(json_error(with_object(R"({"type": "sphere", "radius": -1})")),
             "scene.json: $.objects[0].radius: -1 is out of range (must be > 0)");

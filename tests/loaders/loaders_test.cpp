@@ -21,6 +21,7 @@
 #include "engine/error.h"
 #include "engine/loaders/load.h"
 #include "scratch.h"
+#include "tests/support/error_of.h"
 
 #ifndef RP_SHARED_SCENES
 #define RP_SHARED_SCENES "../shared/scenes"
@@ -30,19 +31,10 @@ namespace rp {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_of;
 
 using test::scratch;
 using test::write_file;
-
-/// what() of the rp::Error that `f` throws, or "no error".
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
 
 Scene obj_scene(const std::string& name, const std::string& text) {
   Scene scene;
@@ -342,6 +334,41 @@ TEST(ObjLoader, DegenerateTrianglesAreKept) {
   const Scene s = obj_scene("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n");
   EXPECT_EQ(s.triangle_count(), 2u);
   EXPECT_EQ(s.degenerate_triangle_count(), 1u);
+}
+
+TEST(ObjLoader, EveryNumberIsParsedStrictlyWithItsLine) {
+  // tinyobjloader alone reads these as 0, as a prefix, or wrapped (4294967299 -> 3).
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"v 1 abc 0\n" + tri + "f 2 3 4\n", "line 1: 'abc' is not a number"},
+      {tri + "v 1x 0 0\nf 1 2 3\n", "line 4: '1x' is not a number"},
+      {tri + "v 1e 0 0\nf 1 2 3\n", "line 4: '1e' is not a number"},
+      {tri + "v nan 0 0\nf 1 2 3\n", "line 4: 'nan' is not a number"},
+      {tri + "v inf 0 0\nf 1 2 3\n", "line 4: 'inf' is not a number"},
+      {tri + "v 0x10 0 0\nf 1 2 3\n", "line 4: '0x10' is not a number"},
+      {tri + "v . 0 0\nf 1 2 3\n", "line 4: '.' is not a number"},
+      {tri + "v 1e39 0 0\nf 1 2 3\n", "line 4: '1e39' is out of the float range"},
+      {tri + "v 0 2e9 0\nf 1 2 3\n", "line 4: vertex coordinate 2e9 is outside the supported coordinate range |x| <= 1073741824 (2^30)"},
+      {tri + "v 1 2\nf 1 2 3\n", "line 4: a vertex ('v') takes 3 to 7 numbers, got 2"},
+      {tri + "vn 0 0\nf 1 2 3\n", "line 4: a normal ('vn') takes 3 numbers, got 2"},
+      {tri + "vn 0 0 1x\nf 1 2 3\n", "line 4: '1x' is not a number"},
+      {tri + "vt 0 q\nf 1 2 3\n", "line 4: 'q' is not a number"},
+      {tri + "f 1 2 4294967299\n", "line 4: vertex index 4294967299 is out of range"},
+      {tri + "f 1 2 3abc\n", "line 4: '3abc' is not an index (i, i/j, i//k or i/j/k)"},
+      {tri + "f 1 2 -4\n", "line 4: relative vertex index -4 reaches before the first (3 read so far)"},
+      {tri + "f 1 2 3/\n", "line 4: '3/' is not an index (i, i/j, i//k or i/j/k)"},
+      {tri + "f 1 2 3/1/1/1\n", "line 4: '3/1/1/1' has more than 3 indices"},
+      {tri + "vt 0 0\nf 1/1 2/1 3/x\n", "line 5: '3/x' is not an index (i, i/j, i//k or i/j/k)"},
+      {tri + "l 1 2 0\n", "line 4: vertex index 0 is 0 (OBJ counts from 1)"},
+      // Line numbers count lines as tinyobj does: "\r\n" and a lone "\r" end one line each.
+      {"v 0 0 0\r\nv 1 0 0\r\nv 0 one 0\r\nf 1 2 3\r\n", "line 3: 'one' is not a number"},
+      {"v 0 0 0\rv 1 0 0\rv 0 one 0\rf 1 2 3\r", "line 3: 'one' is not a number"},
+  };
+  for (const auto& [text, message] : cases) EXPECT_EQ(obj_error("strict.obj", text), path_of("strict.obj") + ": " + message) << text;
+  // What tinyobj reads and the check accepts: signs, fractions alone, exponents, w and colours.
+  const Scene s = obj_scene("fine.obj", "v +1 -.5 1.e0\nv 1.5E+2 0 0 1\nv 0 1 0 0.5 0.5 0.5\nvt .5\nvn 0 0 +1\nf 1/1/1 2//1 -1\n");
+  EXPECT_EQ(s.triangle_count(), 1u);
+  EXPECT_EQ(s.meshes()[0].positions[0], Vec3f(1, -0.5f, 1));
 }
 
 TEST(ObjLoader, BadFilesThrowOneLineErrors) {
@@ -665,6 +692,17 @@ TEST(PlyLoader, BadDataThrowsTheExactError) {
   std::string overflow = triangle_ply(PlyFormat::ascii, tri, {{0, 1, 2}});
   overflow.replace(overflow.find("\n1 0 0\n") + 1, 1, "1e999");
   EXPECT_EQ(ply_error("overflow.ply", overflow), path_of("overflow.ply") + ": vertex 1 has a non-finite coordinate");
+}
+
+TEST(PlyLoader, CoordinatesOutsideTheRangeAreRefused) {
+  for (PlyFormat f : {PlyFormat::ascii, PlyFormat::little_endian, PlyFormat::big_endian}) {
+    SCOPED_TRACE(name_of(f));
+    EXPECT_EQ(ply_error("far.ply", triangle_ply(f, {{0, 0, 0}, {1e19f, 0, 0}, {0, 1, 0}}, {{0, 1, 2}})),
+              path_of("far.ply") + ": vertex 1 (1e+19, 0, 0) is outside the supported coordinate range |x| <= "
+                                   "1073741824 (2^30)");
+    EXPECT_EQ(ply_error("edge.ply", triangle_ply(f, {{0, 0, 0}, {0x1p30f, 0, 0}, {0, -0x1p30f, 0}}, {{0, 1, 2}})),
+              "no error");
+  }
 }
 
 TEST(PlyLoader, PolygonsAreFannedAndOtherElementsSkipped) {
