@@ -56,9 +56,9 @@ std::vector<Method> methods() {
   std::vector<Method> m;
   for (const std::string& name : available_backends()) {
     m.push_back({name, name, {}});
-    if (name == "simd") m.push_back({"simd-watertight", "simd", {.variant = "watertight", .device_config = {}}});
+    if (name == "simd") m.push_back({"simd-watertight", "simd", {.variant = "watertight", .device_config = {}, .coherent_method = {}}});
   }
-  m.push_back({"embree-avx2", "embree", {.variant = "default", .device_config = "max_isa=avx2"}});
+  m.push_back({"embree-avx2", "embree", {.variant = "default", .device_config = "max_isa=avx2", .coherent_method = {}}});
   return m;
 }
 

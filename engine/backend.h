@@ -28,10 +28,11 @@ struct BackendInfo {
   std::vector<std::pair<std::string, double>> stats;  ///< backend-specific figures (nodes, depth, ...)
 };
 
-/// Construction options; each backend documents the variants it accepts.
+/// Construction options; each backend documents the variants and coherent methods it accepts.
 struct BackendOptions {
   std::string variant = "default";
-  std::string device_config;  ///< backend-specific configuration string (embree: rtcNewDevice config)
+  std::string device_config;    ///< backend-specific configuration string (embree: rtcNewDevice config)
+  std::string coherent_method;  ///< how coherent spans are traced; empty: the backend's default
 };
 
 class Backend {

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -18,13 +19,16 @@ RaySet primary_rays(const Scene& scene, int width, int height) {
   rs.height = height;
   rs.rays.reserve(size_t(width) * height);
   rs.pixel.reserve(size_t(width) * height);
-  for (int y = 0; y < height; y += 2)
-    for (int x = 0; x < width; x += 4)
-      for (int lane = 0; lane < 8; ++lane) {
-        const int px = x + lane % 4, py = y + lane / 4;
-        if (px >= width || py >= height) continue;
-        rs.rays.push_back(cam.generate(float(px) + 0.5f, float(py) + 0.5f));
-        rs.pixel.push_back(uint32_t(py) * uint32_t(width) + uint32_t(px));
+  for (int ty = 0; ty < height; ty += kPrimaryTile)
+    for (int tx = 0; tx < width; tx += kPrimaryTile)
+      for (int b = 0; b < kPrimaryTile * kPrimaryTile / 8; ++b) {
+        const TileBlock block = tile_block(b);
+        for (int lane = 0; lane < 8; ++lane) {
+          const int px = tx + block.x + lane % 4, py = ty + block.y + lane / 4;
+          if (px >= width || py >= height) continue;
+          rs.rays.push_back(cam.generate(float(px) + 0.5f, float(py) + 0.5f));
+          rs.pixel.push_back(uint32_t(py) * uint32_t(width) + uint32_t(px));
+        }
       }
   return rs;
 }

@@ -19,10 +19,26 @@ struct RaySet {
   int width = 0, height = 0;
 };
 
+/// Edge of the tiles primary_rays orders its rays by, as the renderer's (engine/render.cpp).
+inline constexpr int kPrimaryTile = 16;
+
+/// The top-left pixel (within its tile) of 4x2-pixel block b of a 16x16 tile, b in [0, 32):
+/// blocks in Morton (Z) order over the 4 x 8 grid of blocks, so that any aligned run of
+/// 2^k blocks covers a compact patch of the tile (what large-packet traversal ranges over).
+struct TileBlock {
+  int x, y;
+};
+constexpr TileBlock tile_block(int b) {
+  // Bits of b: x0 y0 x1 y1 y2 (from the lowest); the grid is 4 blocks wide, 8 high.
+  const int bx = (b & 1) | (b >> 1 & 2), by = (b >> 1 & 1) | (b >> 2 & 6);
+  return {4 * bx, 2 * by};
+}
+
 /// Pinhole rays through the pixel centres of a width x height image of `scene` (its camera,
-/// or one framing its bounds), in 4x2-pixel blocks: every 8 consecutive rays form a packet.
-/// Pixels past the right or bottom edge of a partial block are left out, so only images
-/// whose sides are multiples of 4 and 2 give whole packets throughout.
+/// or one framing its bounds), as the renderer orders them: 16x16-pixel tiles in row order,
+/// each in 4x2-pixel blocks in row order, so every 8 consecutive rays form a packet and every
+/// 256 a tile. Pixels past the right or bottom edge of a partial block are left out, so only
+/// images whose sides are multiples of 4 and 2 give whole packets throughout.
 RaySet primary_rays(const Scene& scene, int width, int height);
 
 /// From each hit of `primary` (hits[i] for primary.rays[i]): a shadow ray to the first point

@@ -76,6 +76,11 @@ inline int first_lane(uint32_t bits) { return std::countr_zero(bits); }
 /// Number of set bits.
 inline int lane_count(uint32_t bits) { return std::popcount(bits); }
 
+/// Lane i of v in every lane (i in 0..7): one permute, no trip through memory.
+inline float8 broadcast_lane(const float8& v, int i) {
+  return _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(i));
+}
+
 /// Lanes of v whose bit is set in `bits`, packed to the front in lane order (the rest are
 /// unspecified); returns how many. The compress step xsimd 8.1 lacks.
 inline int compress(uint32_t bits, const float8& v, float* out) {
@@ -84,6 +89,34 @@ inline int compress(uint32_t bits, const float8& v, float* out) {
   int n = 0;
   for (; bits; bits &= bits - 1) out[n++] = lanes[std::countr_zero(bits)];
   return n;
+}
+
+/// Transposes the 8x8 matrix whose row i is m[i], in place: afterwards lane i of m[j] is the
+/// old lane j of m[i]. Loading eight 32-byte records (eight rays) as rows gives their fields
+/// as SoA rows. Bits move unchanged (24 shuffles, no arithmetic).
+inline void transpose8x8(float8 m[8]) {
+  const __m256 t0 = _mm256_unpacklo_ps(m[0], m[1]), t1 = _mm256_unpackhi_ps(m[0], m[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(m[2], m[3]), t3 = _mm256_unpackhi_ps(m[2], m[3]);
+  const __m256 t4 = _mm256_unpacklo_ps(m[4], m[5]), t5 = _mm256_unpackhi_ps(m[4], m[5]);
+  const __m256 t6 = _mm256_unpacklo_ps(m[6], m[7]), t7 = _mm256_unpackhi_ps(m[6], m[7]);
+  const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xee);
+  const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xee);
+  const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xee);
+  const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xee);
+  m[0] = _mm256_permute2f128_ps(s0, s4, 0x20);
+  m[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
+  m[2] = _mm256_permute2f128_ps(s2, s6, 0x20);
+  m[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
+  m[4] = _mm256_permute2f128_ps(s0, s4, 0x31);
+  m[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
+  m[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
+  m[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
+}
+
+/// Eight consecutive 32-byte records (8 floats each) from unaligned memory, as the rows of
+/// an 8x8 matrix (to be transposed by transpose8x8).
+inline void load_rows8(const float* records, float8 m[8]) {
+  for (int i = 0; i < 8; ++i) m[i] = float8::load_unaligned(records + 8 * i);
 }
 
 /// Three 8-wide components: eight 3-vectors in SoA.
@@ -97,6 +130,10 @@ struct Vec3x8 {
   /// Lanes from three aligned SoA arrays of 8 floats.
   static Vec3x8 load(const float* xs, const float* ys, const float* zs) {
     return {float8::load_aligned(xs), float8::load_aligned(ys), float8::load_aligned(zs)};
+  }
+  /// Lane i in every lane.
+  Vec3x8 broadcast(int i) const {
+    return {simd::broadcast_lane(x, i), simd::broadcast_lane(y, i), simd::broadcast_lane(z, i)};
   }
   /// Lane i as a scalar vector.
   Vec3f lane(int i) const {

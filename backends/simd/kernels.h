@@ -127,11 +127,59 @@ inline uint32_t intersect_box(const RayPacket& p, const Vec3f& lo, const Vec3f& 
 /// 4.2). Valid only when every active ray has the same nonzero direction sign per axis;
 /// then each axis is mirrored so that directions are positive, and a child is culled when
 /// the earliest possible entry over all rays exceeds the latest possible exit.
+struct PacketBeam;
+
+/// The bounds of a PacketBeam as scalars (52 bytes): mirrored origin and inverse-direction
+/// ranges per axis and the least tnear. The large-packet traversal keeps them per packet
+/// and merges them over ranges of packets.
+struct BeamBounds {
+  float omin[3], omax[3], imin[3], imax[3], tnear_min;
+
+  /// The bounds of both: the beam holding the rays of each.
+  static BeamBounds merge(const BeamBounds& a, const BeamBounds& b) {
+    BeamBounds m;
+    for (int k = 0; k < 3; ++k) {
+      m.omin[k] = std::min(a.omin[k], b.omin[k]);
+      m.omax[k] = std::max(a.omax[k], b.omax[k]);
+      m.imin[k] = std::min(a.imin[k], b.imin[k]);
+      m.imax[k] = std::max(a.imax[k], b.imax[k]);
+    }
+    m.tnear_min = std::min(a.tnear_min, b.tnear_min);
+    return m;
+  }
+};
+
 struct PacketBeam {
   bool valid = false;
   bool neg[3] = {};
   float8 omin[3], omax[3], imin[3], imax[3];  ///< mirrored origin and inverse-direction ranges
   float8 tnear_min;
+
+  PacketBeam() = default;
+  /// The beam of `b` for rays of direction signs `negative` (valid).
+  PacketBeam(const BeamBounds& b, const bool negative[3]) : valid(true) {
+    for (int a = 0; a < 3; ++a) {
+      neg[a] = negative[a];
+      omin[a] = float8(b.omin[a]);
+      omax[a] = float8(b.omax[a]);
+      imin[a] = float8(b.imin[a]);
+      imax[a] = float8(b.imax[a]);
+    }
+    tnear_min = float8(b.tnear_min);
+  }
+
+  /// The scalar bounds of a valid beam.
+  BeamBounds bounds() const {
+    BeamBounds b;
+    for (int a = 0; a < 3; ++a) {
+      b.omin[a] = omin[a].get(0);
+      b.omax[a] = omax[a].get(0);
+      b.imin[a] = imin[a].get(0);
+      b.imax[a] = imax[a].get(0);
+    }
+    b.tnear_min = tnear_min.get(0);
+    return b;
+  }
 
   PacketBeam(const RayPacket& p, uint32_t active) {
     if (!active) return;
@@ -205,10 +253,10 @@ struct Mt8 {
 /// the decisions at shared edges are those of Embree's default intersector. Takes the
 /// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (the leaf layout, see Tri8). Serves one ray against 8
 /// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
-/// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite.
+/// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite. The
+/// first form takes Ng = e2 x e1 computed once per triangle (by cross_fma: the same bits).
 inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                            const Vec3x8& e2, const float8& tnear, const float8& tfar) {
-  const Vec3x8 ng = simd::cross_fma(e2, e1);
+                            const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
   const Vec3x8 c = v0 - org;
   const Vec3x8 r = simd::cross_fma(c, dir);
   const float8 den = simd::dot_fma(ng, dir);
@@ -222,6 +270,12 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
   const float8 t = (simd::dot_fma(ng, c) ^ sign) * inv;
   const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
   return {hit, t, u * inv, v * inv};
+}
+
+/// The same, with the normal Ng = e2 x e1 computed here (cross_fma, as the scalar routine).
+inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                            const Vec3x8& e2, const float8& tnear, const float8& tfar) {
+  return moller_trumbore8(org, dir, v0, e1, e2, simd::cross_fma(e2, e1), tnear, tfar);
 }
 
 /// The lane mask of the first n lanes (n = 0..8).
@@ -259,6 +313,7 @@ struct WatertightRays {
   bool uniform = false;    ///< one ray in every lane: the axes are k[] (no per-lane selects)
   int k[3] = {0, 1, 2};
 
+  WatertightRays() = default;
   /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
   /// caller masks them).
   WatertightRays(const Ray* rays, size_t n) {

@@ -18,8 +18,13 @@ namespace rp::bvh8 {
 /// variant traverses with conservative (padded) box tests.
 std::vector<std::string> variants();
 
+/// Ways to trace a coherent span (BackendOptions::coherent_method): "large" (the default: up
+/// to 64 packets of one direction octant traverse as one large packet, large_packet.h) and
+/// "packet8" (independent 8-ray packets).
+std::vector<std::string> coherent_methods();
+
 /// Builds the backend; the caller (the registry) has checked that the CPU has AVX2 and FMA.
-/// Throws rp::Error for an unknown variant.
+/// Throws rp::Error for an unknown variant or coherent method.
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options);
 
 }  // namespace rp::bvh8

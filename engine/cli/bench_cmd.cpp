@@ -152,7 +152,7 @@ int run_bench(const BenchArgs& a) {
     std::string last_backend;
     for (const Method& m : methods()) {
       const std::string backend_key = m.backend + "/" + m.variant;
-      const std::unique_ptr<Backend> b = make_backend(m.backend, scene, {.variant = m.variant, .device_config = {}});
+      const std::unique_ptr<Backend> b = make_backend(m.backend, scene, {.variant = m.variant, .device_config = {}, .coherent_method = {}});
       if (backend_key != last_backend) {
         js["backends"].push_back({{"backend", backend_key}, {"build_seconds", b->info().build_seconds},
                                   {"bytes", b->info().bytes},

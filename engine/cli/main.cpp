@@ -87,7 +87,7 @@ std::unique_ptr<rp::Backend> build_backend(const std::string& name, const std::s
   const std::string what =
       rp::cat("building the ", name, "/", variant, " structure of ", scene_name, " (", scene.prim_count(), " primitives)");
   try {
-    return with_memory_context(what, [&] { return rp::make_backend(name, scene, {.variant = variant, .device_config = {}}); });
+    return with_memory_context(what, [&] { return rp::make_backend(name, scene, {.variant = variant, .device_config = {}, .coherent_method = {}}); });
   } catch (const rp::Error& e) {
     if (std::string_view(e.what()).starts_with("out of memory")) throw;
     throw rp::Error(rp::cat(what, ": ", e.what()));

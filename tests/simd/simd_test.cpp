@@ -353,6 +353,21 @@ TEST(LaneCount, MatchesScalarCountForAllPatterns) {
   }
 }
 
+TEST(BroadcastLane, CopiesTheChosenLaneBitExactlyToEveryLane) {
+  alignas(32) const uint32_t in[8] = {0x7fc00001u, 0x80000000u, 0x00000001u, 0x3f800000u,
+                                      0xff800000u, 0x7f7fffffu, 0xbf000000u, 0x12345678u};
+  float8 v;
+  std::memcpy(&v, in, 32);
+  for (int i = 0; i < 8; ++i) {
+    alignas(32) uint32_t out[8];
+    const float8 b = broadcast_lane(v, i);
+    std::memcpy(out, &b, 32);
+    for (int l = 0; l < 8; ++l) EXPECT_EQ(out[l], in[i]) << "lane " << i << " into " << l;
+    const Vec3x8 three{v, v, v};
+    EXPECT_EQ(std::bit_cast<uint32_t>(three.broadcast(i).lane(5).z), in[i]);
+  }
+}
+
 TEST(Compress, PacksSelectedLanesInLaneOrderForAll256Patterns) {
   constexpr uint32_t kGuard = 0xdeadbeef;
   std::mt19937 rng(kSeed + 4);
@@ -432,6 +447,24 @@ void expect_vec3_op(const char* name, const std::function<Vec3x8(const Vec3Case&
     }
   }
   EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(Transpose8x8, MovesEveryBitToItsTransposedPlace) {
+  std::mt19937 rng(81);
+  for (int round = 0; round < 100; ++round) {
+    alignas(32) uint32_t in[64];
+    for (uint32_t& b : in) b = rng();  // every bit pattern: NaNs, -0, denormals included
+    float records[64];
+    std::memcpy(records, in, sizeof in);
+    float8 m[8];
+    load_rows8(records, m);
+    transpose8x8(m);
+    for (int j = 0; j < 8; ++j) {
+      alignas(32) uint32_t out[8];
+      std::memcpy(out, &m[j], 32);
+      for (int i = 0; i < 8; ++i) ASSERT_EQ(out[i], in[8 * i + j]) << "row " << j << " lane " << i;
+    }
+  }
 }
 
 TEST(Vec3x8, LoadAndLaneKeepEveryBit) {

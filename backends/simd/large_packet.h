@@ -1,0 +1,425 @@
+#pragma once
+/// Large-packet traversal for coherent spans (a renderer's tile, a bench's primary or shadow
+/// rays): up to kMaxPackets 8-ray packets that share a direction octant traverse the tree as
+/// one group, so a node is fetched and culled once for the whole group instead of once per
+/// packet, and a leaf's triangles are set up once for every packet that reaches it. AVX2+FMA
+/// translation units only.
+///
+/// Per inner node (Wald, Boulos and Shirley, "Ray Tracing Deformable Scenes using Dynamic
+/// Bounding Volume Hierarchies", ACM TOG 26(1), 2007; Boulos, Wald and Shirley, "Geometric
+/// and Arithmetic Culling Methods for Entire Ray Packets", 2006):
+/// 1. the group's interval-arithmetic beam (the bounds of all its rays' origins and inverse
+///    directions) culls the 8 children in one 8-wide step;
+/// 2. for each surviving child, the first and the last packet of the entry's range whose rays
+///    hit the child's box (an 8-ray slab test each) bound the range the child is pushed
+///    with, or cull it when there is none: partition traversal (Overbeck, Ramamoorthi and
+///    Mark, "Large Ray Packets for Real-time Whitted Ray Tracing", IEEE RT 2008);
+/// 3. children are pushed near-first along the group's direction signs.
+/// At a leaf each packet of the range is tested against the leaf's box; then each triangle is
+/// set up once (broadcast, and for Möller–Trumbore its normal) and tested against every
+/// packet that reached the leaf. A range of kPacketFallback packets or fewer continues as
+/// 8-ray packets (Traversal::closest_packet), which in turn hand entries with few live lanes
+/// to single rays; packets whose rays do not share an octant, or have a zero direction
+/// component, and octants with fewer than kMinGroupPackets packets, are traced as 8-ray
+/// packets from the root. Hits are resolved by the same rule as the other paths (see
+/// Traversal), so every answer is theirs, bit for bit.
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <limits>
+#include <span>
+
+#include "backends/simd/traversal.h"
+
+namespace rp::bvh8 {
+
+/// Packets in one large packet: 64 packets, 512 rays.
+inline constexpr int kMaxPackets = 64;
+/// A range of this many packets or fewer continues as independent 8-ray packets.
+inline constexpr int kPacketFallback = 1;
+/// An octant with fewer packets than this in a span is traced as 8-ray packets.
+inline constexpr int kMinGroupPackets = 2;
+
+template <class Kernel>
+class LargePacketTraversal {
+ public:
+  explicit LargePacketTraversal(const Traversal<Kernel>& t) : t_(t) {}
+
+  /// Closest hits of a coherent span, cut into large packets of at most kMaxPackets packets.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    for (size_t base = 0; base < rays.size(); base += 8 * kMaxPackets) {
+      const size_t n = std::min<size_t>(8 * kMaxPackets, rays.size() - base);
+      intersect_span(rays.subspan(base, n), hits.subspan(base, n));
+    }
+  }
+
+  /// Any hits of a coherent span, cut as intersect() does.
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    for (size_t base = 0; base < rays.size(); base += 8 * kMaxPackets) {
+      const size_t n = std::min<size_t>(8 * kMaxPackets, rays.size() - base);
+      occluded_span(rays.subspan(base, n), out.subspan(base, n));
+    }
+  }
+
+ private:
+  /// One packet of the span and everything the traversals keep for it.
+  struct Packet {
+    RayPacket p;
+    typename Kernel::Packet kp;  ///< the triangle test's per-packet data
+    PacketSetup<Kernel> ps;      ///< for an 8-ray traversal of the packet (built when needed)
+    bool has_setup = false;
+    PacketHits h;
+    uint32_t active = 0;  ///< valid lanes
+    uint32_t live = 0;    ///< lanes still being traced (any hit: not yet occluded)
+    int octant = -1;      ///< 0..7 when every active lane has this sign pattern and no 0 component
+  };
+
+  /// The scratch of one span: a thread's own, reused from span to span.
+  struct Work {
+    std::array<Packet, kMaxPackets> packets;
+    int count = 0;
+  };
+  static Work& work() {
+    static thread_local Work w;
+    return w;
+  }
+
+  static std::span<const Ray> packet_rays(std::span<const Ray> rays, int i) {
+    return rays.subspan(size_t(i) * 8, std::min<size_t>(8, rays.size() - size_t(i) * 8));
+  }
+
+  /// The packet's 8-ray traversal set-up, built on first use.
+  static const PacketSetup<Kernel>& setup(Packet& q, std::span<const Ray> rays) {
+    if (!q.has_setup) {
+      q.ps = PacketSetup<Kernel>(q.p, rays, q.active);
+      q.has_setup = true;
+    }
+    return q.ps;
+  }
+
+  /// Loads the span's packets; returns their count.
+  int load(std::span<const Ray> rays, Work& w, bool closest) const noexcept {
+    const int count = int((rays.size() + 7) / 8);
+    const float8 inf(std::numeric_limits<float>::infinity());
+    for (int i = 0; i < count; ++i) {
+      Packet& q = w.packets[size_t(i)];
+      const std::span<const Ray> r = packet_rays(rays, i);
+      q.active = load_packet(r, q.p, q.h.tfar);
+      q.live = q.active;
+      q.octant = -1;
+      q.has_setup = false;
+      if (closest) {
+        std::fill_n(q.h.prim, 8, kInvalidId);
+        q.h.u = q.h.v = float8(0.0f);
+      }
+      if (!q.active) continue;
+      q.kp = typename Kernel::Packet(q.p, r);
+      // One octant: every active lane has the same sign pattern and no zero component.
+      const uint32_t finite = simd::movemask((xsimd::abs(q.p.inv.x) < inf) & (xsimd::abs(q.p.inv.y) < inf) &
+                                             (xsimd::abs(q.p.inv.z) < inf));
+      const uint32_t nx = simd::movemask(q.p.neg_x) & q.active, ny = simd::movemask(q.p.neg_y) & q.active,
+                     nz = simd::movemask(q.p.neg_z) & q.active;
+      const auto uniform = [&](uint32_t n) { return n == 0 || n == q.active; };
+      if ((finite & q.active) == q.active && uniform(nx) && uniform(ny) && uniform(nz))
+        q.octant = int(nx != 0) | int(ny != 0) << 1 | int(nz != 0) << 2;
+    }
+    w.count = count;
+    return count;
+  }
+
+  /// The packets of each octant with enough of them for a group, in span order; the others go
+  /// to `single` (traced as 8-ray packets from the root).
+  struct Groups {
+    uint8_t members[8][kMaxPackets];
+    int size[8] = {};
+    uint8_t single[kMaxPackets];
+    int singles = 0;
+  };
+  static void group(const Work& w, Groups& g) {
+    for (int i = 0; i < w.count; ++i) {
+      const Packet& q = w.packets[size_t(i)];
+      if (!q.active) continue;
+      if (q.octant < 0) g.single[g.singles++] = uint8_t(i);
+      else g.members[q.octant][g.size[q.octant]++] = uint8_t(i);
+    }
+    for (int o = 0; o < 8; ++o)
+      if (g.size[o] > 0 && g.size[o] < kMinGroupPackets) {
+        for (int k = 0; k < g.size[o]; ++k) g.single[g.singles++] = g.members[o][k];
+        g.size[o] = 0;
+      }
+  }
+
+  void intersect_span(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    Work& w = work();
+    const int count = load(rays, w, true);
+    if (!t_.bvh().empty()) {
+      Groups g;
+      group(w, g);
+      for (int o = 0; o < 8; ++o)
+        if (g.size[o] > 0) closest_group(rays, w, g.members[o], g.size[o], o);
+      for (int k = 0; k < g.singles; ++k) {
+        Packet& q = w.packets[g.single[k]];
+        const std::span<const Ray> r = packet_rays(rays, g.single[k]);
+        t_.closest_packet(0, q.active, q.p, setup(q, r), r, q.h);
+      }
+    }
+    for (int i = 0; i < count; ++i) {
+      const Packet& q = w.packets[size_t(i)];
+      t_.store_hits(packet_rays(rays, i), q.active, q.h, hits.subspan(size_t(i) * 8));
+    }
+  }
+
+  void occluded_span(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    Work& w = work();
+    const int count = load(rays, w, false);
+    uint32_t done[kMaxPackets] = {};
+    for (int i = 0; i < count; ++i) {
+      Packet& q = w.packets[size_t(i)];
+      const std::span<const Ray> r = packet_rays(rays, i);
+      for (uint32_t b = q.active; b; b &= b - 1)
+        if (t_.scene().occluded_by_planes(r[size_t(std::countr_zero(b))])) done[i] |= b & (~b + 1);
+      q.live = q.active & ~done[i];
+    }
+    if (!t_.bvh().empty()) {
+      Groups g;
+      group(w, g);
+      for (int o = 0; o < 8; ++o)
+        if (g.size[o] > 0) any_group(rays, w, g.members[o], g.size[o], o, done);
+      for (int k = 0; k < g.singles; ++k) {
+        const int i = g.single[k];
+        Packet& q = w.packets[size_t(i)];
+        const std::span<const Ray> r = packet_rays(rays, i);
+        if (q.live) done[i] |= t_.any_packet(0, q.live, q.p, setup(q, r), r, q.h.tfar);
+      }
+    }
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done[i / 8] >> (i % 8) & 1u);
+  }
+
+  /// What the group shares: its beam, its direction signs (as flags and as +-1 for ordering
+  /// children) and the largest tfar of its rays.
+  struct GroupBeam {
+    PacketBeam beam;
+    float8 sx, sy, sz;
+    float tfar_max;
+  };
+
+  /// The beam of every live ray of the group `members` of one octant: lane-wise minima and
+  /// maxima over the packets, then one reduction each.
+  static GroupBeam group_beam(const Work& w, const uint8_t* members, int n, int octant) {
+    const bool neg[3] = {(octant & 1) != 0, (octant & 2) != 0, (octant & 4) != 0};
+    const float8 inf(std::numeric_limits<float>::infinity());
+    float8 omin[3] = {inf, inf, inf}, omax[3] = {-inf, -inf, -inf}, imin[3] = {inf, inf, inf};
+    float8 imax[3] = {-inf, -inf, -inf}, tnear = inf, tfar(0.0f);
+    for (int k = 0; k < n; ++k) {
+      const Packet& q = w.packets[members[k]];
+      const mask8 on = simd::mask_from_bits(q.live);
+      const float8 org[3] = {q.p.org.x, q.p.org.y, q.p.org.z}, inv[3] = {q.p.inv.x, q.p.inv.y, q.p.inv.z};
+      for (int a = 0; a < 3; ++a) {
+        const float8 o = neg[a] ? -org[a] : org[a], i = neg[a] ? -inv[a] : inv[a];
+        omin[a] = xsimd::min(omin[a], xsimd::select(on, o, inf));
+        omax[a] = xsimd::max(omax[a], xsimd::select(on, o, -inf));
+        imin[a] = xsimd::min(imin[a], xsimd::select(on, i, inf));
+        imax[a] = xsimd::max(imax[a], xsimd::select(on, i, -inf));
+      }
+      tnear = xsimd::min(tnear, xsimd::select(on, q.p.tnear, inf));
+      tfar = xsimd::max(tfar, xsimd::select(on, q.h.tfar, float8(0.0f)));
+    }
+    BeamBounds b;
+    for (int a = 0; a < 3; ++a) {
+      b.omin[a] = simd::reduce_min(omin[a]);
+      b.omax[a] = simd::reduce_max(omax[a]);
+      b.imin[a] = simd::reduce_min(imin[a]);
+      b.imax[a] = simd::reduce_max(imax[a]);
+    }
+    b.tnear_min = simd::reduce_min(tnear);
+    return {PacketBeam(b, neg), float8(neg[0] ? -1.0f : 1.0f), float8(neg[1] ? -1.0f : 1.0f),
+            float8(neg[2] ? -1.0f : 1.0f), simd::reduce_max(tfar)};
+  }
+
+  /// A pushed subtree: the node or leaf, the range [first, last] of the group's members that
+  /// may reach it, and its box (a leaf's box lives in its parent only).
+  struct Entry {
+    int32_t ref;
+    uint8_t first, last;
+    Vec3f lo, hi;
+  };
+
+  /// Narrows [first, last] to the first and the last member whose live lanes hit box [lo, hi];
+  /// first > last when none does.
+  static void bound_range(const Work& w, const uint8_t* members, const bool neg[3], const Vec3f& lo, const Vec3f& hi,
+                          int& first, int& last) {
+    auto hits = [&](int k) {
+      const Packet& q = w.packets[members[k]];
+      return q.live && (intersect_box_octant(q.p, neg, lo, hi, q.h.tfar) & q.live);
+    };
+    while (first <= last && !hits(first)) ++first;
+    while (last > first && !hits(last)) --last;
+  }
+
+  /// Pushes the children of node `n` that the members of entry `e` may reach, nearest last.
+  static void push_children(const Work& w, const uint8_t* members, const GroupBeam& gb, const Bvh8Node& n,
+                            const Entry& e, Entry* stack, int& sp) {
+    const uint32_t candidates = gb.beam.cull(n, gb.tfar_max);
+    if (!candidates) return;
+    alignas(32) float key[8];
+    near_first_keys(n, gb.sx, gb.sy, gb.sz).store_aligned(key);
+    Entry kids[8];
+    float kid_key[8];
+    int k = 0;
+    for (uint32_t bits = candidates; bits; bits &= bits - 1) {
+      const int c = std::countr_zero(bits);
+      if (n.child[c] == kEmpty) continue;
+      const Vec3f lo{n.lo_x[c], n.lo_y[c], n.lo_z[c]}, hi{n.hi_x[c], n.hi_y[c], n.hi_z[c]};
+      int first = e.first, last = e.last;
+      bound_range(w, members, gb.beam.neg, lo, hi, first, last);
+      if (first > last) continue;
+      const Entry kid{n.child[c], uint8_t(first), uint8_t(last), lo, hi};
+      int j = k++;
+      for (; j > 0 && kid_key[j - 1] < key[c]; --j) {  // descending keys: the nearest ends up last
+        kids[j] = kids[j - 1];
+        kid_key[j] = kid_key[j - 1];
+      }
+      kids[j] = kid;
+      kid_key[j] = key[c];
+    }
+    RP_DCHECK(sp + k <= kStackSize);
+    for (int j = 0; j < k; ++j) stack[sp++] = kids[j];
+  }
+
+  /// The members of entry `e` (a leaf) whose live lanes hit its box, and those lanes.
+  static int leaf_packets(const Work& w, const uint8_t* members, const GroupBeam& gb, const Entry& e, uint8_t* which,
+                          uint32_t* lanes) {
+    int m = 0;
+    for (int k = e.first; k <= e.last; ++k) {
+      const Packet& q = w.packets[members[k]];
+      if (!q.live) continue;
+      const uint32_t hit = intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live;
+      if (!hit) continue;
+      which[m] = members[k];
+      lanes[m++] = hit;
+    }
+    return m;
+  }
+
+  void closest_group(std::span<const Ray> rays, Work& w, const uint8_t* members, int n, int octant) const noexcept {
+    const GroupBeam gb = group_beam(w, members, n, octant);
+    Entry stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    uint8_t which[kMaxPackets];
+    uint32_t lanes[kMaxPackets];
+    while (sp > 0) {
+      const Entry e = stack[--sp];
+      if (e.last - e.first < kPacketFallback) {  // few packets left: each continues on its own
+        for (int k = e.first; k <= e.last; ++k) {
+          Packet& q = w.packets[members[k]];
+          const std::span<const Ray> r = packet_rays(rays, members[k]);
+          t_.closest_packet(e.ref, q.active, q.p, setup(q, r), r, q.h);
+        }
+        continue;
+      }
+      if (!is_leaf(e.ref)) {
+        push_children(w, members, gb, t_.bvh().nodes[size_t(e.ref)], e, stack, sp);
+        continue;
+      }
+      int m = leaf_packets(w, members, gb, e, which, lanes);
+      if (!m) continue;
+      const uint32_t count = leaf_count(e.ref);
+      const float* rows = t_.bvh().leaf(leaf_first(e.ref));
+      if (t_.analytic_leaf(rows, count) == kInvalidId) {  // packets with few lanes here: a lane at a time
+        int kept = 0;
+        for (int j = 0; j < m; ++j) {
+          if (Traversal<Kernel>::by_rays(lanes[j], count)) {
+            Packet& q = w.packets[which[j]];
+            t_.leaf_by_rays(rows, count, lanes[j], q.p, packet_rays(rays, which[j]), q.h);
+          } else {
+            which[kept] = which[j];
+            lanes[kept++] = lanes[j];
+          }
+        }
+        m = kept;
+      }
+      for (uint32_t k = 0; k < count && m > 0; ++k) {
+        const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
+        if (id >= t_.bvh().first_analytic) {
+          for (int j = 0; j < m; ++j) t_.analytic_packet(id, packet_rays(rays, which[j]), lanes[j], w.packets[which[j]].h);
+          continue;
+        }
+        const typename Kernel::Triangle tri(rows, count, k);  // set up once for every packet
+        for (int j = 0; j < m; ++j) {
+          Packet& q = w.packets[which[j]];
+          Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar), lanes[j], id);
+        }
+      }
+    }
+  }
+
+  void any_group(std::span<const Ray> rays, Work& w, const uint8_t* members, int n, int octant,
+                 uint32_t* done) const noexcept {
+    const GroupBeam gb = group_beam(w, members, n, octant);
+    Entry stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    int live_packets = 0;
+    for (int k = 0; k < n; ++k) live_packets += w.packets[members[k]].live != 0;
+    auto occlude = [&](int i, uint32_t found) {  // packet index i
+      Packet& q = w.packets[size_t(i)];
+      done[i] |= found;
+      const bool was_live = q.live != 0;
+      q.live &= ~found;
+      live_packets -= was_live && !q.live;
+    };
+    uint8_t which[kMaxPackets];
+    uint32_t lanes[kMaxPackets];
+    while (sp > 0 && live_packets > 0) {
+      const Entry e = stack[--sp];
+      if (e.last - e.first < kPacketFallback) {
+        for (int k = e.first; k <= e.last; ++k) {
+          Packet& q = w.packets[members[k]];
+          const std::span<const Ray> r = packet_rays(rays, members[k]);
+          if (q.live) occlude(members[k], t_.any_packet(e.ref, q.live, q.p, setup(q, r), r, q.h.tfar));
+        }
+        continue;
+      }
+      if (!is_leaf(e.ref)) {
+        push_children(w, members, gb, t_.bvh().nodes[size_t(e.ref)], e, stack, sp);
+        continue;
+      }
+      int m = leaf_packets(w, members, gb, e, which, lanes);
+      const uint32_t count = leaf_count(e.ref);
+      const float* rows = t_.bvh().leaf(leaf_first(e.ref));
+      for (uint32_t k = 0; k < count && m > 0; ++k) {
+        const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
+        const bool analytic = id >= t_.bvh().first_analytic;
+        const typename Kernel::Triangle tri = analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(rows, count, k);
+        for (int j = 0; j < m; ++j) {
+          Packet& q = w.packets[which[j]];
+          uint32_t found = 0;
+          if (analytic) {
+            const std::span<const Ray> r = packet_rays(rays, which[j]);
+            for (uint32_t b = lanes[j]; b; b &= b - 1)
+              if (t_.scene().intersect_analytic(id, r[size_t(std::countr_zero(b))]).hit) found |= b & -b;
+          } else {
+            found = simd::movemask(q.kp.test(tri, q.h.tfar).hit) & lanes[j];
+          }
+          if (!found) continue;
+          occlude(which[j], found);
+          lanes[j] &= ~found;
+        }
+        // Drop the packets whose lanes here are all occluded.
+        int kept = 0;
+        for (int j = 0; j < m; ++j)
+          if (lanes[j]) {
+            which[kept] = which[j];
+            lanes[kept++] = lanes[j];
+          }
+        m = kept;
+      }
+    }
+  }
+
+  const Traversal<Kernel>& t_;
+};
+
+}  // namespace rp::bvh8

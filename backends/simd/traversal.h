@@ -1,0 +1,652 @@
+#pragma once
+/// Single-ray and 8-ray packet traversal of the 8-wide BVH, templated on the triangle test
+/// (Möller–Trumbore or watertight). Both start from any subtree, so the large-packet
+/// traversal (large_packet.h) can hand them what it no longer traverses as a group: a packet
+/// continues as an 8-ray packet, a packet with few live lanes as single rays. AVX2+FMA
+/// translation units only.
+///
+/// The closest hit is the least (t, prim_id): among primitives hit at exactly the same t (a
+/// ray through a shared edge or vertex), the lowest prim_id. The rule does not depend on the
+/// order in which leaves are visited, so every traversal (single rays, 8-ray packets, large
+/// packets) gives every ray the same primitive and the same t, u, v bits. (The unbounded
+/// planes then take a hit at equal t, after any traversal: Scene::intersect_planes.)
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <span>
+
+#include "backends/simd/bvh8.h"
+#include "backends/simd/kernels.h"
+#include "engine/error.h"
+#include "engine/scene.h"
+
+namespace rp::bvh8 {
+
+/// Traversal stack bound: the build keeps binary depth <= 64 + log2(n) < 100, so an 8-wide
+/// tree holds at most 7 pending children per level.
+inline constexpr int kStackSize = 1024;
+
+/// A packet entry with at most this many active lanes continues as single rays.
+inline constexpr int kSingleRayLanes = 2;
+
+/// Primitive k of a leaf of n: rows `row`, `row` + 1, `row` + 2 (see Tri8), in every lane.
+inline Vec3x8 row3(const float* rows, uint32_t n, uint32_t row, uint32_t k) {
+  return Vec3x8(Vec3f{rows[row * n + k], rows[(row + 1) * n + k], rows[(row + 2) * n + k]});
+}
+
+/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
+/// edge layout. Single: one ray against a leaf's primitives; Triangle: one primitive of a leaf
+/// in every lane, with its normal computed once; Packet: the 8 rays of a packet against one
+/// Triangle.
+struct MtKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::edges;
+  struct Single {
+    Vec3x8 org, dir;
+    float8 tnear;
+    explicit Single(const Ray& r) : org(r.org), dir(r.dir), tnear(r.tnear) {}
+    /// Lane `lane` of packet p (the ray `r`), from the packet's registers.
+    Single(const RayPacket& p, int lane, const Ray&)
+        : org(p.org.broadcast(lane)), dir(p.dir.broadcast(lane)), tnear(simd::broadcast_lane(p.tnear, lane)) {}
+    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return moller_trumbore8(org, dir, lv.v0, lv.p1, lv.p2, tnear, tfar);
+    }
+  };
+  struct Triangle {
+    Vec3x8 v0, e1, e2, ng;
+    Triangle() = default;
+    Triangle(const float* rows, uint32_t n, uint32_t k)
+        : v0(row3(rows, n, 0, k)), e1(row3(rows, n, 3, k)), e2(row3(rows, n, 6, k)), ng(simd::cross_fma(e2, e1)) {}
+  };
+  struct Packet {
+    const RayPacket* p = nullptr;
+    Packet() = default;
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet) {}
+    Mt8 test(const Triangle& t, const float8& tfar) const {
+      return moller_trumbore8(p->org, p->dir, t.v0, t.e1, t.e2, t.ng, p->tnear, tfar);
+    }
+  };
+};
+
+/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the vertex
+/// layout; the traversal around it is the same conservative one.
+struct WatertightKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::vertices;
+  struct Single {
+    WatertightRays r;
+    explicit Single(const Ray& ray) : r(&ray, 1) {}
+    Single(const RayPacket&, int, const Ray& ray) : r(&ray, 1) {}
+    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return watertight8(r, lv.v0, lv.p1, lv.p2, tfar);
+    }
+  };
+  struct Triangle {
+    Vec3x8 v0, v1, v2;
+    Triangle() = default;
+    Triangle(const float* rows, uint32_t n, uint32_t k)
+        : v0(row3(rows, n, 0, k)), v1(row3(rows, n, 3, k)), v2(row3(rows, n, 6, k)) {}
+  };
+  struct Packet {
+    WatertightRays r;
+    Packet() = default;
+    Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
+    Mt8 test(const Triangle& t, const float8& tfar) const { return watertight8(r, t.v0, t.v1, t.v2, tfar); }
+  };
+};
+
+/// The lanes of 8 rays in SoA that pass rp::valid_ray (engine/ray.h), decided exactly as it
+/// decides: every comparison is false for a NaN.
+inline uint32_t valid_lanes(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& tfar) {
+  const float8 range(kMaxCoordinate), lo(kMinDirection), hi(kMaxDirection), zero(0.0f);
+  const mask8 origin = (xsimd::abs(org.x) <= range) & (xsimd::abs(org.y) <= range) & (xsimd::abs(org.z) <= range);
+  const float8 largest = xsimd::max(xsimd::abs(dir.x), xsimd::max(xsimd::abs(dir.y), xsimd::abs(dir.z)));
+  const mask8 not_nan = (dir.x == dir.x) & (dir.y == dir.y) & (dir.z == dir.z);
+  const mask8 direction = (largest >= lo) & (largest <= hi) & not_nan;
+  return simd::movemask(origin & direction & (tnear >= zero) & (tnear <= tfar));
+}
+
+/// Loads up to 8 rays into `p` with their tfar; invalid rays and missing lanes are inactive
+/// (and get harmless values: origin 0, direction (1, 1, 1), tnear 0, tfar -1). Returns the
+/// active lanes. Eight rays (32 bytes each, the float fields in the order org, tnear, dir,
+/// tfar) load as one 8x8 transpose.
+inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfar) {
+  static_assert(sizeof(Ray) == 32 && offsetof(Ray, tnear) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tfar) == 28);
+  uint32_t active = 0;
+  if (rays.size() >= 8) {
+    float8 m[8];
+    simd::load_rows8(&rays[0].org.x, m);
+    simd::transpose8x8(m);
+    active = valid_lanes({m[0], m[1], m[2]}, {m[4], m[5], m[6]}, m[3], m[7]);
+    const mask8 on = simd::mask_from_bits(active);
+    const float8 zero(0.0f), one(1.0f);
+    p.org = {xsimd::select(on, m[0], zero), xsimd::select(on, m[1], zero), xsimd::select(on, m[2], zero)};
+    p.dir = {xsimd::select(on, m[4], one), xsimd::select(on, m[5], one), xsimd::select(on, m[6], one)};
+    p.tnear = xsimd::select(on, m[3], zero);
+    tfar = xsimd::select(on, m[7], float8(-1.0f));
+  } else {
+    alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], tn[8], tf[8];
+    for (size_t i = 0; i < 8; ++i) {
+      const bool ok = i < rays.size() && valid_ray(rays[i]);
+      const Ray r = ok ? rays[i] : Ray{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 1.0f, 1.0f}, -1.0f};
+      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
+      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
+      tn[i] = r.tnear; tf[i] = r.tfar;
+      active |= uint32_t(ok) << i;
+    }
+    p.org = Vec3x8::load(ox, oy, oz);
+    p.dir = Vec3x8::load(dx, dy, dz);
+    p.tnear = float8::load_aligned(tn);
+    tfar = float8::load_aligned(tf);
+  }
+  const float8 one(1.0f);
+  p.inv = {one / p.dir.x, one / p.dir.y, one / p.dir.z};
+  // Sign bit, so that -0 (inverse -inf) takes the far plane first like a negative direction.
+  p.neg_x = simd::sign_mask(p.dir.x);
+  p.neg_y = simd::sign_mask(p.dir.y);
+  p.neg_z = simd::sign_mask(p.dir.z);
+  p.oi = {p.org.x * p.inv.x, p.org.y * p.inv.y, p.org.z * p.inv.z};
+  p.abs_pad = xsimd::max(xsimd::abs(p.oi.x), xsimd::max(xsimd::abs(p.oi.y), xsimd::abs(p.oi.z))) * float8(0x1p-23f);
+  return active;
+}
+
+/// The closest hits found so far for the 8 lanes of a packet: t (the lane's tfar), u, v and
+/// the primitive (kInvalidId for none).
+struct PacketHits {
+  float8 tfar, u, v;
+  alignas(32) uint32_t prim[8];
+};
+
+/// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
+/// that order children near-first, and the beam that culls them.
+template <class Kernel>
+struct PacketSetup {
+  typename Kernel::Packet kp;
+  float8 sx, sy, sz;
+  PacketBeam beam;
+  PacketSetup() = default;
+  PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active) : kp(p, rays), beam(p, active) {
+    // The packet's direction signs from its first active ray, as +-1 per axis.
+    const Vec3f d = p.dir.lane(std::countr_zero(active));
+    sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);
+    sy = float8(std::signbit(d.y) ? -1.0f : 1.0f);
+    sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
+  }
+};
+
+/// The keys that order a node's children near-first along direction signs (sx, sy, sz): sum
+/// over axes of sign * (lo + hi), one 8-wide op; the nearest child has the smallest key.
+inline float8 near_first_keys(const Bvh8Node& n, const float8& sx, const float8& sy, const float8& sz) {
+  return sx * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
+         sy * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
+         sz * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
+}
+
+/// Single-ray and 8-ray packet traversal of one tree (see the top of this file).
+template <class Kernel>
+class Traversal {
+ public:
+  Traversal(const Bvh8& bvh, const Scene& scene) : bvh_(bvh), scene_(scene) {}
+
+  const Bvh8& bvh() const { return bvh_; }
+  const Scene& scene() const { return scene_; }
+
+  // ---- single rays: one ray against the 8 children of a node ----
+
+  /// Closest hit of one ray (a miss for an invalid one), the planes included.
+  Hit intersect_single(const Ray& r) const noexcept {
+    Hit best;
+    if (!valid_ray(r)) return best;
+    if (!bvh_.empty()) closest(r, 0, best);
+    scene_.intersect_planes(r, best);
+    return best;
+  }
+
+  /// Any hit of one valid ray, the planes included; stops at the first.
+  bool occluded_single(const Ray& r) const noexcept {
+    if (scene_.occluded_by_planes(r)) return true;
+    return !bvh_.empty() && any(r, 0);
+  }
+
+  /// Closest hit of a valid ray in the subtree `root`, replacing `best` by any hit within
+  /// [tnear, min(tfar, best.t)]. Children are visited near-first by their entry distance, the
+  /// far ones pushed first; popped entries farther than the current hit are skipped.
+  void closest(const Ray& r, int32_t root, Hit& best) const noexcept {
+    float tfar = std::min(r.tfar, best.t);
+    const SingleRay sr(r);
+    const typename Kernel::Single kr(r);
+    struct Entry {
+      int32_t ref;
+      float t;
+    };
+    Entry stack[kStackSize];
+    int sp = 0;
+    int32_t ref = root;
+    for (;;) {
+      if (!is_leaf(ref)) {
+        const Bvh8Node& n = bvh_.nodes[size_t(ref)];
+        float8 t_enter;
+        uint32_t bits = intersect_node(n, sr, r.tnear, tfar, t_enter);
+        if (bits) {
+          if ((bits & (bits - 1)) == 0) {
+            ref = n.child[std::countr_zero(bits)];
+            continue;
+          }
+          alignas(32) float dist[8];
+          t_enter.store_aligned(dist);
+          const uint32_t rest = bits & (bits - 1);
+          if ((rest & (rest - 1)) == 0) {  // two children: one compare, push the far one
+            const int a = std::countr_zero(bits), b = std::countr_zero(rest);
+            const bool a_near = dist[a] < dist[b];  // ties: the higher slot first, as below
+            const int near = a_near ? a : b, far = a_near ? b : a;
+            prefetch_children(n, 1u << far);
+            RP_DCHECK(sp < kStackSize);
+            stack[sp++] = {n.child[far], dist[far]};
+            ref = n.child[near];
+            continue;
+          }
+          prefetch_children(n, bits);
+          // Onto the stack in slot order, then sorted there by descending distance (a stable
+          // insertion sort: ties keep the higher slot nearer the top); the nearest is visited.
+          RP_DCHECK(sp + 8 <= kStackSize);
+          Entry* hit = stack + sp;
+          int k = 0;
+          for (; bits; bits &= bits - 1) {
+            const int c = std::countr_zero(bits);
+            const Entry e{n.child[c], dist[c]};
+            int j = k++;
+            for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];
+            hit[j] = e;
+          }
+          sp += k - 1;
+          ref = hit[k - 1].ref;
+          continue;
+        }
+      } else {
+        const uint32_t n = leaf_count(ref);
+        const float* rows = bvh_.leaf(leaf_first(ref));
+        if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+          Ray rr = r;
+          rr.tfar = tfar;
+          const Intersection<float> ah = scene_.intersect_analytic(id, rr);
+          if (ah.hit && (ah.t < tfar || id < best.prim_id)) {
+            tfar = ah.t;
+            best = {ah.t, id, ah.u, ah.v};
+          }
+        } else {
+          const Mt8 h = kr.block(rows, n, float8(tfar));
+          if (const uint32_t bits = simd::movemask(h.hit) & ((1u << n) - 1)) {
+            const float tmin = simd::reduce_min(
+                xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
+            const int lane = lowest_prim(rows, n, simd::movemask(h.t == float8(tmin)) & bits);
+            const uint32_t id = prim_at(rows, n, uint32_t(lane));
+            if (tmin < tfar || id < best.prim_id) {
+              tfar = tmin;
+              best = {tmin, id, h.u.get(size_t(lane)), h.v.get(size_t(lane))};
+            }
+          }
+        }
+      }
+      for (;;) {  // pop, skipping subtrees entered beyond the current hit
+        if (sp == 0) return;
+        const Entry e = stack[--sp];
+        if (e.t <= std::fma(tfar, kSlabPad, sr.pad)) {  // conservative, as intersect_node
+          ref = e.ref;
+          break;
+        }
+      }
+    }
+  }
+
+  /// Any hit of a valid ray in the subtree `root`.
+  bool any(const Ray& r, int32_t root) const noexcept {
+    const SingleRay sr(r);
+    const typename Kernel::Single kr(r);
+    const float8 tfar8(r.tfar);
+    int32_t stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = root;
+    while (sp > 0) {
+      const int32_t ref = stack[--sp];
+      if (!is_leaf(ref)) {
+        const Bvh8Node& n = bvh_.nodes[size_t(ref)];
+        float8 t_enter;
+        RP_DCHECK(sp + 8 <= kStackSize);
+        for (uint32_t bits = intersect_node(n, sr, r.tnear, r.tfar, t_enter); bits; bits &= bits - 1)
+          stack[sp++] = n.child[std::countr_zero(bits)];
+        continue;
+      }
+      const uint32_t n = leaf_count(ref);
+      const float* rows = bvh_.leaf(leaf_first(ref));
+      if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+        if (scene_.intersect_analytic(id, r).hit) return true;
+      } else if (simd::movemask(kr.block(rows, n, tfar8).hit) & ((1u << n) - 1)) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // ---- packets: 8 rays against one node's boxes ----
+
+  /// Closest hits of the lanes of `mask` of packet `p` (rays `rays`, set up in `ps`) in the
+  /// subtree `root`, improving `h`. Below kSingleRayLanes live lanes an entry's rays continue
+  /// one at a time.
+  void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                      std::span<const Ray> rays, PacketHits& h) const noexcept {
+    struct Entry {
+      int32_t ref;
+      uint32_t mask;
+    };
+    Entry stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = {root, mask};
+    while (sp > 0) {
+      const Entry e = stack[--sp];
+      if (simd::lane_count(e.mask) <= kSingleRayLanes) {
+        single_rays_closest(e.ref, e.mask, rays, h);
+        continue;
+      }
+      if (!is_leaf(e.ref)) {
+        Child kids[8];
+        const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, ps, h.tfar, e.mask, kids);
+        RP_DCHECK(sp + k <= kStackSize);
+        for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
+        continue;
+      }
+      leaf_closest(e.ref, e.mask, p, ps, rays, h);
+    }
+  }
+
+  /// The primitives of leaf `ref` against the lanes of `mask` (set up in `ps`), improving `h`:
+  /// a lane at a time when few lanes reach the leaf (leaf_by_rays), else a triangle at a time.
+  void leaf_closest(int32_t ref, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                    std::span<const Ray> rays, PacketHits& h) const noexcept {
+    const uint32_t n = leaf_count(ref);
+    const float* rows = bvh_.leaf(leaf_first(ref));
+    if (by_rays(mask, n) && analytic_leaf(rows, n) == kInvalidId) {
+      leaf_by_rays(rows, n, mask, p, rays, h);
+      return;
+    }
+    for (uint32_t k = 0; k < n; ++k) {
+      const uint32_t id = prim_at(rows, n, k);
+      if (id >= bvh_.first_analytic) {
+        analytic_packet(id, rays, mask, h);
+        continue;
+      }
+      update(h, ps.kp.test(typename Kernel::Triangle(rows, n, k), h.tfar), mask, id);
+    }
+  }
+
+  /// True when testing a leaf of n triangles one lane of `mask` at a time (each lane against
+  /// the n triangles in one 8-wide test) takes fewer kernel calls than one triangle at a
+  /// time against the packet: at most n / 2 lanes.
+  static bool by_rays(uint32_t mask, uint32_t n) { return 2u * uint32_t(std::popcount(mask)) <= n; }
+
+  /// The triangles of the leaf at `rows` (n of them) against each lane of `mask` in turn, by
+  /// the single-ray test: the same hits and bits as a triangle at a time.
+  void leaf_by_rays(const float* rows, uint32_t n, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
+                    PacketHits& h) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    h.tfar.store_aligned(tf);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    const uint32_t slots = (1u << n) - 1;
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(tf[lane]));
+      const uint32_t bits = simd::movemask(m.hit) & slots;
+      if (!bits) continue;
+      const float tmin =
+          simd::reduce_min(xsimd::select(simd::mask_from_bits(bits), m.t, float8(std::numeric_limits<float>::infinity())));
+      const int slot = lowest_prim(rows, n, simd::movemask(m.t == float8(tmin)) & bits);
+      const uint32_t id = prim_at(rows, n, uint32_t(slot));
+      if (!(tmin < tf[lane] || id < h.prim[lane])) continue;
+      tf[lane] = tmin;
+      uu[lane] = m.u.get(size_t(slot));
+      vv[lane] = m.v.get(size_t(slot));
+      h.prim[lane] = id;
+    }
+    h.tfar = float8::load_aligned(tf);
+    h.u = float8::load_aligned(uu);
+    h.v = float8::load_aligned(vv);
+  }
+
+  /// Any hits of the lanes of `live` of packet `p` in the subtree `root` (tfar per lane);
+  /// returns the lanes found occluded. Stops once every live lane is.
+  uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                      std::span<const Ray> rays, const float8& tfar) const noexcept {
+    struct Entry {
+      int32_t ref;
+      uint32_t mask;
+    };
+    Entry stack[kStackSize];
+    int sp = 0;
+    stack[sp++] = {root, live};
+    uint32_t done = 0;
+    while (sp > 0 && live & ~done) {
+      Entry e = stack[--sp];
+      e.mask &= ~done;
+      if (!e.mask) continue;
+      if (simd::lane_count(e.mask) <= kSingleRayLanes) {
+        for (uint32_t b = e.mask; b; b &= b - 1)
+          if (any(rays[size_t(std::countr_zero(b))], e.ref)) done |= b & (~b + 1);
+        continue;
+      }
+      if (!is_leaf(e.ref)) {
+        Child kids[8];
+        const int k = ordered_children(bvh_.nodes[size_t(e.ref)], p, ps, tfar, e.mask, kids);
+        RP_DCHECK(sp + k <= kStackSize);
+        for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
+        continue;
+      }
+      done |= leaf_any(e.ref, e.mask, ps, rays, tfar);
+    }
+    return done;
+  }
+
+  /// The lanes of `mask` that some primitive of leaf `ref` occludes.
+  uint32_t leaf_any(int32_t ref, uint32_t mask, const PacketSetup<Kernel>& ps, std::span<const Ray> rays,
+                    const float8& tfar) const noexcept {
+    const uint32_t n = leaf_count(ref);
+    const float* rows = bvh_.leaf(leaf_first(ref));
+    uint32_t done = 0;
+    for (uint32_t k = 0; k < n && mask; ++k) {
+      const uint32_t id = prim_at(rows, n, k);
+      uint32_t hit = 0;
+      if (id >= bvh_.first_analytic) {
+        for (uint32_t b = mask; b; b &= b - 1)
+          if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
+      } else {
+        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(rows, n, k), tfar).hit) & mask;
+      }
+      done |= hit;
+      mask &= ~hit;
+    }
+    return done;
+  }
+
+  /// Closest hits of up to 8 rays as one packet, the planes included.
+  void intersect_packet(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    RayPacket p;
+    PacketHits h;
+    const uint32_t active = load_packet(rays, p, h.tfar);
+    std::fill_n(h.prim, 8, kInvalidId);
+    h.u = h.v = float8(0.0f);
+    if (active && !bvh_.empty()) closest_packet(0, active, p, PacketSetup<Kernel>(p, rays, active), rays, h);
+    store_hits(rays, active, h, hits);
+  }
+
+  /// Any hits of up to 8 rays as one packet, the planes included.
+  void occluded_packet(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    RayPacket p;
+    float8 tfar;
+    const uint32_t active = load_packet(rays, p, tfar);
+    uint32_t done = 0;
+    for (uint32_t b = active; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      if (scene_.occluded_by_planes(rays[size_t(lane)])) done |= 1u << lane;
+    }
+    const uint32_t live = active & ~done;
+    if (live && !bvh_.empty()) done |= any_packet(0, live, p, PacketSetup<Kernel>(p, rays, live), rays, tfar);
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done >> i & 1u);
+  }
+
+  /// Writes the hits of a packet's rays, field by field (no 16-byte reload of a Hit built in
+  /// pieces), and lets the unbounded planes take the hits of its active lanes.
+  void store_hits(std::span<const Ray> rays, uint32_t active, const PacketHits& h, std::span<Hit> hits) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    h.tfar.store_aligned(tf);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      Hit& out = hits[i];
+      const bool hit = h.prim[i] != kInvalidId;  // an inactive lane never gets a primitive
+      out.t = hit ? tf[i] : std::numeric_limits<float>::infinity();
+      out.prim_id = h.prim[i];
+      out.u = hit ? uu[i] : 0.0f;
+      out.v = hit ? vv[i] : 0.0f;
+      if (active >> i & 1u) scene_.intersect_planes(rays[i], out);
+    }
+  }
+
+  /// Takes the hits `m` of primitive `id` for the lanes of `mask`: closer ones, and ones at
+  /// the same t when `id` is lower (the closest-hit rule at the top of this file).
+  static void update(PacketHits& h, const Mt8& m, uint32_t mask, uint32_t id) {
+    uint32_t bits = simd::movemask(m.hit) & mask;
+    if (!bits) return;
+    if (const uint32_t ties = simd::movemask(m.t == h.tfar) & bits)  // rare: exactly equal t
+      for (uint32_t b = ties; b; b &= b - 1)
+        if (!(id < h.prim[std::countr_zero(b)])) bits &= ~(b & -b);
+    if (!bits) return;
+    const mask8 upd = simd::mask_from_bits(bits);
+    h.tfar = xsimd::select(upd, m.t, h.tfar);
+    h.u = xsimd::select(upd, m.u, h.u);
+    h.v = xsimd::select(upd, m.v, h.v);
+    for (uint32_t b = bits; b; b &= b - 1) h.prim[std::countr_zero(b)] = id;
+  }
+
+  /// Of the slots `at` (non-empty) of the leaf of n at `rows`, the one with the lowest prim_id.
+  static int lowest_prim(const float* rows, uint32_t n, uint32_t at) {
+    int best = std::countr_zero(at);
+    for (uint32_t b = at & (at - 1); b; b &= b - 1)  // rare: several triangles at exactly one t
+      if (prim_at(rows, n, uint32_t(std::countr_zero(b))) < prim_at(rows, n, uint32_t(best))) best = std::countr_zero(b);
+    return best;
+  }
+
+  /// The prim_id of the leaf of n at `rows` when it is an analytic primitive, else
+  /// kInvalidId. The build gives an analytic primitive a leaf of its own, so a leaf is all
+  /// triangles (one 8-wide test) or one analytic primitive (its scalar routine).
+  uint32_t analytic_leaf(const float* rows, uint32_t n) const noexcept {
+    if (n != 1 || !bvh_.has_analytic) return kInvalidId;
+    const uint32_t id = prim_at(rows, 1, 0);
+    return id >= bvh_.first_analytic ? id : kInvalidId;
+  }
+  static uint32_t prim_at(const float* rows, uint32_t n, uint32_t k) { return std::bit_cast<uint32_t>(rows[9 * n + k]); }
+
+  /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
+  void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, PacketHits& h) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    h.tfar.store_aligned(tf);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Ray r = rays[size_t(lane)];
+      r.tfar = tf[lane];
+      const Intersection<float> a = scene_.intersect_analytic(id, r);
+      if (a.hit && (a.t < tf[lane] || id < h.prim[lane])) {
+        tf[lane] = a.t;
+        uu[lane] = a.u;
+        vv[lane] = a.v;
+        h.prim[lane] = id;
+      }
+    }
+    h.tfar = float8::load_aligned(tf);
+    h.u = float8::load_aligned(uu);
+    h.v = float8::load_aligned(vv);
+  }
+
+ private:
+  /// Starts loading the nodes (or leaf blocks) of the children in `bits`, which traversal is
+  /// about to visit or push: hides part of the memory latency that dominates traversal.
+  void prefetch_children(const Bvh8Node& n, uint32_t bits) const noexcept {
+    for (; bits; bits &= bits - 1) {
+      const int32_t c = n.child[std::countr_zero(bits)];
+      if (is_leaf(c)) {  // 40 bytes per primitive, from anywhere in a line
+        const char* p = reinterpret_cast<const char*>(bvh_.leaf(leaf_first(c)));
+        const uint32_t bytes = 40 * leaf_count(c);
+        for (uint32_t off = 0; off < bytes; off += 64) _mm_prefetch(p + off, _MM_HINT_T0);
+        _mm_prefetch(p + bytes - 1, _MM_HINT_T0);
+      } else {
+        const char* p = reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
+        _mm_prefetch(p, _MM_HINT_T0);
+        _mm_prefetch(p + 64, _MM_HINT_T0);
+        _mm_prefetch(p + 128, _MM_HINT_T0);
+        _mm_prefetch(p + 192, _MM_HINT_T0);
+      }
+    }
+  }
+
+  /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
+  /// direction signs (near_first_keys): the nearest ends up last.
+  struct Child {
+    int32_t ref;
+    uint32_t mask;
+    float key;
+  };
+  static int ordered_children(const Bvh8Node& n, const RayPacket& p, const PacketSetup<Kernel>& ps, const float8& tfar,
+                              uint32_t mask, Child* out) {
+    const PacketBeam& beam = ps.beam;
+    uint32_t candidates = 0xffu;
+    if (beam.valid)
+      candidates = beam.cull(n, simd::reduce_max(xsimd::select(simd::mask_from_bits(mask), tfar, float8(0.0f))));
+    alignas(32) float key[8];
+    near_first_keys(n, ps.sx, ps.sy, ps.sz).store_aligned(key);
+    int k = 0;
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      if (!(candidates >> c & 1u)) continue;
+      const Vec3f lo{n.lo_x[c], n.lo_y[c], n.lo_z[c]}, hi{n.hi_x[c], n.hi_y[c], n.hi_z[c]};
+      const uint32_t m =
+          (beam.valid ? intersect_box_octant(p, beam.neg, lo, hi, tfar) : intersect_box(p, lo, hi, tfar)) & mask;
+      if (!m) continue;
+      Child e{n.child[c], m, key[c]};
+      int j = k++;
+      for (; j > 0 && out[j - 1].key < e.key; --j) out[j] = out[j - 1];  // descending: nearest last
+      out[j] = e;
+    }
+    return k;
+  }
+
+  /// The lanes of `mask` through the subtree `ref` one ray at a time: a packet whose rays
+  /// have drifted apart costs 8 lanes of work per box and triangle for one or two useful
+  /// ones, so below kSingleRayLanes active lanes the packet hands its rays to the single-ray
+  /// traversal (Benthin et al., "Combining Single and Packet-Ray Tracing for Arbitrary Ray
+  /// Distributions on the Intel MIC Architecture", IEEE TVCG 18(9), 2012).
+  void single_rays_closest(int32_t ref, uint32_t mask, std::span<const Ray> rays, PacketHits& h) const noexcept {
+    alignas(32) float tf[8], uu[8], vv[8];
+    h.tfar.store_aligned(tf);
+    h.u.store_aligned(uu);
+    h.v.store_aligned(vv);
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Hit hit{tf[lane], h.prim[lane], uu[lane], vv[lane]};
+      closest(rays[size_t(lane)], ref, hit);
+      tf[lane] = hit.t;
+      uu[lane] = hit.u;
+      vv[lane] = hit.v;
+      h.prim[lane] = hit.prim_id;
+    }
+    h.tfar = float8::load_aligned(tf);
+    h.u = float8::load_aligned(uu);
+    h.v = float8::load_aligned(vv);
+  }
+
+  const Bvh8& bvh_;
+  const Scene& scene_;
+};
+
+}  // namespace rp::bvh8

@@ -1,0 +1,128 @@
+#pragma once
+// Seeded scenes and rays the backend tests share: a triangle soup, a closed tessellated sphere
+// (shared edges and vertices everywhere), every analytic kind, and ray sets around them.
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "engine/math.h"
+#include "engine/ray.h"
+#include "engine/scene.h"
+
+namespace rp::test {
+
+inline Vec3f random_in_box(std::mt19937& rng, float lo, float hi) {
+  std::uniform_real_distribution<float> u(lo, hi);
+  return {u(rng), u(rng), u(rng)};
+}
+
+inline Vec3f random_direction(std::mt19937& rng) {
+  std::normal_distribution<float> n(0.0f, 1.0f);
+  Vec3f d;
+  do d = {n(rng), n(rng), n(rng)};
+  while (length(d) < 1e-3f);
+  return normalize(d);
+}
+
+inline Scene triangle_soup(uint32_t seed, int count) {
+  std::mt19937 rng(seed);
+  TriangleMesh m;
+  m.name = "soup";
+  for (int i = 0; i < count; ++i) {
+    const Vec3f c = random_in_box(rng, -1.0f, 1.0f);
+    for (int k = 0; k < 3; ++k) {
+      m.positions.push_back(c + random_in_box(rng, -0.15f, 0.15f));
+      m.indices.push_back(uint32_t(m.positions.size() - 1));
+    }
+  }
+  Scene s;
+  s.add_mesh(std::move(m));
+  return s;
+}
+
+/// Closed UV sphere of radius 1: shared edges and vertices everywhere.
+inline Scene tessellated_sphere(int slices, int stacks) {
+  TriangleMesh m;
+  m.name = "uv_sphere";
+  for (int j = 0; j <= stacks; ++j)
+    for (int i = 0; i < slices; ++i) {
+      const double th = kPi * j / stacks, ph = 2 * kPi * i / slices;
+      m.positions.push_back({float(std::sin(th) * std::cos(ph)), float(std::cos(th)), float(std::sin(th) * std::sin(ph))});
+    }
+  for (int j = 0; j < stacks; ++j)
+    for (int i = 0; i < slices; ++i) {
+      const uint32_t a = j * slices + i, b = j * slices + (i + 1) % slices;
+      const uint32_t c = (j + 1) * slices + (i + 1) % slices, d = (j + 1) * slices + i;
+      if (j != 0) m.indices.insert(m.indices.end(), {a, b, c});
+      if (j != stacks - 1) m.indices.insert(m.indices.end(), {a, c, d});
+    }
+  Scene s;
+  s.add_mesh(std::move(m));
+  return s;
+}
+
+inline Scene analytic_scene() {
+  Scene s;
+  using Qf = Quadric<float>;
+  s.add_sphere({{0.0f, 0.0f, 0.0f}, 0.6f, 0});
+  s.add_sphere({{1.2f, 0.3f, -0.4f}, 0.25f, 0});
+  s.add_quadric({Qf::ellipsoid({-1.0f, 0.5f, 0.5f}, {0.5f, 0.3f, 0.4f}), 0});
+  s.add_quadric({Qf::cylinder({1.0f, -0.8f, 0.8f}, 0.3f, 0.2f, 0.5f, 1), 0});
+  s.add_quadric({Qf::cone({-1.0f, -1.0f, -0.6f}, 0.4f, 0.4f, 0.6f, 1), 0});
+  s.add_quadric({Qf::hyperboloid_one_sheet({0.6f, 1.1f, 0.9f}, 0.2f, 0.2f, 0.3f, 0.4f, 0), 0});
+  s.add_quadric({Qf::hyperboloid_two_sheets({-0.3f, -1.2f, 1.2f}, 0.2f, 0.2f, 0.2f, 0.5f, 2), 0});
+  s.add_quadric({Qf::paraboloid({0.2f, 1.0f, -1.2f}, 0.3f, 0.3f, 0.5f, 1), 0});
+  const std::vector<Vec3f> quad{{-1.5f, -1.5f, -1.5f}, {-0.5f, -1.5f, -1.5f}, {-0.5f, -0.5f, -1.5f}, {-1.5f, -0.5f, -1.5f}};
+  s.add_polygon(quad, 0);
+  std::vector<Vec3f> star;
+  for (int k = 0; k < 10; ++k) {
+    const float a = float(kPi) * (0.5f + float(k) / 5.0f), r = (k % 2 == 0) ? 0.7f : 0.3f;
+    star.push_back({1.0f + r * std::cos(a), 0.0f, 1.2f + r * std::sin(a)});  // in the plane y = 0... tilted below
+  }
+  for (Vec3f& v : star) v.y = 0.3f * (v.x - 1.0f) - 0.5f;
+  s.add_polygon(star, 0);
+  s.add_plane({normalize(Vec3f{0.1f, 1.0f, 0.05f}), 1.8f, 0});
+  return s;
+}
+
+/// Rays aimed from a sphere of radius 4 at random points in [-1.5, 1.5]^3, a quarter with a
+/// finite tfar cutting the segment short, in groups of 8 with nearby targets (coherent-ish).
+inline std::vector<Ray> random_rays(uint32_t seed, int count) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (int g = 0; g < count / 8; ++g) {
+    const Vec3f org = random_direction(rng) * 4.0f;
+    const Vec3f target = random_in_box(rng, -1.5f, 1.5f);
+    for (int i = 0; i < 8; ++i) {
+      Ray r{org, 0.0f, (target + random_in_box(rng, -0.2f, 0.2f)) - org, std::numeric_limits<float>::infinity()};
+      if (u01(rng) < 0.25f) r.tfar = 0.3f + u01(rng);
+      if (u01(rng) < 0.1f) r.tnear = 0.5f * u01(rng);
+      rays.push_back(r);
+    }
+  }
+  return rays;
+}
+
+/// Axis-parallel rays with +0 and -0 in the other components, on a grid of origins that
+/// includes coordinates exactly on primitive bounds (multiples of 0.25).
+inline std::vector<Ray> axis_rays() {
+  std::vector<Ray> rays;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f})
+      for (int a = -6; a <= 6; ++a)
+        for (int b = -6; b <= 6; ++b) {
+          Ray r;
+          r.org[axis] = -4.0f * sign;
+          r.org[(axis + 1) % 3] = 0.25f * float(a);
+          r.org[(axis + 2) % 3] = 0.25f * float(b);
+          r.dir = Vec3f{(a + b) % 2 ? 0.0f : -0.0f};
+          r.dir[axis] = sign;
+          rays.push_back(r);
+        }
+  return rays;
+}
+
+}  // namespace rp::test
