@@ -158,6 +158,28 @@ inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfa
 struct PacketHits {
   float8 tfar, u, v;
   alignas(32) uint32_t prim[8];
+
+  /// Runs f(lane, hit) for each lane of `mask` on that lane's closest hit as a scalar Hit
+  /// (t = the lane's tfar), which f may improve: the lanes are stored once, then reloaded.
+  template <class F>
+  void each_lane(uint32_t mask, F&& f) {
+    alignas(32) float tf[8], uu[8], vv[8];
+    tfar.store_aligned(tf);
+    u.store_aligned(uu);
+    v.store_aligned(vv);
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Hit hit{tf[lane], prim[lane], uu[lane], vv[lane]};
+      f(lane, hit);
+      tf[lane] = hit.t;
+      uu[lane] = hit.u;
+      vv[lane] = hit.v;
+      prim[lane] = hit.prim_id;
+    }
+    tfar = float8::load_aligned(tf);
+    u = float8::load_aligned(uu);
+    v = float8::load_aligned(vv);
+  }
 };
 
 /// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
@@ -337,15 +359,11 @@ class Traversal {
   /// one at a time.
   void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                       std::span<const Ray> rays, PacketHits& h) const noexcept {
-    struct Entry {
-      int32_t ref;
-      uint32_t mask;
-    };
-    Entry stack[kStackSize];
+    PacketEntry stack[kStackSize];
     int sp = 0;
     stack[sp++] = {root, mask};
     while (sp > 0) {
-      const Entry e = stack[--sp];
+      const PacketEntry e = stack[--sp];
       if (simd::lane_count(e.mask) <= kSingleRayLanes) {
         single_rays_closest(e.ref, e.mask, rays, h);
         continue;
@@ -390,45 +408,30 @@ class Traversal {
   /// the single-ray test: the same hits and bits as a triangle at a time.
   void leaf_by_rays(const float* rows, uint32_t n, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
                     PacketHits& h) const noexcept {
-    alignas(32) float tf[8], uu[8], vv[8];
-    h.tfar.store_aligned(tf);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
     const uint32_t slots = (1u << n) - 1;
-    for (uint32_t b = mask; b; b &= b - 1) {
-      const int lane = std::countr_zero(b);
-      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(tf[lane]));
+    h.each_lane(mask, [&](int lane, Hit& hit) {
+      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(hit.t));
       const uint32_t bits = simd::movemask(m.hit) & slots;
-      if (!bits) continue;
+      if (!bits) return;
       const float tmin =
           simd::reduce_min(xsimd::select(simd::mask_from_bits(bits), m.t, float8(std::numeric_limits<float>::infinity())));
       const int slot = lowest_prim(rows, n, simd::movemask(m.t == float8(tmin)) & bits);
       const uint32_t id = prim_at(rows, n, uint32_t(slot));
-      if (!(tmin < tf[lane] || id < h.prim[lane])) continue;
-      tf[lane] = tmin;
-      uu[lane] = m.u.get(size_t(slot));
-      vv[lane] = m.v.get(size_t(slot));
-      h.prim[lane] = id;
-    }
-    h.tfar = float8::load_aligned(tf);
-    h.u = float8::load_aligned(uu);
-    h.v = float8::load_aligned(vv);
+      if (tmin < hit.t || id < hit.prim_id) hit = {tmin, id, m.u.get(size_t(slot)), m.v.get(size_t(slot))};
+    });
   }
+
 
   /// Any hits of the lanes of `live` of packet `p` in the subtree `root` (tfar per lane);
   /// returns the lanes found occluded. Stops once every live lane is.
   uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
                       std::span<const Ray> rays, const float8& tfar) const noexcept {
-    struct Entry {
-      int32_t ref;
-      uint32_t mask;
-    };
-    Entry stack[kStackSize];
+    PacketEntry stack[kStackSize];
     int sp = 0;
     stack[sp++] = {root, live};
     uint32_t done = 0;
     while (sp > 0 && live & ~done) {
-      Entry e = stack[--sp];
+      PacketEntry e = stack[--sp];
       e.mask &= ~done;
       if (!e.mask) continue;
       if (simd::lane_count(e.mask) <= kSingleRayLanes) {
@@ -549,28 +552,22 @@ class Traversal {
 
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
   void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, PacketHits& h) const noexcept {
-    alignas(32) float tf[8], uu[8], vv[8];
-    h.tfar.store_aligned(tf);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
-    for (uint32_t b = mask; b; b &= b - 1) {
-      const int lane = std::countr_zero(b);
+    h.each_lane(mask, [&](int lane, Hit& hit) {
       Ray r = rays[size_t(lane)];
-      r.tfar = tf[lane];
+      r.tfar = hit.t;
       const Intersection<float> a = scene_.intersect_analytic(id, r);
-      if (a.hit && (a.t < tf[lane] || id < h.prim[lane])) {
-        tf[lane] = a.t;
-        uu[lane] = a.u;
-        vv[lane] = a.v;
-        h.prim[lane] = id;
-      }
-    }
-    h.tfar = float8::load_aligned(tf);
-    h.u = float8::load_aligned(uu);
-    h.v = float8::load_aligned(vv);
+      if (a.hit && (a.t < hit.t || id < hit.prim_id)) hit = {a.t, id, a.u, a.v};
+    });
   }
 
+
  private:
+  /// A subtree an 8-ray packet still has to visit, with the lanes that reach it.
+  struct PacketEntry {
+    int32_t ref;
+    uint32_t mask;
+  };
+
   /// Starts loading the nodes (or leaf blocks) of the children in `bits`, which traversal is
   /// about to visit or push: hides part of the memory latency that dominates traversal.
   void prefetch_children(const Bvh8Node& n, uint32_t bits) const noexcept {
@@ -627,23 +624,9 @@ class Traversal {
   /// traversal (Benthin et al., "Combining Single and Packet-Ray Tracing for Arbitrary Ray
   /// Distributions on the Intel MIC Architecture", IEEE TVCG 18(9), 2012).
   void single_rays_closest(int32_t ref, uint32_t mask, std::span<const Ray> rays, PacketHits& h) const noexcept {
-    alignas(32) float tf[8], uu[8], vv[8];
-    h.tfar.store_aligned(tf);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
-    for (uint32_t b = mask; b; b &= b - 1) {
-      const int lane = std::countr_zero(b);
-      Hit hit{tf[lane], h.prim[lane], uu[lane], vv[lane]};
-      closest(rays[size_t(lane)], ref, hit);
-      tf[lane] = hit.t;
-      uu[lane] = hit.u;
-      vv[lane] = hit.v;
-      h.prim[lane] = hit.prim_id;
-    }
-    h.tfar = float8::load_aligned(tf);
-    h.u = float8::load_aligned(uu);
-    h.v = float8::load_aligned(vv);
+    h.each_lane(mask, [&](int lane, Hit& hit) { closest(rays[size_t(lane)], ref, hit); });
   }
+
 
   const Bvh8& bvh_;
   const Scene& scene_;
