@@ -314,8 +314,10 @@ class LargePacketTraversal {
       if (e.last - e.first < kPacketFallback) {  // few packets left: each continues on its own
         for (int k = e.first; k <= e.last; ++k) {
           Packet& q = w.packets[members[k]];
+          const uint32_t m = intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live;  // lanes here
+          if (!m) continue;
           const std::span<const Ray> r = packet_rays(rays, members[k]);
-          t_.closest_packet(e.ref, q.active, q.p, setup(q, r), r, q.h);
+          t_.closest_packet(e.ref, m, q.p, setup(q, r), r, q.h);
         }
         continue;
       }
@@ -377,8 +379,10 @@ class LargePacketTraversal {
       if (e.last - e.first < kPacketFallback) {
         for (int k = e.first; k <= e.last; ++k) {
           Packet& q = w.packets[members[k]];
+          const uint32_t m = q.live ? intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live : 0u;
+          if (!m) continue;
           const std::span<const Ray> r = packet_rays(rays, members[k]);
-          if (q.live) occlude(members[k], t_.any_packet(e.ref, q.live, q.p, setup(q, r), r, q.h.tfar));
+          occlude(members[k], t_.any_packet(e.ref, m, q.p, setup(q, r), r, q.h.tfar));
         }
         continue;
       }
