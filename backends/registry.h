@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "engine/backend.h"
@@ -16,6 +17,8 @@ struct BackendEntry {
   std::string name;
   std::string description;
   std::vector<std::string> variants;  ///< accepted BackendOptions::variant values
+  std::vector<std::string> coherent_methods;  ///< accepted BackendOptions::coherent_method values, default first
+  std::vector<std::pair<std::string, std::string>> facts;  ///< version, ISA, ... (for benchmark records)
   bool available = true;
   std::string unavailable_reason;  ///< why not, when !available
 };

@@ -1,8 +1,10 @@
-// BM_Trace/<backend>/<scene>/<primary|shadow|diffuse> and BM_Build/<backend>/<scene>: every
-// available backend, plus Embree limited to AVX2 ("embree-avx2": equal SIMD width with the
-// simd backend), on identical rays, traced by all threads (TBB; --threads=N or the core
-// count). Scenes: the embedded default and, when ../shared/scenes is present, bunny.obj and
-// dragon.ply. Rays from engine/raygen.h.
+// BM_Trace/<method>/<scene>/<primary|shadow|diffuse> and BM_Build/<method>/<scene>: every
+// available backend and its coherent methods (see methods()), plus Embree limited to AVX2
+// ("embree-avx2": equal SIMD width with the simd backend), on identical rays, traced by all
+// threads (TBB; --threads=N or the core count); primary and shadow rays as coherent spans,
+// diffuse rays as single rays. Scenes: the embedded default and, when ../shared/scenes is
+// present, bunny.obj, dragon.ply and Sponza from inside (bench/scenes/sponza-inside.json).
+// Rays from engine/raygen.h.
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -26,6 +28,9 @@
 #include "engine/reference.h"
 #include "engine/scene.h"
 
+#ifndef RP_SOURCE_DIR
+#define RP_SOURCE_DIR "."
+#endif
 #ifndef RP_SHARED_SCENES
 #define RP_SHARED_SCENES "../shared/scenes"
 #endif
@@ -46,19 +51,36 @@ RaySets make_rays(const Scene& scene, const Backend& backend) {
   return {primary.rays, shadow_rays(scene, primary, hits).rays, diffuse_rays(scene, primary, hits, 2024).rays};
 }
 
-/// The backends measured: registry name, options, and the label in benchmark names.
+/// The backends measured: registry name, options, the label in benchmark names, and whether
+/// its build is measured (not for a second coherent method over the same structure).
 struct Method {
   std::string label, name;
   BackendOptions options;
+  bool build = true;
 };
 
+/// Every backend with its default options; simd's 8-ray packets beside its large packets;
+/// Embree's stream mode and, where its AVX-512 kernels run, 16-wide packets, beside its 8-wide
+/// default; and Embree limited to AVX2 (the simd backend's SIMD width).
 std::vector<Method> methods() {
   std::vector<Method> m;
-  for (const std::string& name : available_backends()) {
-    m.push_back({name, name, {}});
-    if (name == "simd") m.push_back({"simd-watertight", "simd", {.variant = "watertight", .device_config = {}, .coherent_method = {}}});
+  const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent) {
+    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent};
+  };
+  for (const BackendEntry& e : list_backends()) {
+    if (!e.available) continue;
+    m.push_back({e.name, e.name, {}});
+    if (e.name == "simd") {
+      m.push_back({"simd-packet8", "simd", with("default", "", "packet8"), false});
+      m.push_back({"simd-watertight", "simd", with("watertight", "", "")});
+    } else if (e.name == "embree") {
+      m.push_back({"embree-stream", "embree", with("default", "", "stream"), false});
+      for (const auto& [key, value] : e.facts)
+        if (key == "native_ray16" && value == "yes")
+          m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), false});
+    }
   }
-  m.push_back({"embree-avx2", "embree", {.variant = "default", .device_config = "max_isa=avx2", .coherent_method = {}}});
+  m.push_back({"embree-avx2", "embree", with("default", "max_isa=avx2", "")});
   return m;
 }
 
@@ -106,7 +128,9 @@ void BM_Trace(benchmark::State& state, const std::string& label, const std::stri
   const Backend& b = *f.backends.at(label);
   const Backend& ref = *f.backends.at("embree");
   const std::vector<Ray>& rays = kind == "primary" ? f.rays.primary : kind == "shadow" ? f.rays.shadow : f.rays.diffuse;
-  const Coherence coh = kind == "primary" ? Coherence::coherent : Coherence::incoherent;
+  // Primary rays and shadow rays (towards one light, in the primary rays' tile order) are
+  // coherent spans; diffuse bounces are not.
+  const Coherence coh = kind == "diffuse" ? Coherence::incoherent : Coherence::coherent;
   const bool shadow = kind == "shadow";
   std::vector<Hit> hits(rays.size()), ref_hits(rays.size());
   std::vector<uint8_t> occ(rays.size()), ref_occ(rays.size());
@@ -202,17 +226,24 @@ int main(int argc, char** argv) {
     if (std::filesystem::exists(p)) scene_files()[std::filesystem::path(file).stem().string()] = p.string();
     else std::fprintf(stderr, "rp_bench: %s is absent: its benchmarks are not run\n", p.string().c_str());
   }
+  // Sponza from inside (bench/scenes/sponza-inside.json: camera and lights around sponza.obj).
+  if (std::filesystem::exists(std::filesystem::path(RP_SHARED_SCENES) / "sponza.obj"))
+    scene_files()["sponza-inside"] = RP_SOURCE_DIR "/bench/scenes/sponza-inside.json";
+  else
+    std::fprintf(stderr, "rp_bench: %s/sponza.obj is absent: the sponza-inside benchmarks are not run\n", RP_SHARED_SCENES);
   for (const auto& [scene, path] : scene_files()) {
     (void)path;
     for (const Method& m : methods()) {
       for (const char* kind : {"primary", "shadow", "diffuse"})
-        benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label, scene,
+        if (m.build || std::string_view(kind) != "diffuse")  // a coherent method does not touch diffuse rays
+          benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label, scene,
                                      std::string(kind))
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
-      benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
-          ->Unit(benchmark::kMillisecond)
-          ->UseRealTime();
+      if (m.build)
+        benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
     }
   }
   // The kernel benchmarks run AVX2+FMA code: only where the simd backend is offered.

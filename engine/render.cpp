@@ -43,7 +43,7 @@ struct Counters {
 
 /// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
 struct ShadeWork {
-  std::vector<Ray> rays, next_rays, shadow_rays;
+  std::vector<Ray> rays, next_rays;
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
@@ -51,7 +51,11 @@ struct ShadeWork {
     uint32_t slot;
     Vec3f contribution;
   };
-  std::vector<Pending> pending;  ///< lit contributions waiting for their shadow ray
+  /// Per light: the shadow rays of this batch, and the lit contributions waiting for them.
+  /// Rays towards one light from one tile share an endpoint (or, for a directional light, a
+  /// direction) and go to the backend as one coherent span.
+  std::vector<std::vector<Ray>> shadow_rays;
+  std::vector<std::vector<Pending>> pending;
 };
 
 /// Shades the primary rays in w.rays / w.paths (whose groups of 8 are packets), adding each
@@ -66,8 +70,13 @@ void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork&
     const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
     w.hits.resize(w.rays.size());
     backend.intersect(w.rays, w.hits, coherence);
-    w.shadow_rays.clear();
-    w.pending.clear();
+    const size_t n_lights = scene.point_lights().size() + scene.directional_lights().size();
+    w.shadow_rays.resize(n_lights);
+    w.pending.resize(n_lights);
+    for (size_t l = 0; l < n_lights; ++l) {
+      w.shadow_rays[l].clear();
+      w.pending[l].clear();
+    }
     w.next_rays.clear();
     w.next_paths.clear();
     for (size_t i = 0; i < w.rays.size(); ++i) {
@@ -94,22 +103,24 @@ void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork&
       const float transparency = 1.0f - m.opacity;
       const float diffuse_weight = (1.0f - m.mirror) * m.opacity;
       out[ps.slot] += mul(ps.weight, m.emission + m.diffuse * (0.06f * diffuse_weight));
-      auto light = [&](const Vec3f& to_light, float tfar, const Vec3f& irradiance) {
+      auto light = [&](size_t index, const Vec3f& to_light, float tfar, const Vec3f& irradiance) {
         const Vec3f l = normalize(to_light);
         const float ndl = dot(ns, l);
         if (ndl <= 0.0f || dot(ng, l) <= 0.0f) return;
         const Vec3f h = normalize(l + view);
         const float spec = std::pow(std::max(0.0f, dot(ns, h)), m.shininess);
         const Vec3f c = mul(m.diffuse * (ndl * diffuse_weight) + m.specular * spec, irradiance);
-        w.shadow_rays.push_back({origin, 0.0f, to_light, tfar});
-        w.pending.push_back({ps.slot, mul(ps.weight, c)});
+        w.shadow_rays[index].push_back({origin, 0.0f, to_light, tfar});
+        w.pending[index].push_back({ps.slot, mul(ps.weight, c)});
       };
+      size_t index = 0;
       for (const PointLight& pl : scene.point_lights()) {
         const Vec3f to = pl.position - origin;
         const float r2 = dot(to, to);
-        if (r2 > 0.0f) light(to, 1.0f - 1e-4f, pl.intensity / r2);
+        if (r2 > 0.0f) light(index, to, 1.0f - 1e-4f, pl.intensity / r2);
+        ++index;
       }
-      for (const DirectionalLight& dl : scene.directional_lights()) light(-dl.direction, inf, dl.irradiance);
+      for (const DirectionalLight& dl : scene.directional_lights()) light(index++, -dl.direction, inf, dl.irradiance);
       if (depth >= max_depth) continue;
       // Fresnel on the geometric normal: entering when the ray met the front face.
       const float cos_i = -dot(d, ng);
@@ -130,12 +141,15 @@ void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork&
         ++n.refraction;
       }
     }
-    if (!w.shadow_rays.empty()) {
-      w.occluded.resize(w.shadow_rays.size());
-      backend.occluded(w.shadow_rays, w.occluded, coherence);
-      n.shadow += w.shadow_rays.size();
-      for (size_t k = 0; k < w.pending.size(); ++k)
-        if (!w.occluded[k]) out[w.pending[k].slot] += w.pending[k].contribution;
+    // Contributions are added light by light, in batch order: a fixed order for the tile,
+    // whatever the thread count.
+    for (size_t l = 0; l < n_lights; ++l) {
+      if (w.shadow_rays[l].empty()) continue;
+      w.occluded.resize(w.shadow_rays[l].size());
+      backend.occluded(w.shadow_rays[l], w.occluded, coherence);
+      n.shadow += w.shadow_rays[l].size();
+      for (size_t k = 0; k < w.pending[l].size(); ++k)
+        if (!w.occluded[k]) out[w.pending[l][k].slot] += w.pending[l][k].contribution;
     }
     std::swap(w.rays, w.next_rays);
     std::swap(w.paths, w.next_paths);

@@ -211,7 +211,8 @@ void user_occluded(const RTCOccludedFunctionNArguments* a) {
 
 class EmbreeBackend final : public Backend {
  public:
-  EmbreeBackend(const Scene& scene, const BackendOptions& options) : scene_(scene), user_{&scene} {
+  EmbreeBackend(const Scene& scene, const BackendOptions& options)
+      : scene_(scene), user_{&scene}, method_(parse_method(options.coherent_method)) {
     const auto start = std::chrono::steady_clock::now();
     info_.name = "embree";
     info_.variant = options.variant;
@@ -273,49 +274,21 @@ class EmbreeBackend final : public Backend {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
-    if (coherence == Coherence::coherent) {
-      for (size_t base = 0; base < rays.size(); base += 8) {
-        const size_t n = std::min<size_t>(8, rays.size() - base);
-        alignas(32) int valid[8];
-        alignas(32) RTCRayHit8 rh;
-        for (size_t i = 0; i < 8; ++i) {
-          const bool ok = i < n && valid_ray(rays[base + i]);
-          valid[i] = ok ? -1 : 0;
-          set_lane(rh.ray, i, ok ? rays[base + i] : kDummy, ok ? base + i : 0);
-          rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect8(valid, scene_handle_, &q.embree, &rh);
-        for (size_t i = 0; i < n; ++i)
-          hits[base + i] = valid[i] ? settle(q, base + i, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i],
-                                             rh.hit.u[i], rh.hit.v[i])
-                                    : Hit{};
-      }
-    } else {
+    if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) hits[i] = valid_ray(rays[i]) ? intersect1(q, i) : Hit{};
+      return;
+    }
+    switch (method_) {
+      case Method::packet8: intersect_packets<RTCRayHit8, 8>(q, hits); break;
+      case Method::packet16: intersect_packets<RTCRayHit16, 16>(q, hits); break;
+      case Method::stream: intersect_stream(q, hits); break;
     }
   }
 
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
-    if (coherence == Coherence::coherent) {
-      for (size_t base = 0; base < rays.size(); base += 8) {
-        const size_t n = std::min<size_t>(8, rays.size() - base);
-        alignas(32) int valid[8];
-        alignas(32) RTCRay8 ray;
-        for (size_t i = 0; i < 8; ++i) {
-          const bool ok = i < n && valid_ray(rays[base + i]) && !hits_plane(rays[base + i]);
-          valid[i] = ok ? -1 : 0;
-          set_lane(ray, i, ok ? rays[base + i] : kDummy, ok ? base + i : 0);
-        }
-        rtcOccluded8(valid, scene_handle_, &q.embree, &ray);
-        for (size_t i = 0; i < n; ++i) {
-          const Ray& r = rays[base + i];
-          out[base + i] = valid[i] ? uint8_t(ray.tfar[i] < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
-        }
-      }
-    } else {
+    if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
         if (!valid_ray(r)) { out[i] = 0; continue; }
@@ -324,6 +297,12 @@ class EmbreeBackend final : public Backend {
         rtcOccluded1(scene_handle_, &q.embree, &ray);
         out[i] = uint8_t(ray.tfar < 0.0f);
       }
+      return;
+    }
+    switch (method_) {
+      case Method::packet8: occluded_packets<RTCRay8, 8>(q, out); break;
+      case Method::packet16: occluded_packets<RTCRay16, 16>(q, out); break;
+      case Method::stream: occluded_stream(q, out); break;
     }
   }
 
@@ -331,6 +310,100 @@ class EmbreeBackend final : public Backend {
 
  private:
   static constexpr Ray kDummy{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 0.0f};
+  static constexpr Ray kInactive{{0.0f, 0.0f, 0.0f}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  ///< tnear > tfar
+
+  /// How coherent spans are traced (BackendOptions::coherent_method).
+  enum class Method { packet8, packet16, stream };
+
+  static Method parse_method(const std::string& m) {
+    if (m.empty() || m == "packet8") return Method::packet8;
+    if (m == "packet16") return Method::packet16;
+    if (m == "stream") return Method::stream;
+    throw Error(cat("embree: unknown coherent method '", m, "' (packet8, packet16, stream)"));
+  }
+
+  /// Ray i of the query as Embree sees it in a packet or stream: invalid rays, and for
+  /// occlusion rays that hit a plane (answered beside Embree), are inactive.
+  bool active(const QueryContext& q, size_t i, bool occlusion) const noexcept {
+    return valid_ray(q.rays[i]) && !(occlusion && hits_plane(q.rays[i]));
+  }
+
+  /// Coherent closest hits by N-wide packets (rtcIntersect8 or rtcIntersect16).
+  template <typename RayHitN, size_t N>
+  void intersect_packets(QueryContext& q, std::span<Hit> hits) const noexcept {
+    for (size_t base = 0; base < hits.size(); base += N) {
+      const size_t n = std::min(N, hits.size() - base);
+      alignas(64) int valid[N];
+      RayHitN rh;  // Embree's packet types carry their own alignment
+      for (size_t i = 0; i < N; ++i) {
+        const bool ok = i < n && active(q, base + i, false);
+        valid[i] = ok ? -1 : 0;
+        set_lane(rh.ray, i, ok ? q.rays[base + i] : kDummy, ok ? base + i : 0);
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+      }
+      trace_packet(valid, &q.embree, &rh);
+      for (size_t i = 0; i < n; ++i)
+        hits[base + i] = valid[i] ? settle(q, base + i, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i],
+                                           rh.hit.u[i], rh.hit.v[i])
+                                  : Hit{};
+    }
+  }
+
+  /// Coherent any hits by N-wide packets (rtcOccluded8 or rtcOccluded16).
+  template <typename RayN, size_t N>
+  void occluded_packets(QueryContext& q, std::span<uint8_t> out) const noexcept {
+    for (size_t base = 0; base < out.size(); base += N) {
+      const size_t n = std::min(N, out.size() - base);
+      alignas(64) int valid[N];
+      RayN ray;
+      for (size_t i = 0; i < N; ++i) {
+        const bool ok = i < n && active(q, base + i, true);
+        valid[i] = ok ? -1 : 0;
+        set_lane(ray, i, ok ? q.rays[base + i] : kDummy, ok ? base + i : 0);
+      }
+      trace_packet(valid, &q.embree, &ray);
+      for (size_t i = 0; i < n; ++i) {
+        const Ray& r = q.rays[base + i];
+        out[base + i] = valid[i] ? uint8_t(ray.tfar[i] < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
+      }
+    }
+  }
+
+  void trace_packet(const int* valid, RTCIntersectContext* c, RTCRayHit8* p) const { rtcIntersect8(valid, scene_handle_, c, p); }
+  void trace_packet(const int* valid, RTCIntersectContext* c, RTCRayHit16* p) const { rtcIntersect16(valid, scene_handle_, c, p); }
+  void trace_packet(const int* valid, RTCIntersectContext* c, RTCRay8* p) const { rtcOccluded8(valid, scene_handle_, c, p); }
+  void trace_packet(const int* valid, RTCIntersectContext* c, RTCRay16* p) const { rtcOccluded16(valid, scene_handle_, c, p); }
+
+  /// Coherent closest hits as one ray stream (rtcIntersect1M; the context carries the coherent
+  /// flag). An inactive ray has tnear > tfar, as Embree's stream API asks.
+  void intersect_stream(QueryContext& q, std::span<Hit> hits) const noexcept {
+    thread_local std::vector<RTCRayHit> stream;
+    stream.resize(hits.size());
+    for (size_t i = 0; i < hits.size(); ++i) {
+      RTCRayHit& rh = stream[i];
+      rh.ray = to_embree(active(q, i, false) ? q.rays[i] : kInactive, i);
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect1M(scene_handle_, &q.embree, stream.data(), unsigned(hits.size()), sizeof(RTCRayHit));
+    for (size_t i = 0; i < hits.size(); ++i) {
+      const RTCRayHit& rh = stream[i];
+      hits[i] = active(q, i, false) ? settle(q, i, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v) : Hit{};
+    }
+  }
+
+  /// Coherent any hits as one ray stream (rtcOccluded1M).
+  void occluded_stream(QueryContext& q, std::span<uint8_t> out) const noexcept {
+    thread_local std::vector<RTCRay> stream;
+    stream.resize(out.size());
+    for (size_t i = 0; i < out.size(); ++i) stream[i] = to_embree(active(q, i, true) ? q.rays[i] : kInactive, i);
+    rtcOccluded1M(scene_handle_, &q.embree, stream.data(), unsigned(out.size()), sizeof(RTCRay));
+    for (size_t i = 0; i < out.size(); ++i) {
+      const Ray& r = q.rays[i];
+      out[i] = active(q, i, true) ? uint8_t(stream[i].tfar < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
+    }
+  }
 
   static QueryContext context(std::span<const Ray> rays, Coherence coherence) {
     QueryContext q;
@@ -352,7 +425,8 @@ class EmbreeBackend final : public Backend {
   }
 
   /// Lane i of an Embree packet from `r` (see to_embree).
-  static void set_lane(RTCRay8& p, size_t i, const Ray& r, size_t index) {
+  template <typename RayN>
+  static void set_lane(RayN& p, size_t i, const Ray& r, size_t index) {
     const RTCRay e = to_embree(r, index);
     p.org_x[i] = e.org_x; p.org_y[i] = e.org_y; p.org_z[i] = e.org_z;
     p.dir_x[i] = e.dir_x; p.dir_y[i] = e.dir_y; p.dir_z[i] = e.dir_z;
@@ -423,15 +497,6 @@ class EmbreeBackend final : public Backend {
     attach(g, Kind::base(scene_));
   }
 
-  /// Maps Embree's (geomID, primID) to the scene numbering, then lets the unbounded planes,
-  /// which live beside the Embree scene, take the hit when they are closer.
-  Hit finish(const Ray& r, unsigned geom, unsigned prim, float t, float u, float v) const noexcept {
-    Hit h;
-    if (geom != RTC_INVALID_GEOMETRY_ID) h = {t, geom_base_[geom] + prim, u, v};
-    scene_.intersect_planes(r, h);
-    return h;
-  }
-
   bool hits_plane(const Ray& r) const noexcept { return scene_.occluded_by_planes(r); }
 
   const Scene& scene_;
@@ -440,12 +505,34 @@ class EmbreeBackend final : public Backend {
   Device* device_ = nullptr;
   RTCScene scene_handle_ = nullptr;
   std::vector<uint32_t> geom_base_;
+  Method method_;
   BackendInfo info_;
 };
 
 }  // namespace
 
 std::vector<std::string> variants() { return {"default", "robust", "compact", "high"}; }
+
+std::vector<std::string> coherent_methods() { return {"packet8", "packet16", "stream"}; }
+
+DeviceFacts device_facts() {
+  const RTCDevice dev = device_for("").handle;
+  DeviceFacts f;
+  f.version = cat(rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MAJOR), ".",
+                  rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MINOR), ".",
+                  rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_PATCH));
+  f.native_ray4 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) != 0;
+  f.native_ray8 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
+  f.native_ray16 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+  f.stream = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_RAY_STREAM_SUPPORTED) != 0;
+  // Embree 3 does not report the ISA it dispatches to; it takes the widest one it was built
+  // for that the CPU has, and only its AVX-512 kernels trace 16-wide packets natively.
+  __builtin_cpu_init();
+  f.isa = f.native_ray16 ? "avx512"
+          : f.native_ray8 ? (__builtin_cpu_supports("avx2") ? "avx2" : "avx")
+                          : (__builtin_cpu_supports("sse4.2") ? "sse4.2" : "sse2");
+  return f;
+}
 
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
   return std::make_unique<EmbreeBackend>(scene, options);

@@ -15,6 +15,21 @@ namespace rp::embree {
 /// "compact" (RTC_SCENE_FLAG_COMPACT: smaller BVH), "high" (RTC_BUILD_QUALITY_HIGH).
 std::vector<std::string> variants();
 
+/// Ways to trace a coherent span (BackendOptions::coherent_method): "packet8" (the default:
+/// rtcIntersect8/rtcOccluded8), "packet16" (rtcIntersect16/rtcOccluded16: native only where
+/// Embree runs its AVX-512 kernels, emulated otherwise), "stream" (the whole span as one
+/// rtcIntersect1M/rtcOccluded1M stream with RTC_INTERSECT_CONTEXT_FLAG_COHERENT, which
+/// Embree's documentation names the fastest mode for coherent rays).
+std::vector<std::string> coherent_methods();
+
+/// What Embree's default device says about itself.
+struct DeviceFacts {
+  std::string version;  ///< e.g. "3.13.5"
+  std::string isa;      ///< the kernels it runs: inferred from the native packet widths and the CPU
+  bool native_ray4 = false, native_ray8 = false, native_ray16 = false, stream = false;
+};
+DeviceFacts device_facts();
+
 /// Builds an Embree scene over `scene`: one triangle geometry per mesh; spheres, quadrics and
 /// polygons as user geometry whose callbacks call engine/geometry; unbounded planes tested
 /// beside the Embree scene. Throws rp::Error on an Embree error or an unknown variant.

@@ -222,6 +222,29 @@ struct PacketBeam {
   }
 };
 
+/// The beams of 8 packets of one octant, one per lane (structure of arrays): the transposed
+/// PacketBeam, for culling 8 packets against one box in one step.
+struct PacketBeams8 {
+  float8 omin[3], omax[3], imin[3], imax[3];  ///< mirrored origin and inverse-direction ranges
+  float8 tnear_min, tfar_max;                 ///< a lane that no ray may use has tnear_min = +inf
+
+  /// Lanes whose beam some ray may take into box [lo, hi] (of the octant `neg`) within its
+  /// interval; conservative as PacketBeam::cull, with the same arithmetic.
+  uint32_t cull(const bool neg[3], const Vec3f& lo, const Vec3f& hi) const {
+    const float l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    const float8 zero(0.0f);
+    float8 enter = tnear_min, exit = tfar_max;
+    for (int a = 0; a < 3; ++a) {
+      const float8 near(neg[a] ? -h[a] : l[a]), far(neg[a] ? -l[a] : h[a]);
+      const float8 dn = near - omax[a], df = far - omin[a];
+      enter = xsimd::max(enter, dn * xsimd::select(dn >= zero, imin[a], imax[a]));
+      exit = xsimd::min(exit, df * xsimd::select(df >= zero, imax[a], imin[a]));
+    }
+    const float8 slack = (xsimd::abs(enter) + xsimd::abs(exit)) * float8(0x1p-20f);
+    return simd::movemask(enter - slack <= exit);
+  }
+};
+
 /// Slab test ×8 across rays for a packet whose rays share one octant and have no zero
 /// direction component (PacketBeam::valid): near and far planes chosen once per packet, one
 /// FMA per slab distance with the error bounds of intersect_node. Returns the lanes that hit.

@@ -197,44 +197,83 @@ class LargePacketTraversal {
   }
 
   /// What the group shares: its beam, its direction signs (as flags and as +-1 for ordering
-  /// children) and the largest tfar of its rays.
+  /// children), the largest tfar of its rays, and each member's own beam (lane k % 8 of
+  /// block k / 8 for member k).
   struct GroupBeam {
     PacketBeam beam;
     float8 sx, sy, sz;
     float tfar_max;
+    PacketBeams8 members[kMaxPackets / 8];
   };
 
-  /// The beam of every live ray of the group `members` of one octant: lane-wise minima and
-  /// maxima over the packets, then one reduction each.
-  static GroupBeam group_beam(const Work& w, const uint8_t* members, int n, int octant) {
+  /// The beams of the group `members` of one octant and of each member, over their live rays.
+  static void group_beam(const Work& w, const uint8_t* members, int n, int octant, GroupBeam& gb) {
     const bool neg[3] = {(octant & 1) != 0, (octant & 2) != 0, (octant & 4) != 0};
-    const float8 inf(std::numeric_limits<float>::infinity());
-    float8 omin[3] = {inf, inf, inf}, omax[3] = {-inf, -inf, -inf}, imin[3] = {inf, inf, inf};
-    float8 imax[3] = {-inf, -inf, -inf}, tnear = inf, tfar(0.0f);
-    for (int k = 0; k < n; ++k) {
-      const Packet& q = w.packets[members[k]];
-      const mask8 on = simd::mask_from_bits(q.live);
-      const float8 org[3] = {q.p.org.x, q.p.org.y, q.p.org.z}, inv[3] = {q.p.inv.x, q.p.inv.y, q.p.inv.z};
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    const float8 inf8(inf);
+    // Per member: rows omin[3], omax[3], imin[3], imax[3], tnear_min, tfar_max.
+    alignas(32) float row[14][kMaxPackets];
+    const int blocks = (n + 7) / 8;
+    for (int k = 0; k < 8 * blocks; ++k) {
+      const Packet* q = k < n ? &w.packets[members[k]] : nullptr;
+      if (!q || !q->live) {  // reaches nothing
+        for (int r = 0; r < 14; ++r) row[r][k] = r == 12 ? inf : 0.0f;
+        continue;
+      }
+      const mask8 on = simd::mask_from_bits(q->live);
+      const float8 org[3] = {q->p.org.x, q->p.org.y, q->p.org.z}, inv[3] = {q->p.inv.x, q->p.inv.y, q->p.inv.z};
       for (int a = 0; a < 3; ++a) {
         const float8 o = neg[a] ? -org[a] : org[a], i = neg[a] ? -inv[a] : inv[a];
-        omin[a] = xsimd::min(omin[a], xsimd::select(on, o, inf));
-        omax[a] = xsimd::max(omax[a], xsimd::select(on, o, -inf));
-        imin[a] = xsimd::min(imin[a], xsimd::select(on, i, inf));
-        imax[a] = xsimd::max(imax[a], xsimd::select(on, i, -inf));
+        row[a][k] = simd::reduce_min(xsimd::select(on, o, inf8));
+        row[3 + a][k] = simd::reduce_max(xsimd::select(on, o, -inf8));
+        row[6 + a][k] = simd::reduce_min(xsimd::select(on, i, inf8));
+        row[9 + a][k] = simd::reduce_max(xsimd::select(on, i, -inf8));
       }
-      tnear = xsimd::min(tnear, xsimd::select(on, q.p.tnear, inf));
-      tfar = xsimd::max(tfar, xsimd::select(on, q.h.tfar, float8(0.0f)));
+      row[12][k] = simd::reduce_min(xsimd::select(on, q->p.tnear, inf8));
+      row[13][k] = simd::reduce_max(xsimd::select(on, q->h.tfar, float8(0.0f)));
+    }
+    float8 lo[14], hi[14];
+    for (int r = 0; r < 14; ++r) lo[r] = inf8, hi[r] = -inf8;
+    for (int blk = 0; blk < blocks; ++blk) {
+      PacketBeams8& m = gb.members[blk];
+      float8 v[14];
+      for (int r = 0; r < 14; ++r) v[r] = float8::load_aligned(&row[r][8 * blk]);
+      const mask8 used = v[12] < inf8;  // members with live rays
+      for (int r = 0; r < 14; ++r) {
+        lo[r] = xsimd::min(lo[r], xsimd::select(used, v[r], inf8));
+        hi[r] = xsimd::max(hi[r], xsimd::select(used, v[r], -inf8));
+      }
+      for (int a = 0; a < 3; ++a) {
+        m.omin[a] = v[a];
+        m.omax[a] = v[3 + a];
+        m.imin[a] = v[6 + a];
+        m.imax[a] = v[9 + a];
+      }
+      m.tnear_min = v[12];
+      m.tfar_max = v[13];
     }
     BeamBounds b;
     for (int a = 0; a < 3; ++a) {
-      b.omin[a] = simd::reduce_min(omin[a]);
-      b.omax[a] = simd::reduce_max(omax[a]);
-      b.imin[a] = simd::reduce_min(imin[a]);
-      b.imax[a] = simd::reduce_max(imax[a]);
+      b.omin[a] = simd::reduce_min(lo[a]);
+      b.omax[a] = simd::reduce_max(hi[3 + a]);
+      b.imin[a] = simd::reduce_min(lo[6 + a]);
+      b.imax[a] = simd::reduce_max(hi[9 + a]);
     }
-    b.tnear_min = simd::reduce_min(tnear);
-    return {PacketBeam(b, neg), float8(neg[0] ? -1.0f : 1.0f), float8(neg[1] ? -1.0f : 1.0f),
-            float8(neg[2] ? -1.0f : 1.0f), simd::reduce_max(tfar)};
+    b.tnear_min = simd::reduce_min(lo[12]);
+    gb.beam = PacketBeam(b, neg);
+    gb.sx = float8(neg[0] ? -1.0f : 1.0f);
+    gb.sy = float8(neg[1] ? -1.0f : 1.0f);
+    gb.sz = float8(neg[2] ? -1.0f : 1.0f);
+    gb.tfar_max = simd::reduce_max(hi[13]);
+  }
+
+  /// Members in [first, last] whose beam may reach box [lo, hi], as bits.
+  static uint64_t beam_hits(const GroupBeam& gb, const Vec3f& lo, const Vec3f& hi, int first, int last) {
+    uint64_t maybe = 0;
+    for (int blk = first / 8; blk <= last / 8; ++blk)
+      maybe |= uint64_t(gb.members[blk].cull(gb.beam.neg, lo, hi)) << (8 * blk);
+    const uint64_t upto_last = last >= 63 ? ~uint64_t(0) : (uint64_t(1) << (last + 1)) - 1;
+    return maybe & upto_last & ~((uint64_t(1) << first) - 1);
   }
 
   /// A pushed subtree: the node or leaf, the range [first, last] of the group's members that
@@ -245,16 +284,35 @@ class LargePacketTraversal {
     Vec3f lo, hi;
   };
 
-  /// Narrows [first, last] to the first and the last member whose live lanes hit box [lo, hi];
-  /// first > last when none does.
-  static void bound_range(const Work& w, const uint8_t* members, const bool neg[3], const Vec3f& lo, const Vec3f& hi,
-                          int& first, int& last) {
+  /// The traversal stack, left uninitialised: only pushed entries are read (zeroing kStackSize
+  /// boxes per group was 3% of the instructions on the dragon).
+  struct Stack {
+    union {
+      Entry at[kStackSize];
+    };
+    Stack() {}
+  };
+
+  /// Narrows [first, last] to the first and the last member whose live lanes hit box [lo, hi]
+  /// (an 8-ray slab test each, only for members whose beam may reach the box); first > last
+  /// when none does.
+  static void bound_range(const Work& w, const uint8_t* members, const GroupBeam& gb, const Vec3f& lo,
+                          const Vec3f& hi, int& first, int& last) {
+    uint64_t maybe = beam_hits(gb, lo, hi, first, last);
     auto hits = [&](int k) {
       const Packet& q = w.packets[members[k]];
-      return q.live && (intersect_box_octant(q.p, neg, lo, hi, q.h.tfar) & q.live);
+      return (intersect_box_octant(q.p, gb.beam.neg, lo, hi, q.h.tfar) & q.live) != 0;
     };
-    while (first <= last && !hits(first)) ++first;
-    while (last > first && !hits(last)) --last;
+    for (; maybe; maybe &= maybe - 1)
+      if (hits(std::countr_zero(maybe))) break;
+    if (!maybe) {
+      first = last + 1;
+      return;
+    }
+    first = std::countr_zero(maybe);
+    for (maybe &= maybe - 1; maybe; maybe &= ~(uint64_t(1) << (63 - std::countl_zero(maybe))))
+      if (hits(63 - std::countl_zero(maybe))) break;
+    last = maybe ? 63 - std::countl_zero(maybe) : first;
   }
 
   /// Pushes the children of node `n` that the members of entry `e` may reach, nearest last.
@@ -272,7 +330,7 @@ class LargePacketTraversal {
       if (n.child[c] == kEmpty) continue;
       const Vec3f lo{n.lo_x[c], n.lo_y[c], n.lo_z[c]}, hi{n.hi_x[c], n.hi_y[c], n.hi_z[c]};
       int first = e.first, last = e.last;
-      bound_range(w, members, gb.beam.neg, lo, hi, first, last);
+      bound_range(w, members, gb, lo, hi, first, last);
       if (first > last) continue;
       const Entry kid{n.child[c], uint8_t(first), uint8_t(last), lo, hi};
       int j = k++;
@@ -291,7 +349,8 @@ class LargePacketTraversal {
   static int leaf_packets(const Work& w, const uint8_t* members, const GroupBeam& gb, const Entry& e, uint8_t* which,
                           uint32_t* lanes) {
     int m = 0;
-    for (int k = e.first; k <= e.last; ++k) {
+    for (uint64_t maybe = beam_hits(gb, e.lo, e.hi, e.first, e.last); maybe; maybe &= maybe - 1) {
+      const int k = std::countr_zero(maybe);
       const Packet& q = w.packets[members[k]];
       if (!q.live) continue;
       const uint32_t hit = intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live;
@@ -303,8 +362,10 @@ class LargePacketTraversal {
   }
 
   void closest_group(std::span<const Ray> rays, Work& w, const uint8_t* members, int n, int octant) const noexcept {
-    const GroupBeam gb = group_beam(w, members, n, octant);
-    Entry stack[kStackSize];
+    GroupBeam gb;
+    group_beam(w, members, n, octant, gb);
+    Stack st;
+    Entry* stack = st.at;
     int sp = 0;
     stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
     uint8_t which[kMaxPackets];
@@ -359,8 +420,10 @@ class LargePacketTraversal {
 
   void any_group(std::span<const Ray> rays, Work& w, const uint8_t* members, int n, int octant,
                  uint32_t* done) const noexcept {
-    const GroupBeam gb = group_beam(w, members, n, octant);
-    Entry stack[kStackSize];
+    GroupBeam gb;
+    group_beam(w, members, n, octant, gb);
+    Stack st;
+    Entry* stack = st.at;
     int sp = 0;
     stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
     int live_packets = 0;

@@ -13,6 +13,10 @@ struct BenchArgs {
   int size = 512;          ///< primary rays: size x size pixels
   int min_runs = 5, max_runs = 25;
   double target_spread = 0.03;  ///< stop when (max - min) / median of the last min_runs runs is below
+  std::string method_filter;      ///< ECMAScript regex searched in method labels; empty: every method
+  std::vector<std::string> kinds;  ///< primary, shadow, diffuse: the ray kinds timed (empty: all)
+  std::string ray_file;           ///< time these rays (one scene) instead of the generated kinds
+  bool occlusion = false;         ///< with ray_file: any-hit queries instead of closest hits
   std::string json, chart;
 };
 

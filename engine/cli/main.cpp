@@ -525,9 +525,12 @@ int run_backends() {
   for (const rp::BackendEntry& e : rp::list_backends()) {
     std::string variants;
     for (const std::string& v : e.variants) variants += (variants.empty() ? "" : ", ") + v;
-    std::printf("%-8s %s\n         variants: %s\n", e.name.c_str(),
+    std::string methods, facts;
+    for (const std::string& m : e.coherent_methods) methods += (methods.empty() ? "" : ", ") + m;
+    for (const auto& [k, v] : e.facts) facts += (facts.empty() ? "" : ", ") + k + "=" + v;
+    std::printf("%-8s %s\n         variants: %s\n         coherent methods: %s\n         %s\n", e.name.c_str(),
                 e.available ? e.description.c_str() : ("unavailable: " + e.unavailable_reason).c_str(),
-                variants.c_str());
+                variants.c_str(), methods.c_str(), facts.c_str());
   }
   return 0;
 }
@@ -615,6 +618,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   bench->add_option("--max-runs", ba.max_runs, "Most runs per measurement")->check(CLI::Range(1, 1000))->capture_default_str();
+  bench->add_option("--method", ba.method_filter, "Only the methods whose label matches this regular expression");
+  bench->add_option("--kind", ba.kinds, "Only these ray kinds: primary, shadow, diffuse (repeatable)");
+  bench->add_option("--rays", ba.ray_file, "Time the rays of this ray file (one --scene) instead of the generated kinds");
+  bench->add_flag("--any-hit", ba.occlusion, "With --rays: time any-hit (occlusion) queries, not closest hits");
   bench->add_option("--json", ba.json, "Write the results as JSON");
   bench->add_option("--chart", ba.chart, "Also draw the charts (PNG and SVG, with gnuplot)");
   bench->add_option("-t,--threads", bench_threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));

@@ -33,19 +33,24 @@ using test::random_rays;
 using test::tessellated_sphere;
 using test::triangle_soup;
 
-/// Every variant of every available backend, as "backend/variant": the conformance suite holds
+/// Every variant of every available backend, as "backend/variant", and every other coherent
+/// method of its default variant, as "backend/default@method": the conformance suite holds
 /// each of them to the same oracle.
 std::vector<std::string> backend_variants() {
   std::vector<std::string> out;
   for (const BackendEntry& b : list_backends())
-    if (b.available)
+    if (b.available) {
       for (const std::string& v : b.variants) out.push_back(b.name + "/" + v);
+      for (size_t m = 1; m < b.coherent_methods.size(); ++m) out.push_back(b.name + "/default@" + b.coherent_methods[m]);
+    }
   return out;
 }
 
 std::unique_ptr<Backend> make_param_backend(const std::string& param, const Scene& scene) {
-  const size_t slash = param.find('/');
-  return make_backend(param.substr(0, slash), scene, {.variant = param.substr(slash + 1), .device_config = {}, .coherent_method = {}});
+  const size_t slash = param.find('/'), at = param.find('@');
+  const std::string variant = param.substr(slash + 1, at == std::string::npos ? std::string::npos : at - slash - 1);
+  const std::string method = at == std::string::npos ? std::string() : param.substr(at + 1);
+  return make_backend(param.substr(0, slash), scene, {.variant = variant, .device_config = {}, .coherent_method = method});
 }
 
 struct Counts {
@@ -335,6 +340,7 @@ TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(backend_variants()), [](const auto& info) {
   std::string name = info.param;
   std::replace(name.begin(), name.end(), '/', '_');
+  std::replace(name.begin(), name.end(), '@', '_');
   return name;
 });
 
@@ -369,10 +375,12 @@ TEST(Registry, SimdIsOfferedExactlyWhenTheCpuHasAvx2AndFma) {
   EXPECT_EQ(make_backend("simd", scene)->info().name, "simd");
 }
 
-TEST(Registry, UnknownVariantIsAnError) {
+TEST(Registry, UnknownVariantOrCoherentMethodIsAnError) {
   const Scene scene;
   EXPECT_THROW(make_backend("embree", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}}), Error);
   EXPECT_THROW(make_backend("simd", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}}), Error);
+  EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = "large"}), Error);
+  EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = "stream"}), Error);
 }
 
 }  // namespace

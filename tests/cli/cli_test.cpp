@@ -228,13 +228,16 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   const fs::path json = dir_ / "b.json", chart = dir_ / "c.png", again = dir_ / "again.png";
   Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
-  for (const char* word : {"simd packet", "simd single", "embree rtcIntersect8", "embree rtcIntersect1", "embree robust 1",
-                           "bytes/prim", "primary", "shadow", "diffuse"})
+  for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
+                           "embree rtcIntersect1", "embree robust 1", "bytes/prim", "primary", "shadow", "diffuse",
+                           "best simd", "best embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);
   for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
-                          "\"build_seconds\""})
+                          "\"build_seconds\"", "\"commit\"", "\"compiler\"", "\"flags\"", "\"caches\"", "\"isa\"",
+                          "\"coherent_method\"", "\"skipped_methods\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
+  EXPECT_NE(text.find("\"version\": \"3."), std::string::npos) << "Embree's version recorded";
   for (const fs::path& p : {chart, dir_ / "c-scaling.png"})
     EXPECT_GT(fs::exists(p) ? fs::file_size(p) : 0u, 1000u) << p;
   EXPECT_FALSE(fs::exists(dir_ / "c.svg")) << "a .png chart is drawn as PNG only";
@@ -256,6 +259,44 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   r = run("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("not a raypack bench file"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
+  // --method and --kind choose the rows; every other method and kind is left out.
+  Result r = run("bench --size 16 --min-runs 1 --max-runs 1 --method '^embree (stream|rtcIntersect1)$' --kind shadow");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("embree stream            shadow"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("embree rtcIntersect1     shadow"), std::string::npos) << r.output;
+  for (const char* absent : {"simd", "rtcIntersect8", "primary ", "diffuse "})
+    EXPECT_EQ(r.output.find(absent), std::string::npos) << absent << "\n" << r.output;
+  // --rays times the file's rays, closest or any hit, and checks them against the reference.
+  const fs::path rays = dir_ / "rays.csv";
+  {
+    std::ofstream out(rays);
+    out << "ox,oy,oz,dx,dy,dz,tnear,tfar\n";
+    for (int i = 0; i < 64; ++i) out << (i % 8) * 0.1 - 0.4 << "," << (i / 8) * 0.1 - 0.4 << ",5,0,0,-1,0,inf\n";
+  }
+  for (const std::string& flag : {std::string(), std::string(" --any-hit")}) {
+    r = run("bench --min-runs 1 --max-runs 1 --method 'simd large' --rays " + rays.string() + flag);
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find(flag.empty() ? "simd large               file " : "simd large               file-any"),
+              std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("64 file"), std::string::npos) << r.output;
+  }
+  // Bad flags: one line, status 2 for usage, 1 for a refused combination, naming the value.
+  const std::pair<std::string, std::string> bad[] = {
+      {"--method 'simd (' ", "--method 'simd (' is not a regular expression"},
+      {"--method nothing-matches", "--method 'nothing-matches' matches none of: "},
+      {"--kind secondary", "--kind 'secondary' is not one of primary, shadow, diffuse"},
+      {"--rays " + rays.string() + " --scene default --scene default", "--rays needs exactly one --scene"},
+      {"--any-hit", "--any-hit applies to --rays only"},
+      {"--rays " + (dir_ / "absent.bin").string(), "absent.bin"}};
+  for (const auto& [args, message] : bad) {
+    r = run("bench --size 8 --min-runs 1 --max-runs 1 " + args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
+  }
 }
 
 TEST_F(Cli, HelpAndVersion) {
