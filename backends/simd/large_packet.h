@@ -456,6 +456,22 @@ class LargePacketTraversal {
       int m = leaf_packets(w, members, gb, e, which, lanes);
       const uint32_t count = leaf_count(e.ref);
       const float* rows = t_.bvh().leaf(leaf_first(e.ref));
+      if (t_.analytic_leaf(rows, count) == kInvalidId) {  // packets with few lanes here: a lane at a time
+        int kept = 0;
+        for (int j = 0; j < m; ++j) {
+          if (Traversal<Kernel>::by_rays(lanes[j], count)) {
+            const std::span<const Ray> r = packet_rays(rays, which[j]);
+            uint32_t found = 0;
+            for (uint32_t b = lanes[j]; b; b &= b - 1)
+              if (t_.any(r[size_t(std::countr_zero(b))], e.ref)) found |= b & (~b + 1);
+            if (found) occlude(which[j], found);
+          } else {
+            which[kept] = which[j];
+            lanes[kept++] = lanes[j];
+          }
+        }
+        m = kept;
+      }
       for (uint32_t k = 0; k < count && m > 0; ++k) {
         const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
         const bool analytic = id >= t_.bvh().first_analytic;
