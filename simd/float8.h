@@ -71,6 +71,9 @@ inline float reduce_max(const float8& v) {
   return _mm256_cvtss_f32(m);
 }
 
+/// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
+inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
+
 /// Index of the lowest set bit (bits != 0).
 inline int first_lane(uint32_t bits) { return std::countr_zero(bits); }
 /// Number of set bits.

@@ -67,17 +67,19 @@ class LargePacketTraversal {
   struct Packet {
     RayPacket p;
     typename Kernel::Packet kp;  ///< the triangle test's per-packet data
-    PacketSetup<Kernel> ps;      ///< for an 8-ray traversal of the packet (built when needed)
-    bool has_setup = false;
+    bool has_setup = false;      ///< Work::setups holds its 8-ray set-up
     PacketHits h;
     uint32_t active = 0;  ///< valid lanes
     uint32_t live = 0;    ///< lanes still being traced (any hit: not yet occluded)
     int octant = -1;      ///< 0..7 when every active lane has this sign pattern and no 0 component
   };
 
-  /// The scratch of one span: a thread's own, reused from span to span.
+  /// The scratch of one span: a thread's own, reused from span to span. The packets' 8-ray
+  /// set-ups (used only when a packet continues on its own) live apart, so the rays the group
+  /// traversal reads for every node stay close together in L1.
   struct Work {
     std::array<Packet, kMaxPackets> packets;
+    std::array<PacketSetup<Kernel>, kMaxPackets> setups;
     int count = 0;
   };
   static Work& work() {
@@ -90,12 +92,13 @@ class LargePacketTraversal {
   }
 
   /// The packet's 8-ray traversal set-up, built on first use.
-  static const PacketSetup<Kernel>& setup(Packet& q, std::span<const Ray> rays) {
+  static const PacketSetup<Kernel>& setup(Work& w, int i, std::span<const Ray> rays) {
+    Packet& q = w.packets[size_t(i)];
     if (!q.has_setup) {
-      q.ps = PacketSetup<Kernel>(q.p, rays, q.active);
+      w.setups[size_t(i)] = PacketSetup<Kernel>(q.p, rays, q.active);
       q.has_setup = true;
     }
-    return q.ps;
+    return w.setups[size_t(i)];
   }
 
   /// Loads the span's packets; returns their count.
@@ -161,7 +164,7 @@ class LargePacketTraversal {
       for (int k = 0; k < g.singles; ++k) {
         Packet& q = w.packets[g.single[k]];
         const std::span<const Ray> r = packet_rays(rays, g.single[k]);
-        t_.closest_packet(0, q.active, q.p, setup(q, r), r, q.h);
+        t_.closest_packet(0, q.active, q.p, setup(w, g.single[k], r), r, q.h);
       }
     }
     for (int i = 0; i < count; ++i) {
@@ -190,7 +193,7 @@ class LargePacketTraversal {
         const int i = g.single[k];
         Packet& q = w.packets[size_t(i)];
         const std::span<const Ray> r = packet_rays(rays, i);
-        if (q.live) done[i] |= t_.any_packet(0, q.live, q.p, setup(q, r), r, q.h.tfar);
+        if (q.live) done[i] |= t_.any_packet(0, q.live, q.p, setup(w, i, r), r, q.h.tfar);
       }
     }
     for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done[i / 8] >> (i % 8) & 1u);
@@ -378,7 +381,7 @@ class LargePacketTraversal {
           const uint32_t m = intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live;  // lanes here
           if (!m) continue;
           const std::span<const Ray> r = packet_rays(rays, members[k]);
-          t_.closest_packet(e.ref, m, q.p, setup(q, r), r, q.h);
+          t_.closest_packet(e.ref, m, q.p, setup(w, members[k], r), r, q.h);
         }
         continue;
       }
@@ -445,7 +448,7 @@ class LargePacketTraversal {
           const uint32_t m = q.live ? intersect_box_octant(q.p, gb.beam.neg, e.lo, e.hi, q.h.tfar) & q.live : 0u;
           if (!m) continue;
           const std::span<const Ray> r = packet_rays(rays, members[k]);
-          occlude(members[k], t_.any_packet(e.ref, m, q.p, setup(q, r), r, q.h.tfar));
+          occlude(members[k], t_.any_packet(e.ref, m, q.p, setup(w, members[k], r), r, q.h.tfar));
         }
         continue;
       }

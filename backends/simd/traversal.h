@@ -576,17 +576,15 @@ class Traversal {
       if (is_leaf(c)) {  // 40 bytes per primitive, from anywhere in a line
         const char* p = reinterpret_cast<const char*>(bvh_.leaf(leaf_first(c)));
         const uint32_t bytes = 40 * leaf_count(c);
-        for (uint32_t off = 0; off < bytes; off += 64) _mm_prefetch(p + off, _MM_HINT_T0);
-        _mm_prefetch(p + bytes - 1, _MM_HINT_T0);
+        for (uint32_t off = 0; off < bytes; off += 64) simd::prefetch(p + off);
+        simd::prefetch(p + bytes - 1);
       } else {
         const char* p = reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
-        _mm_prefetch(p, _MM_HINT_T0);
-        _mm_prefetch(p + 64, _MM_HINT_T0);
-        _mm_prefetch(p + 128, _MM_HINT_T0);
-        _mm_prefetch(p + 192, _MM_HINT_T0);
+        for (uint32_t off = 0; off < sizeof(Bvh8Node); off += 64) simd::prefetch(p + off);
       }
     }
   }
+
 
   /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
   /// direction signs (near_first_keys): the nearest ends up last.
