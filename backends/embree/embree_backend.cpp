@@ -322,10 +322,15 @@ class EmbreeBackend final : public Backend {
     throw Error(cat("embree: unknown coherent method '", m, "' (packet8, packet16, stream)"));
   }
 
-  /// Ray i of the query as Embree sees it in a packet or stream: invalid rays, and for
-  /// occlusion rays that hit a plane (answered beside Embree), are inactive.
-  bool active(const QueryContext& q, size_t i, bool occlusion) const noexcept {
-    return valid_ray(q.rays[i]) && !(occlusion && hits_plane(q.rays[i]));
+  /// Ray i of the query as Embree sees it in a packet or stream: invalid rays are inactive.
+  bool active(const QueryContext& q, size_t i) const noexcept { return valid_ray(q.rays[i]); }
+
+  /// The same for occlusion, where a ray that hits a plane (answered beside Embree) is
+  /// inactive too; `out` gets the answer of an inactive ray (1 when a plane occludes it).
+  bool active(const QueryContext& q, size_t i, uint8_t& out) const noexcept {
+    const bool valid = valid_ray(q.rays[i]), plane = valid && hits_plane(q.rays[i]);
+    out = uint8_t(plane);
+    return valid && !plane;
   }
 
   /// Coherent closest hits by N-wide packets (rtcIntersect8 or rtcIntersect16).
@@ -336,7 +341,7 @@ class EmbreeBackend final : public Backend {
       alignas(64) int valid[N];
       RayHitN rh;  // Embree's packet types carry their own alignment
       for (size_t i = 0; i < N; ++i) {
-        const bool ok = i < n && active(q, base + i, false);
+        const bool ok = i < n && active(q, base + i);
         valid[i] = ok ? -1 : 0;
         set_lane(rh.ray, i, ok ? q.rays[base + i] : kDummy, ok ? base + i : 0);
         rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
@@ -358,15 +363,13 @@ class EmbreeBackend final : public Backend {
       alignas(64) int valid[N];
       RayN ray;
       for (size_t i = 0; i < N; ++i) {
-        const bool ok = i < n && active(q, base + i, true);
+        const bool ok = i < n && active(q, base + i, out[base + i]);
         valid[i] = ok ? -1 : 0;
         set_lane(ray, i, ok ? q.rays[base + i] : kDummy, ok ? base + i : 0);
       }
       trace_packet(valid, &q.embree, &ray);
-      for (size_t i = 0; i < n; ++i) {
-        const Ray& r = q.rays[base + i];
-        out[base + i] = valid[i] ? uint8_t(ray.tfar[i] < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
-      }
+      for (size_t i = 0; i < n; ++i)
+        if (valid[i]) out[base + i] = uint8_t(ray.tfar[i] < 0.0f);
     }
   }
 
@@ -382,14 +385,14 @@ class EmbreeBackend final : public Backend {
     stream.resize(hits.size());
     for (size_t i = 0; i < hits.size(); ++i) {
       RTCRayHit& rh = stream[i];
-      rh.ray = to_embree(active(q, i, false) ? q.rays[i] : kInactive, i);
+      rh.ray = to_embree(active(q, i) ? q.rays[i] : kInactive, i);
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect1M(scene_handle_, &q.embree, stream.data(), unsigned(hits.size()), sizeof(RTCRayHit));
     for (size_t i = 0; i < hits.size(); ++i) {
       const RTCRayHit& rh = stream[i];
-      hits[i] = active(q, i, false) ? settle(q, i, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v) : Hit{};
+      hits[i] = active(q, i) ? settle(q, i, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v) : Hit{};
     }
   }
 
@@ -397,12 +400,10 @@ class EmbreeBackend final : public Backend {
   void occluded_stream(QueryContext& q, std::span<uint8_t> out) const noexcept {
     thread_local std::vector<RTCRay> stream;
     stream.resize(out.size());
-    for (size_t i = 0; i < out.size(); ++i) stream[i] = to_embree(active(q, i, true) ? q.rays[i] : kInactive, i);
+    for (size_t i = 0; i < out.size(); ++i) stream[i] = to_embree(active(q, i, out[i]) ? q.rays[i] : kInactive, i);
     rtcOccluded1M(scene_handle_, &q.embree, stream.data(), unsigned(out.size()), sizeof(RTCRay));
-    for (size_t i = 0; i < out.size(); ++i) {
-      const Ray& r = q.rays[i];
-      out[i] = active(q, i, true) ? uint8_t(stream[i].tfar < 0.0f) : uint8_t(valid_ray(r) && hits_plane(r));
-    }
+    // An inactive ray keeps tfar = 0 (kInactive); an occluded one gets -inf.
+    for (size_t i = 0; i < out.size(); ++i) out[i] |= uint8_t(stream[i].tfar < 0.0f);
   }
 
   static QueryContext context(std::span<const Ray> rays, Coherence coherence) {

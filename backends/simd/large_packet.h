@@ -364,6 +364,24 @@ class LargePacketTraversal {
     return m;
   }
 
+  /// Of the m packets `which` (lanes `lanes` there) that reach a leaf of `count` triangles,
+  /// hands those with few lanes there (Traversal::by_rays) to f(packet, lanes), which tests
+  /// them a lane at a time, and keeps the others for the triangle-at-a-time test; returns
+  /// how many it kept.
+  template <class F>
+  static int split_by_rays(uint8_t* which, uint32_t* lanes, int m, uint32_t count, F&& f) {
+    int kept = 0;
+    for (int j = 0; j < m; ++j) {
+      if (Traversal<Kernel>::by_rays(lanes[j], count)) {
+        f(which[j], lanes[j]);
+      } else {
+        which[kept] = which[j];
+        lanes[kept++] = lanes[j];
+      }
+    }
+    return kept;
+  }
+
   void closest_group(std::span<const Ray> rays, Work& w, const uint8_t* members, int n, int octant) const noexcept {
     GroupBeam gb;
     group_beam(w, members, n, octant, gb);
@@ -393,19 +411,11 @@ class LargePacketTraversal {
       if (!m) continue;
       const uint32_t count = leaf_count(e.ref);
       const float* rows = t_.bvh().leaf(leaf_first(e.ref));
-      if (t_.analytic_leaf(rows, count) == kInvalidId) {  // packets with few lanes here: a lane at a time
-        int kept = 0;
-        for (int j = 0; j < m; ++j) {
-          if (Traversal<Kernel>::by_rays(lanes[j], count)) {
-            Packet& q = w.packets[which[j]];
-            t_.leaf_by_rays(rows, count, lanes[j], q.p, packet_rays(rays, which[j]), q.h);
-          } else {
-            which[kept] = which[j];
-            lanes[kept++] = lanes[j];
-          }
-        }
-        m = kept;
-      }
+      if (t_.analytic_leaf(rows, count) == kInvalidId)
+        m = split_by_rays(which, lanes, m, count, [&](int i, uint32_t here) {
+          Packet& q = w.packets[size_t(i)];
+          t_.leaf_by_rays(rows, count, here, q.p, packet_rays(rays, i), q.h);
+        });
       for (uint32_t k = 0; k < count && m > 0; ++k) {
         const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
         if (id >= t_.bvh().first_analytic) {
@@ -459,22 +469,12 @@ class LargePacketTraversal {
       int m = leaf_packets(w, members, gb, e, which, lanes);
       const uint32_t count = leaf_count(e.ref);
       const float* rows = t_.bvh().leaf(leaf_first(e.ref));
-      if (t_.analytic_leaf(rows, count) == kInvalidId) {  // packets with few lanes here: a lane at a time
-        int kept = 0;
-        for (int j = 0; j < m; ++j) {
-          if (Traversal<Kernel>::by_rays(lanes[j], count)) {
-            const std::span<const Ray> r = packet_rays(rays, which[j]);
-            uint32_t found = 0;
-            for (uint32_t b = lanes[j]; b; b &= b - 1)
-              if (t_.any(r[size_t(std::countr_zero(b))], e.ref)) found |= b & (~b + 1);
-            if (found) occlude(which[j], found);
-          } else {
-            which[kept] = which[j];
-            lanes[kept++] = lanes[j];
-          }
-        }
-        m = kept;
-      }
+      if (t_.analytic_leaf(rows, count) == kInvalidId)
+        m = split_by_rays(which, lanes, m, count, [&](int i, uint32_t here) {
+          const Packet& q = w.packets[size_t(i)];
+          if (const uint32_t found = t_.leaf_any_by_rays(rows, count, here, q.p, packet_rays(rays, i), q.h.tfar))
+            occlude(i, found);
+        });
       for (uint32_t k = 0; k < count && m > 0; ++k) {
         const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
         const bool analytic = id >= t_.bvh().first_analytic;

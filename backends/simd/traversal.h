@@ -422,6 +422,19 @@ class Traversal {
   }
 
 
+  /// The lanes of `mask` that a triangle of the leaf at `rows` (n of them) occludes, each lane
+  /// against the n triangles in one single-ray test, as leaf_by_rays does for closest hits.
+  uint32_t leaf_any_by_rays(const float* rows, uint32_t n, uint32_t mask, const RayPacket& p,
+                            std::span<const Ray> rays, const float8& tfar) const noexcept {
+    uint32_t found = 0;
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, simd::broadcast_lane(tfar, lane));
+      if (simd::movemask(m.hit) & ((1u << n) - 1)) found |= b & (~b + 1);
+    }
+    return found;
+  }
+
   /// Any hits of the lanes of `live` of packet `p` in the subtree `root` (tfar per lane);
   /// returns the lanes found occluded. Stops once every live lane is.
   uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
@@ -584,7 +597,6 @@ class Traversal {
       }
     }
   }
-
 
   /// Children of `n` hit by any lane of `mask`, ordered near-first along the packet's
   /// direction signs (near_first_keys): the nearest ends up last.
