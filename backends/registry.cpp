@@ -38,16 +38,26 @@ std::vector<std::string> available_backends() {
   return names;
 }
 
-std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options) {
+std::optional<MethodProblem> check_method(std::string_view name, std::string_view variant) {
   std::string known;
   for (const BackendEntry& e : list_backends()) {
     known += (known.empty() ? "" : ", ") + e.name;
     if (e.name != name) continue;
-    RP_CHECK(e.available, "backend '", name, "' is not available on this machine: ", e.unavailable_reason);
-    if (name == "embree") return embree::make_backend(scene, options);
-    if (name == "simd") return bvh8::make_backend(scene, options);
+    if (!e.available) return MethodProblem{false, cat("backend '", name, "' is not available on this machine: ", e.unavailable_reason)};
+    std::string variants;
+    for (const std::string& v : e.variants) {
+      if (v == variant) return std::nullopt;
+      variants += (variants.empty() ? "" : ", ") + v;
+    }
+    return MethodProblem{true, cat("'", variant, "' is not a variant of ", name, " (", variants, ")")};
   }
-  throw Error(cat("unknown backend '", name, "' (available: ", known, ")"));
+  return MethodProblem{false, cat("unknown backend '", name, "' (available: ", known, ")")};
+}
+
+std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options) {
+  if (const std::optional<MethodProblem> p = check_method(name, options.variant)) throw Error(p->message);
+  if (name == "embree") return embree::make_backend(scene, options);
+  return bvh8::make_backend(scene, options);
 }
 
 }  // namespace rp

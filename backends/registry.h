@@ -2,6 +2,7 @@
 /// The one place that names every backend. Callers pick a backend by name at run time.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -32,8 +33,17 @@ std::vector<std::string> available_backends();
 /// The backend used when none is asked for.
 inline constexpr std::string_view kDefaultBackend = "embree";
 
-/// Builds `name` over `scene`. Throws rp::Error for an unknown or unavailable backend (the
-/// message lists the valid names or says why) or an unknown variant.
+/// Why backend `name` with `variant` cannot be built on this machine, when it cannot: the
+/// message (listing the valid names, or saying why the backend is unavailable) and whether the
+/// variant, rather than the backend, is at fault.
+struct MethodProblem {
+  bool variant = false;
+  std::string message;
+};
+std::optional<MethodProblem> check_method(std::string_view name, std::string_view variant);
+
+/// Builds `name` over `scene`. Throws rp::Error with check_method's message for an unknown or
+/// unavailable backend or an unknown variant.
 std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options = {});
 
 }  // namespace rp

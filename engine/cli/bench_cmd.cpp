@@ -1,5 +1,6 @@
 #include "engine/cli/bench_cmd.h"
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <tbb/info.h>
 
 #include "backends/registry.h"
+#include "engine/cli/args.h"
 #include "engine/cli/build_info.h"
 #include "engine/cli/plot.h"
 #include "engine/diff.h"
@@ -195,7 +197,7 @@ std::vector<Kind> ray_kinds(const Scene& scene, const Reference& reference, cons
 
 /// The fastest simd and Embree method per kind of rays, and their ratio (the figure the
 /// project is judged by: hand-written against Embree's best on the same rays).
-void print_best(const Json& js, const std::vector<Kind>& kinds) {
+void print_best(std::FILE* out, const Json& js, const std::vector<Kind>& kinds) {
   bool header = false;
   for (const Kind& k : kinds) {
     const Json* best[2] = {nullptr, nullptr};
@@ -206,23 +208,63 @@ void print_best(const Json& js, const std::vector<Kind>& kinds) {
     }
     if (!best[0] || !best[1]) continue;
     if (!header)
-      std::printf("\n%-8s %-24s %10s   %-24s %10s %8s\n", "rays", "best simd", "Mrays/s", "best embree", "Mrays/s", "ratio");
+      say(out, "\n%-8s %-24s %10s   %-24s %10s %8s\n", "rays", "best simd", "Mrays/s", "best embree", "Mrays/s", "ratio");
     header = true;
     const double s = (*best[0])["mrays_per_s"].get<double>(), e = (*best[1])["mrays_per_s"].get<double>();
-    std::printf("%-8s %-24s %10.2f   %-24s %10.2f %7.2fx\n", k.name.c_str(), (*best[0])["method"].get<std::string>().c_str(),
+    say(out, "%-8s %-24s %10.2f   %-24s %10.2f %7.2fx\n", k.name.c_str(), (*best[0])["method"].get<std::string>().c_str(),
                 s, (*best[1])["method"].get<std::string>().c_str(), e, s / e);
   }
 }
 
 }  // namespace
 
+CLI::App* BenchArgs::add_to(CLI::App& app) {
+  CLI::App* c = app.add_subcommand("bench", "Every backend method on identical rays: speed beside accuracy");
+  c->add_option("--scene", scenes, "Scene: 'default' or a file (repeatable)")->capture_default_str();
+  c->add_option("--size", size, "Primary rays: SIZE x SIZE pixels")->check(CLI::Range(8, 8192))->capture_default_str();
+  c->add_option("--min-runs", min_runs, "Runs over which the spread is judged")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  c->add_option("--max-runs", max_runs, "Most runs per measurement")->check(CLI::Range(1, 1000))->capture_default_str();
+  c->add_option("--method", method_filter, "Only the methods whose label matches this regular expression");
+  c->add_option("--kind", kinds, "Only these ray kinds: primary, shadow, diffuse (repeatable)");
+  c->add_option("--rays", ray_file, "Time the rays of this ray file (one --scene) instead of the generated kinds");
+  c->add_flag("--any-hit", occlusion, "With --rays: time any-hit (occlusion) queries, not closest hits");
+  c->add_option("--json", json, "Write the results as JSON");
+  c->add_option("--chart", chart, "Also draw the charts (PNG and SVG, with gnuplot)");
+  add_threads_option(c, threads);
+  add_quiet_flag(c, quiet);
+  return c;
+}
+
+CLI::App* ChartArgs::add_to(CLI::App& app) {
+  CLI::App* c = app.add_subcommand("chart", "Redraw the charts of a saved `raypack bench --json` file");
+  c->add_option("json", json, "The bench JSON")->required();
+  c->add_option("-o,--output", output, "Chart (PNG; an SVG and a -scaling chart are written beside it)")
+      ->capture_default_str();
+  add_quiet_flag(c, quiet);
+  return c;
+}
+
+int run_chart(const ChartArgs& a) {
+  draw_charts(a.json, a.output);
+  say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", a.output.c_str());
+  return 0;
+}
+
 int run_bench(const BenchArgs& a) {
-  RP_CHECK(a.size >= 8 && a.size <= 8192, "bench: --size ", a.size, " is out of range (8..8192)");
-  RP_CHECK(a.ray_file.empty() || a.scenes.size() == 1, "bench: --rays needs exactly one --scene (the rays' scene), got ",
-           a.scenes.size());
-  RP_CHECK(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
+  if (a.max_runs < a.min_runs) throw UsageError(cat("--max-runs: ", a.max_runs, " is below --min-runs ", a.min_runs));
+  const ThreadLimit limit(a.threads);
+  std::FILE* const table = a.quiet ? nullptr : stdout;
+  const auto usage = [](bool ok, auto&&... message) {
+    if (!ok) throw UsageError(cat(message...));
+  };
+  usage(a.size >= 8 && a.size <= 8192, "bench: --size ", a.size, " is out of range (8..8192)");
+  usage(a.ray_file.empty() || a.scenes.size() == 1, "bench: --rays needs exactly one --scene (the rays' scene), got ",
+        a.scenes.size());
+  usage(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
   for (const std::string& k : a.kinds)
-    RP_CHECK(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
+    usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
   const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
 
   std::vector<std::pair<std::string, std::string>> skipped;
@@ -232,7 +274,7 @@ int run_bench(const BenchArgs& a) {
     try {
       filter = std::regex(a.method_filter.empty() ? std::string(".") : a.method_filter);
     } catch (const std::regex_error& e) {
-      throw Error(cat("bench: --method '", one_line(a.method_filter), "' is not a regular expression: ", e.what()));
+      throw UsageError(cat("bench: --method '", one_line(a.method_filter), "' is not a regular expression: ", e.what()));
     }
     std::string labels;
     for (const Method& m : methods(skipped)) {
@@ -240,7 +282,7 @@ int run_bench(const BenchArgs& a) {
       if (std::regex_search(m.label, filter)) chosen.push_back(m);
     }
     std::erase_if(skipped, [&](const auto& sk) { return !std::regex_search(sk.first, filter); });
-    RP_CHECK(!chosen.empty(), "bench: --method '", one_line(a.method_filter), "' matches none of: ", labels);
+    usage(!chosen.empty(), "bench: --method '", one_line(a.method_filter), "' matches none of: ", labels);
   }
 
   Json out = provenance(threads);
@@ -262,10 +304,10 @@ int run_bench(const BenchArgs& a) {
     js["primitives"] = scene.prim_count();
     js["backends"] = Json::array();
     js["results"] = Json::array();
-    std::printf("\n%s: %u triangles, %u primitives;", name.c_str(), scene.triangle_count(), scene.prim_count());
-    for (const Kind& k : kinds) std::printf(" %zu %s", k.rays.size(), k.name.c_str());
-    std::printf(" rays; %zu threads\n", threads);
-    std::printf("%-24s %-8s %10s %8s %5s %12s   %s\n", "method", "rays", "Mrays/s", "spread", "runs", "mismatch",
+    say(table, "\n%s: %u triangles, %u primitives;", name.c_str(), scene.triangle_count(), scene.prim_count());
+    for (const Kind& k : kinds) say(table, " %zu %s", k.rays.size(), k.name.c_str());
+    say(table, " rays; %zu threads\n", threads);
+    say(table, "%-24s %-8s %10s %8s %5s %12s   %s\n", "method", "rays", "Mrays/s", "spread", "runs", "mismatch",
                 "hit/miss wrong-prim t-error");
     std::vector<std::string> recorded;
     for (const Method& m : chosen) {
@@ -299,9 +341,9 @@ int run_bench(const BenchArgs& a) {
         }
         const double n = std::max<double>(1.0, double(rays.size()));
         const double mismatch = double(count[2] + count[3] + count[4]) / n;
-        std::printf("%-24s %-8s %10.2f %7.1f%% %5d %12.3g   %zu %zu %zu\n", m.label.c_str(), k.name.c_str(),
+        say(table, "%-24s %-8s %10.2f %7.1f%% %5d %12.3g   %zu %zu %zu\n", m.label.c_str(), k.name.c_str(),
                     t.median_mrays, 100.0 * t.spread, t.runs, mismatch, count[2], count[3], count[4]);
-        std::fflush(stdout);
+        if (table) std::fflush(table);
         js["results"].push_back({{"method", m.label},
                                  {"backend", backend_key},
                                  {"coherence", m.coherence == Coherence::coherent ? "coherent" : "incoherent"},
@@ -318,18 +360,36 @@ int run_bench(const BenchArgs& a) {
                                  {"ties", count[1]}});
       }
     }
-    print_best(js, kinds);
-    std::printf("\n%-16s %12s %14s %12s\n", "backend", "build s", "bytes", "bytes/prim");
+    print_best(table, js, kinds);
+    say(table, "\n%-16s %12s %14s %12s\n", "backend", "build s", "bytes", "bytes/prim");
     for (const Json& be : js["backends"])
-      std::printf("%-16s %12.4f %14zu %12.1f\n", be["backend"].get<std::string>().c_str(), be["build_seconds"].get<double>(),
+      say(table, "%-16s %12.4f %14zu %12.1f\n", be["backend"].get<std::string>().c_str(), be["build_seconds"].get<double>(),
                   be["bytes"].get<size_t>(), be["bytes_per_prim"].get<double>());
     out["scenes"].push_back(js);
   }
-  for (const auto& [label, why] : skipped) std::printf("\n%s: not run: %s\n", label.c_str(), why.c_str());
+  for (const auto& [label, why] : skipped) say(table, "\n%s: not run: %s\n", label.c_str(), why.c_str());
   if (!a.json.empty()) write_file(a.json, out.dump(2) + "\n");
   if (!a.chart.empty()) draw_charts(out, a.chart);
   return 0;
 }
+
+namespace {
+
+/// Bench results that cannot be charted (the message names no file; the caller adds it).
+struct BenchFileError : Error {
+  using Error::Error;
+};
+
+/// Refuses results without scenes, or without a single timed result to draw.
+void check_bench_results(const Json& j) {
+  if (!(j.is_object() && j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty()))
+    throw BenchFileError("not a raypack bench file (no \"scenes\")");
+  for (const Json& sc : j["scenes"])
+    if (sc.contains("results") && sc["results"].is_array() && !sc["results"].empty()) return;
+  throw BenchFileError("no results to chart (every scene's \"results\" is empty)");
+}
+
+}  // namespace
 
 void draw_charts(const std::string& json_path, const std::string& chart) {
   const std::string text = read_file(json_path);
@@ -341,52 +401,66 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
     throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
   }
   try {
+    check_bench_results(j);
     draw_charts(j, chart);
   } catch (const Json::exception& e) {  // a value of the wrong type or a missing key
     throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
+  } catch (const BenchFileError& e) {
+    throw Error(cat(json_path, ": ", e.what()));
   }
 }
 
 void draw_charts(const Json& j, const std::string& chart) {
   namespace fs = std::filesystem;
-  if (!(j.is_object() && j.contains("scenes") && j["scenes"].is_array() && !j["scenes"].empty()))
-    throw Error("not a raypack bench file (no \"scenes\")");
+  check_bench_results(j);
   chart_format(chart);  // an unknown format is refused before anything is drawn
   const fs::path file(chart);
   const std::string scaling = ((file.parent_path() / file.stem()).string() + "-scaling") + file.extension().string();
   constexpr double kFloor = 1e-7;  // where a zero mismatch rate is drawn
-  const char* kinds[3] = {"primary", "shadow", "diffuse"};
   const Json& machine = j.contains("machine") ? j["machine"] : Json::object();
   const std::string title = cat("cpu ", machine.value("cpu", std::string("?")), ", ", machine.value("threads", 0),
                                 " threads, ", machine.value("date", std::string("?")));
   const Json& scenes = j["scenes"];
   const size_t n_scenes = scenes.size();
+  // The ray kinds the file has results for (primary, shadow, diffuse, or a ray file's), in order.
+  std::vector<std::string> kinds;
+  for (const Json& sc : scenes)
+    for (const Json& r : sc["results"])
+      if (std::ranges::count(kinds, r["kind"].get<std::string>()) == 0) kinds.push_back(r["kind"].get<std::string>());
+  const size_t n_kinds = kinds.size();
 
   // Speed against accuracy: one panel per scene and kind, each an inline data block of
-  // "Mrays/s drawn-rate label".
+  // "Mrays/s drawn-rate label"; a scene without results of a kind leaves its panel empty.
   std::ostringstream g;
+  std::vector<std::vector<bool>> has(n_scenes, std::vector<bool>(n_kinds, false));
   for (size_t s = 0; s < n_scenes; ++s)
-    for (int k = 0; k < 3; ++k) {
+    for (size_t k = 0; k < n_kinds; ++k) {
       g << "$s" << s << "k" << k << " << EOD\n";
       for (const Json& r : scenes[s]["results"])
-        if (r["kind"] == kinds[k])
+        if (r["kind"] == kinds[k]) {
           g << r["mrays_per_s"].get<double>() << ' ' << std::max(kFloor, r["mismatch_rate"].get<double>()) << " \""
             << gnuplot_label(r["method"].get<std::string>()) << "\"\n";
+          has[s][k] = true;
+        }
       g << "EOD\n";
     }
-  g << "set multiplot layout " << n_scenes << ",3 title "
+  g << "set multiplot layout " << n_scenes << "," << n_kinds << " title "
     << gnuplot_string("raypack bench: speed against accuracy (" + title + ")") << " font ',12'\n";
   g << "set logscale y\nset yrange [" << kFloor / 3 << ":1]\nset format y '%.0e'\nset grid\nset key off\n";
   g << "set ytics add ('0 (floor)' " << kFloor << ")\nset xlabel 'Mrays/s'\nset ylabel 'mismatch rate vs reference'\n";
   for (size_t s = 0; s < n_scenes; ++s)
-    for (int k = 0; k < 3; ++k) {
+    for (size_t k = 0; k < n_kinds; ++k) {
+      if (!has[s][k]) {
+        g << "set multiplot next\n";
+        continue;
+      }
       g << "set title " << gnuplot_string(scenes[s]["scene"].get<std::string>() + ": " + kinds[k] + " rays") << "\n";
       g << "set offsets graph 0.1, graph 0.45, 0, 0\n";
       g << "plot $s" << s << "k" << k << " using 1:2:($0+1) with points pt 7 ps 1.5 lc variable, '' using 1:2:3 "
         << "with labels rotate by 40 left offset 0.4,0.5 font ',8'\n";
     }
   g << "unset multiplot\n";
-  plot_to(chart, cat(1500, ",", 380 * int(n_scenes) + 60), g.str());
+  plot_to(chart, cat(500 * int(n_kinds), ",", 380 * int(n_scenes) + 60), g.str());
 
   // Cost against scene size: Mrays/s on diffuse rays against triangles, a line per method.
   std::ostringstream c;

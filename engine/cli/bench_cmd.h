@@ -6,6 +6,10 @@
 #include <string>
 #include <vector>
 
+namespace CLI {
+class App;
+}
+
 namespace rp::cli {
 
 struct BenchArgs {
@@ -18,6 +22,20 @@ struct BenchArgs {
   std::string ray_file;           ///< time these rays (one scene) instead of the generated kinds
   bool occlusion = false;         ///< with ray_file: any-hit queries instead of closest hits
   std::string json, chart;
+  int threads = 0;
+  bool quiet = false;  ///< print nothing on success
+
+  /// Adds the `bench` subcommand to `app` with these flags.
+  CLI::App* add_to(CLI::App& app);
+};
+
+/// `raypack chart`: the charts of a saved bench JSON file.
+struct ChartArgs {
+  std::string json, output = "chart.png";
+  bool quiet = false;
+
+  /// Adds the `chart` subcommand to `app` with these flags.
+  CLI::App* add_to(CLI::App& app);
 };
 
 /// Runs the benchmark, prints the table, writes JSON and charts when asked. Returns 0.
@@ -27,6 +45,9 @@ int run_bench(const BenchArgs& args);
 /// it, <name>-scaling.<ext> (Mrays/s against triangle count), both in the format of the
 /// extension (.png or .svg), from a saved bench JSON file. Throws rp::Error naming the file.
 void draw_charts(const std::string& json_path, const std::string& chart);
+
+/// Draws the charts of `args`; returns 0.
+int run_chart(const ChartArgs& args);
 
 /// The same from the bench results in memory.
 void draw_charts(const nlohmann::ordered_json& results, const std::string& chart);

@@ -1,5 +1,6 @@
 #include "engine/cli/stability_cmd.h"
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include <sstream>
 
 #include "backends/registry.h"
+#include "engine/cli/args.h"
 #include "engine/cli/plot.h"
 #include "engine/error.h"
 #include "engine/loaders/load.h"
@@ -61,6 +63,27 @@ void draw_chart(const std::vector<stability::Result>& results, const std::string
 
 }  // namespace
 
+CLI::App* StabilityArgs::add_to(CLI::App& app) {
+  CLI::App* c = app.add_subcommand("stability", "Failure rates per method and ray family where intersection methods fail");
+  c->add_option("--scene", scene, "Scene: 'default' or a file; its meshes give the mesh families")
+      ->capture_default_str();
+  c->add_option("--rays", rays, "Rays per family")->check(CLI::Range(1, 1 << 22))->capture_default_str();
+  c->add_option("--seed", seed, "Seed of every family's rays")->capture_default_str();
+  c->add_option("--t-tolerance", t_tolerance, "Relative t difference counted as an error")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  c->add_option("--method", methods,
+                "Backend method backend/variant (repeatable; default embree/default, embree/robust, "
+                "simd/default, simd/watertight)");
+  c->add_option("--family", families, "Run only this family (repeatable; see --list)");
+  c->add_flag("--list", list, "List the families and scalar methods");
+  c->add_option("--json", json, "Write the results as JSON");
+  c->add_option("--chart", chart, "Draw the chart (PNG and SVG beside it, with gnuplot)");
+  add_threads_option(c, threads);
+  add_quiet_flag(c, quiet);
+  return c;
+}
+
 int run_stability(const StabilityArgs& a) {
   if (a.list) {
     std::printf("families:\n");
@@ -70,6 +93,16 @@ int run_stability(const StabilityArgs& a) {
     std::printf("\n");
     return 0;
   }
+  for (const std::string& f : a.families) {
+    std::string names;
+    bool known = false;
+    for (const auto& [name, what] : stability::family_names()) {
+      known |= name == f;
+      names += (names.empty() ? "" : ", ") + name;
+    }
+    if (!known) throw UsageError(cat("--family: unknown family '", f, "' (", names, ")"));
+  }
+  const ThreadLimit limit(a.threads);
   stability::Options o;
   o.rays = a.rays;
   o.seed = a.seed;
@@ -83,30 +116,36 @@ int run_stability(const StabilityArgs& a) {
   if (!a.methods.empty()) {
     o.backends = a.methods;
     for (const std::string& m : o.backends)
-      RP_CHECK(available.count(m), "stability: --method '", m, "' is not an available backend/variant");
+      if (!available.count(m)) {
+        const size_t slash = m.find('/');
+        if (slash == std::string::npos) throw UsageError(cat("--method: '", m, "' is not backend/variant"));
+        check_method("--method", m.substr(0, slash), "--method", m.substr(slash + 1));
+      }
   } else {
     o.backends.clear();
     for (const char* m : {"embree/default", "embree/robust", "simd/default", "simd/watertight"})
       if (available.count(m)) o.backends.push_back(m);
-      else std::fprintf(stderr, "raypack: stability: %s is not available here, skipped\n", m);
+      else say(a.quiet ? nullptr : stderr, "raypack: stability: %s is not available here, skipped\n", m);
   }
   o.make_backend = [](const std::string& method, const Scene& scene) {
     const size_t slash = method.find('/');
     return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}});
   };
-  o.progress = [](const std::string& family) { std::fprintf(stderr, "raypack: stability: %s\n", family.c_str()); };
+  if (!a.quiet)
+    o.progress = [](const std::string& family) { std::fprintf(stderr, "raypack: stability: %s\n", family.c_str()); };
   const Scene scene = load_scene(a.scene);
   const auto start = std::chrono::steady_clock::now();
   const std::vector<stability::Result> results = stability::run(scene, o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("raypack stability: scene %s, %u rays per family, seed %llu, t tolerance %g (relative)\n",
+  std::FILE* const out = a.quiet ? nullptr : stdout;
+  say(out, "raypack stability: scene %s, %u rays per family, seed %llu, t tolerance %g (relative)\n",
               a.scene.c_str(), a.rays, (unsigned long long)a.seed, a.t_tolerance);
-  stability::print_table(stdout, results);
-  std::printf("(%.1f s)\n", seconds);
+  if (out) stability::print_table(out, results);
+  say(out, "(%.1f s)\n", seconds);
   if (!a.json.empty()) write_file(a.json, stability::to_json(results, a.scene, o));
   if (!a.chart.empty()) {
     draw_chart(results, a.scene, a.chart);
-    std::fprintf(stderr, "raypack: wrote %s\n", a.chart.c_str());
+    say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", a.chart.c_str());
   }
   return 0;
 }

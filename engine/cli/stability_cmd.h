@@ -6,6 +6,10 @@
 #include <string>
 #include <vector>
 
+namespace CLI {
+class App;
+}
+
 namespace rp::cli {
 
 struct StabilityArgs {
@@ -17,6 +21,11 @@ struct StabilityArgs {
   std::vector<std::string> families;  ///< empty: all
   std::string json, chart;
   bool list = false;  ///< print the families and methods, run nothing
+  int threads = 0;
+  bool quiet = false;  ///< print nothing on success
+
+  /// Adds the `stability` subcommand to `app` with these flags.
+  CLI::App* add_to(CLI::App& app);
 };
 
 /// Runs the families, prints the table, writes JSON and the chart when asked. Returns 0.

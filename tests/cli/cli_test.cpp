@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <tuple>
 
 #include "engine/image_io.h"
 #include "engine/rayfile.h"
@@ -89,6 +90,59 @@ TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.output, "raypack: --backend: unknown backend 'nope' (available: embree, simd)\n");
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+TEST_F(Cli, ABadBackendOrVariantNamesTheFlagGivenInEverySubcommand) {
+  const std::pair<std::string, std::string> bad[] = {
+      {"render --variant fastest", "--variant: 'fastest' is not a variant of embree (default, robust, compact, high)"},
+      {"trace --rays r.csv -o h.csv --backend nope", "--backend: unknown backend 'nope' (available: embree, simd)"},
+      {"diff -b nope", "-b: unknown backend 'nope' (available: embree, simd)"},
+      {"diff --variant-a watertight", "--variant-a: 'watertight' is not a variant of embree"},
+      {"diff --variant-b robust", "--variant-b: 'robust' is not a variant of simd (default, median, watertight)"},
+      {"stability --method simd/fast", "--method: 'fast' is not a variant of simd (default, median, watertight)"},
+      {"stability --method simd", "--method: 'simd' is not backend/variant"},
+      {"stability --family edgs", "--family: unknown family 'edgs' ("}};
+  for (const auto& [args, message] : bad) {
+    const Result r = run(args);
+    EXPECT_EQ(r.status, 2) << args << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("raypack: " + message, 0), 0u) << args << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+}
+
+TEST_F(Cli, MistypedSubcommandsAndFlagsGetTheNearestNameAndTheirOwnHelp) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"rendr", "raypack: unknown subcommand 'rendr'; did you mean 'render'? (see raypack --help)\n"},
+      {"frobnicate", "raypack: unknown subcommand 'frobnicate' (see raypack --help)\n"},
+      {"render --scen x", "raypack: render: unknown flag '--scen'; did you mean --scene? (see raypack render --help)\n"},
+      {"diff --variantb=x", "raypack: diff: unknown flag '--variantb'; did you mean --variant-b? (see raypack diff --help)\n"},
+      {"stability --famly edges", "raypack: stability: unknown flag '--famly'; did you mean --family? (see raypack stability --help)\n"},
+      {"render -x", "raypack: render: unknown flag '-x' (see raypack render --help)\n"},
+      {"render --threads -1", "raypack: --threads: Value -1 not in range 0 to 1024 (see raypack render --help)\n"}};
+  for (const auto& [args, message] : cases) {
+    const Result r = run(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_EQ(r.output, message) << args;
+  }
+}
+
+TEST_F(Cli, QuietPrintsNothingOnSuccessInEverySubcommand) {
+  const fs::path rays = dir_ / "rays.csv", json = dir_ / "bench.json";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n";
+  for (const std::string& args :
+       {"render --resolution 8x8 -o " + (dir_ / "x.png").string(),
+        "trace --rays " + rays.string() + " -o " + (dir_ / "hits.csv").string(), std::string("diff --count 64"),
+        "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --json " + json.string(),
+        std::string("stability --rays 8 --family edges --method embree/default")}) {
+    const Result r = run(args + " -q");
+    EXPECT_EQ(r.status, 0) << args << ": " << r.output;
+    EXPECT_EQ(r.output, "") << args;
+  }
+  ASSERT_TRUE(fs::exists(json));
+  const Result r = run("chart " + json.string() + " -o " + (dir_ / "c.png").string() + " -q");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  EXPECT_TRUE(fs::exists(dir_ / "c.png"));
 }
 
 TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
@@ -258,7 +312,16 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   std::ofstream(dir_ / "bad.json") << "{\"not\": 1}";
   r = run("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
   EXPECT_EQ(r.status, 1) << r.output;
-  EXPECT_NE(r.output.find("not a raypack bench file"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bad.json: not a raypack bench file"), std::string::npos) << r.output;
+  // Results of one ray kind, or of a ray file, chart as panels of those kinds only.
+  const fs::path rays = dir_ / "rays.csv";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n5,10,5,0,1,0,0,inf\n";
+  for (const std::string& args : {std::string("--kind primary"), "--rays " + rays.string()}) {
+    fs::remove(chart);
+    r = run("bench --size 8 --min-runs 1 --max-runs 1 --method 'simd large' " + args + " --chart " + chart.string());
+    EXPECT_EQ(r.status, 0) << args << ": " << r.output;
+    EXPECT_TRUE(fs::exists(chart)) << args;
+  }
 }
 
 TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
@@ -283,17 +346,18 @@ TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
               std::string::npos) << r.output;
     EXPECT_NE(r.output.find("64 file"), std::string::npos) << r.output;
   }
-  // Bad flags: one line, status 2 for usage, 1 for a refused combination, naming the value.
-  const std::pair<std::string, std::string> bad[] = {
-      {"--method 'simd (' ", "--method 'simd (' is not a regular expression"},
-      {"--method nothing-matches", "--method 'nothing-matches' matches none of: "},
-      {"--kind secondary", "--kind 'secondary' is not one of primary, shadow, diffuse"},
-      {"--rays " + rays.string() + " --scene default --scene default", "--rays needs exactly one --scene"},
-      {"--any-hit", "--any-hit applies to --rays only"},
-      {"--rays " + (dir_ / "absent.bin").string(), "absent.bin"}};
-  for (const auto& [args, message] : bad) {
+  // Bad flags: one line naming the value, status 2 (a bad flag value or combination); a file
+  // that cannot be read is a failure while running, status 1.
+  const std::tuple<std::string, std::string, int> bad[] = {
+      {"--method 'simd (' ", "--method 'simd (' is not a regular expression", 2},
+      {"--method nothing-matches", "--method 'nothing-matches' matches none of: ", 2},
+      {"--kind secondary", "--kind 'secondary' is not one of primary, shadow, diffuse", 2},
+      {"--rays " + rays.string() + " --scene default --scene default", "--rays needs exactly one --scene", 2},
+      {"--any-hit", "--any-hit applies to --rays only", 2},
+      {"--rays " + (dir_ / "absent.bin").string(), "absent.bin", 1}};
+  for (const auto& [args, message, status] : bad) {
     r = run("bench --size 8 --min-runs 1 --max-runs 1 " + args);
-    EXPECT_NE(r.status, 0) << args;
+    EXPECT_EQ(r.status, status) << args;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
     EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
   }
@@ -328,7 +392,13 @@ TEST_F(Cli, CameraAndLightFlagsOutsideTheCoordinateRangeAreBadFlags) {
   EXPECT_EQ(r.output.rfind("raypack: --aperture: 1e+09 puts the lens around the eye", 0), 0u) << r.output;
   r = run("render --light 0,0,1e19,5" + out);
   EXPECT_EQ(r.status, 2) << r.output;
-  EXPECT_EQ(r.output.rfind("raypack: --light: '0,0,1e19' is outside the supported coordinate range", 0), 0u) << r.output;
+  EXPECT_EQ(r.output.rfind("raypack: --light: '0,0,1e19,5' is outside the supported coordinate range", 0), 0u) << r.output;
+  // A light is four numbers; the message says so whichever of them is wrong.
+  for (const char* light : {"1,2,3", "1,2,x,4", "1,2,3,-1", "1,2,3,4,5"}) {
+    r = run(std::string("render --light ") + light + out);
+    EXPECT_EQ(r.status, 2) << r.output;
+    EXPECT_EQ(r.output, std::string("raypack: --light: '") + light + "' is not four numbers x,y,z,intensity with intensity > 0\n");
+  }
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
 }
 

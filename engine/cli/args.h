@@ -1,0 +1,86 @@
+#pragma once
+// What every raypack subcommand shares: the usage-error type (exit status 2), the flags that
+// mean the same in every subcommand (-t/--threads, -q/--quiet, --backend/--variant), and the
+// parsers of values that several subcommands take (points, coherence).
+
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "engine/backend.h"
+#include "engine/error.h"
+#include "engine/math.h"
+#include "engine/scene.h"
+
+namespace CLI {
+class App;
+class ParseError;
+}
+
+namespace rp::cli {
+
+/// A mistake in the flags or their values: reported like CLI11's own parse errors, exit status
+/// 2, before any work starts.
+struct UsageError : Error {
+  using Error::Error;
+};
+
+/// Of `candidates`, the one nearest to `word` (a mistyped flag or subcommand) by edit
+/// distance, when it is within 2 edits or a third of the word; empty when none is.
+std::string nearest(const std::string& word, const std::vector<std::string>& candidates);
+
+/// The one-line message for a command line CLI11 refused (`error`): an unknown subcommand or
+/// flag gets the nearest valid one as a suggestion, and every message points at the help of
+/// the subcommand given (`raypack render --help`) or of raypack.
+std::string parse_error_message(const CLI::App& app, const CLI::ParseError& error, int argc, char** argv);
+
+/// -t,--threads: worker threads (0 = all cores), bound to `threads`.
+void add_threads_option(CLI::App* app, int& threads);
+
+/// -q,--quiet: print nothing on success (results still go to the files asked for).
+void add_quiet_flag(CLI::App* app, bool& quiet);
+
+/// printf to `out`, or nothing when `out` is null (a command run with -q).
+__attribute__((format(printf, 2, 3))) void say(std::FILE* out, const char* format, ...);
+
+/// The worker-thread limit of one command run (0: all cores), held while this lives.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+
+ private:
+  std::optional<tbb::global_control> limit_;
+};
+
+/// Throws UsageError naming `backend_flag` or `variant_flag` (the flags as the user gave them,
+/// e.g. -b and --variant-b) when the registry cannot build backend/variant here.
+void check_method(const std::string& backend_flag, const std::string& backend, const std::string& variant_flag,
+                  const std::string& variant);
+
+/// The scene at `path` ('default' or a file), with an out-of-memory failure named as such.
+Scene load_scene_or_default(const std::string& path);
+
+/// The backend `name`/`variant` built over `scene` (loaded from `scene_name`), with an
+/// out-of-memory failure named as such.
+std::unique_ptr<Backend> build_backend(const std::string& name, const std::string& variant, const Scene& scene,
+                                       const std::string& scene_name);
+
+/// Exactly out.size() comma-separated finite numbers (blanks around each allowed) into `out`;
+/// false when `text` is anything else.
+bool parse_floats(const std::string& text, std::span<float> out);
+
+/// "x,y,z" as a vector, or a usage error naming the flag.
+Vec3f parse_vec3(const std::string& flag, const std::string& text);
+
+/// "x,y,z" as a point, which must lie in the coordinate range every backend traces (engine/ray.h).
+Vec3f parse_point(const std::string& flag, const std::string& text);
+
+/// "coherent" or "incoherent", or a usage error naming the flag.
+Coherence parse_coherence(const std::string& flag, const std::string& text);
+
+}  // namespace rp::cli

@@ -1,0 +1,87 @@
+#include "engine/cli/info_cmd.h"
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "backends/registry.h"
+#include "engine/cli/args.h"
+
+namespace rp::cli {
+
+CLI::App* InfoArgs::add_to(CLI::App& app) {
+  CLI::App* c = app.add_subcommand("info", "Counts, bounds and bytes of a scene and of each backend's structure");
+  c->add_option("scene,--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  c->add_flag("--no-backends", no_backends, "Skip building the backends");
+  return c;
+}
+
+/// Counts, bounds, degenerate triangles and the bytes of the scene and of each backend.
+int run_info(const InfoArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene_or_default(a.scene);
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  size_t vertices = 0, with_normals = 0, with_uvs = 0;
+  for (const TriangleMesh& m : scene.meshes()) {
+    vertices += m.positions.size();
+    with_normals += !m.normals.empty();
+    with_uvs += !m.uvs.empty();
+  }
+  const Box3f b = scene.bounds();
+  std::printf("scene        %s (loaded in %.3f s)\n", a.scene.c_str(), load_s);
+  std::printf("triangles    %u in %zu mesh(es), %zu vertices (%zu meshes with normals, %zu with uvs)\n",
+              scene.triangle_count(), scene.meshes().size(), vertices, with_normals, with_uvs);
+  std::printf("analytic     %zu spheres, %zu quadrics, %zu polygons, %zu planes\n", scene.spheres().size(),
+              scene.quadrics().size(), scene.polygons().size(), scene.planes().size());
+  std::printf("primitives   %u\n", scene.prim_count());
+  std::printf("degenerate   %zu zero-area triangles\n", scene.degenerate_triangle_count());
+  if (b.empty()) std::printf("bounds       empty\n");
+  else
+    std::printf("bounds       (%g, %g, %g) - (%g, %g, %g)\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+  std::printf("materials    %zu; lights: %zu point, %zu directional; camera: %s\n", scene.materials().size(),
+              scene.point_lights().size(), scene.directional_lights().size(),
+              scene.camera() ? "from the scene" : "derived from the bounds");
+  const double prims = std::max(1.0, double(scene.prim_count()));
+  std::printf("scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
+  if (a.no_backends) return 0;
+  std::printf("\n%-8s %-8s %10s %14s %12s\n", "backend", "variant", "build s", "bytes", "bytes/prim");
+  for (const BackendEntry& e : list_backends()) {
+    if (!e.available) {
+      std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
+      continue;
+    }
+    const auto backend = build_backend(e.name, "default", scene, a.scene);
+    const BackendInfo& i = backend->info();
+    std::printf("%-8s %-8s %10.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
+                double(i.bytes) / prims);
+    for (const auto& [key, value] : i.stats) {
+      if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
+        std::printf("  %s=%lld", key.c_str(), (long long)value);
+      else
+        std::printf("  %s=%g", key.c_str(), value);
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+
+CLI::App* add_backends_command(CLI::App& app) {
+  return app.add_subcommand("backends", "List the backends, their variants and availability");
+}
+
+int run_backends() {
+  for (const BackendEntry& e : list_backends()) {
+    std::string variants;
+    for (const std::string& v : e.variants) variants += (variants.empty() ? "" : ", ") + v;
+    std::string methods, facts;
+    for (const std::string& m : e.coherent_methods) methods += (methods.empty() ? "" : ", ") + m;
+    for (const auto& [k, v] : e.facts) facts += (facts.empty() ? "" : ", ") + k + "=" + v;
+    std::printf("%-8s %s\n         variants: %s\n         coherent methods: %s\n         %s\n", e.name.c_str(),
+                e.available ? e.description.c_str() : ("unavailable: " + e.unavailable_reason).c_str(),
+                variants.c_str(), methods.c_str(), facts.c_str());
+  }
+  return 0;
+}
+
+}  // namespace rp::cli

@@ -1,0 +1,227 @@
+#include "engine/cli/render_cmd.h"
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <optional>
+#include <regex>
+
+#include "engine/camera.h"
+#include "engine/cli/args.h"
+#include "engine/cli/out_of_memory.h"
+#include "engine/image_io.h"
+#include "engine/render.h"
+
+namespace rp::cli {
+
+namespace {
+
+struct Resolution {
+  int width, height;
+};
+
+constexpr int kMaxEdge = 32768;
+constexpr long long kMaxPixels = 1ll << 28;
+
+Resolution parse_resolution(const std::string& text) {
+  static const std::regex re(R"(^\s*(\d{1,9})\s*[xX]\s*(\d{1,9})\s*$)");
+  std::smatch m;
+  if (!std::regex_match(text, m, re))
+    throw UsageError(cat("--resolution: '", text, "' is not WIDTHxHEIGHT (e.g. 1920x1080)"));
+  const long long w = std::stoll(m[1]), h = std::stoll(m[2]);
+  if (w < 1 || h < 1 || w > kMaxEdge || h > kMaxEdge || w * h > kMaxPixels)
+    throw UsageError(cat("--resolution: ", text, " is out of range (each side 1..", kMaxEdge, ", at most ", kMaxPixels,
+                         " pixels)"));
+  return {int(w), int(h)};
+}
+
+/// "x,y,z,intensity" as a white point light, or a usage error naming --light.
+PointLight parse_light(const std::string& text) {
+  float v[4];
+  if (!parse_floats(text, v) || !(v[3] > 0.0f))
+    throw UsageError(cat("--light: '", text, "' is not four numbers x,y,z,intensity with intensity > 0"));
+  const Vec3f p{v[0], v[1], v[2]};
+  if (!in_coordinate_range(p))
+    throw UsageError(cat("--light: '", text, "' is outside the supported coordinate range |x| <= 1073741824 (2^30)"));
+  return PointLight{p, Vec3f(v[3])};
+}
+
+CameraDesc apply(const CameraArgs& a, CameraDesc c) {
+  if (!a.model.empty()) {
+    if (a.model == "pinhole") c.model = CameraModel::pinhole;
+    else if (a.model == "panoramic") c.model = CameraModel::panoramic;
+    else if (a.model == "fisheye") c.model = CameraModel::fisheye;
+    else if (a.model == "thin-lens") c.model = CameraModel::thin_lens;
+    else throw UsageError(cat("--camera: '", a.model, "' is not pinhole, panoramic, fisheye or thin-lens"));
+  }
+  if (!a.eye.empty()) c.eye = parse_point("--eye", a.eye);
+  if (!a.look_at.empty()) c.look_at = parse_point("--look-at", a.look_at);
+  if (!a.up.empty()) c.up = parse_vec3("--up", a.up);
+  if (a.fov > 0) c.vfov_degrees = a.fov;
+  if (a.fisheye_fov > 0) c.fisheye_fov_degrees = a.fisheye_fov;
+  if (a.aperture >= 0) c.aperture = a.aperture;
+  if (a.focus_distance >= 0) c.focus_distance = a.focus_distance;
+  if (a.aperture >= 0 && c.model == CameraModel::thin_lens && !in_coordinate_range(abs(c.eye) + Vec3f(a.aperture)))
+    throw UsageError(cat("--aperture: ", a.aperture, " puts the lens around the eye (", c.eye.x, ", ", c.eye.y, ", ",
+                         c.eye.z, ") outside the supported coordinate range |x| <= 1073741824 (2^30)"));
+  return c;
+}
+
+RenderSettings render_settings(const RenderArgs& a, const Resolution& res) {
+  RenderSettings settings;
+  settings.width = res.width;
+  settings.height = res.height;
+  settings.spp = a.spp;
+  settings.seed = a.seed;
+  settings.max_depth = a.max_depth;
+  settings.adaptive_threshold = a.adaptive_threshold;
+  settings.adaptive_depth = a.adaptive_depth;
+  if (a.sampler == "uniform") settings.sampler = Sampler::uniform;
+  else if (a.sampler == "random") settings.sampler = Sampler::random;
+  else if (a.sampler == "stratified") settings.sampler = Sampler::stratified;
+  else if (a.sampler == "adaptive") settings.sampler = Sampler::adaptive;
+  else throw UsageError(cat("--sampler: '", a.sampler, "' is not uniform, random, stratified or adaptive"));
+  const int m = int(std::sqrt(double(a.spp)));
+  if (settings.sampler == Sampler::uniform && m * m != a.spp)
+    throw UsageError(cat("--spp: ", a.spp, " is not a square, which the uniform sampler needs (1, 4, 9, ...)"));
+  return settings;
+}
+
+/// A progress bar with the time left on stderr, for renders that last more than a second
+/// and only when stderr is a terminal; redrawn at most 10 times a second.
+class ProgressBar {
+ public:
+  ProgressBar() : start_(std::chrono::steady_clock::now()) {}
+  void operator()(double fraction) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (elapsed < 1.0 || !::isatty(STDERR_FILENO)) return;
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock || (elapsed - last_ < 0.1 && fraction < 1.0)) return;
+    last_ = elapsed;
+    const int width = 40, filled = int(fraction * width);
+    const double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
+    std::fprintf(stderr, "\r[%s%s] %5.1f%%  %.1f s left ", std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), '.').c_str(), 100.0 * fraction, eta);
+    drawn_ = true;
+  }
+  void finish() {
+    if (drawn_) std::fprintf(stderr, "\r%80s\r", "");
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+  std::mutex mutex_;
+  double last_ = -1.0;
+  bool drawn_ = false;
+};
+
+}  // namespace
+
+void CameraArgs::add_to(CLI::App* app) {
+  app->add_option("--camera", model, "pinhole, panoramic, fisheye or thin-lens (default: the scene's)");
+  app->add_option("--eye", eye, "Camera position x,y,z");
+  app->add_option("--look-at", look_at, "Point the camera looks at x,y,z");
+  app->add_option("--up", up, "Up vector x,y,z");
+  app->add_option("--fov", fov, "Vertical field of view, degrees")->check(CLI::Range(0.001, 179.999));
+  app->add_option("--fisheye-fov", fisheye_fov, "Fisheye field of view across the image circle, degrees")
+      ->check(CLI::Range(0.001, 360.0));
+  app->add_option("--aperture", aperture, "Thin lens radius, world units")->check(CLI::Range(0.0, 1073741824.0));
+  app->add_option("--focus-distance", focus_distance, "Distance in focus (0: the look-at point)")
+      ->check(CLI::Range(0.0, 2147483648.0));
+}
+
+bool CameraArgs::any() const {
+  return !model.empty() || !eye.empty() || !look_at.empty() || !up.empty() || fov > 0 || fisheye_fov > 0 ||
+         aperture >= 0 || focus_distance >= 0;
+}
+
+CLI::App* RenderArgs::add_to(CLI::App& app) {
+  CLI::App* c = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
+  c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
+  c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
+  c->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
+  c->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
+  c->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 65536))->capture_default_str();
+  add_threads_option(c, threads);
+  c->add_option("--seed", seed, "Seed of the per-pixel sample streams")->capture_default_str();
+  c->add_option("--max-depth", max_depth, "Mirror bounces after the primary hit")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
+  add_quiet_flag(c, quiet);
+  camera.add_to(c);
+  c->add_option("--light", lights, "Add a white point light x,y,z,intensity (repeatable)");
+  c->add_option("--aov", aov, "Also write depth, normals, uv and primitive id as a multi-channel .exr");
+  c->add_option("--sampler", sampler, "uniform, random, stratified or adaptive")->capture_default_str();
+  c->add_option("--adaptive-threshold", adaptive_threshold,
+                "Adaptive: subdivide where corner colours differ by more (any channel)")
+      ->check(CLI::Range(0.0f, 1e30f))
+      ->capture_default_str();
+  c->add_option("--adaptive-depth", adaptive_depth, "Adaptive: most subdivisions per pixel")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
+  return c;
+}
+
+int run_render(const RenderArgs& a) {
+  using clock = std::chrono::steady_clock;
+  auto seconds_since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
+  const Resolution res = parse_resolution(a.resolution);
+  const RenderSettings settings = render_settings(a, res);
+  std::vector<PointLight> lights;
+  for (const std::string& l : a.lights) lights.push_back(parse_light(l));
+  const ThreadLimit limit(a.threads);
+  check_method("--backend", a.backend, "--variant", a.variant);
+
+  auto t = clock::now();
+  Scene scene = load_scene_or_default(a.scene);
+  for (const PointLight& l : lights) scene.add_light(l);
+  const double load_s = seconds_since(t);
+  const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds())));
+  std::optional<Camera> camera_or;
+  try {
+    camera_or.emplace(desc, res.width, res.height);
+  } catch (const Error& e) {
+    if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
+    throw Error(cat(a.scene, ": ", e.what()));
+  }
+  const Camera& camera = *camera_or;
+  const std::unique_ptr<Backend> backend = build_backend(a.backend, a.variant, scene, a.scene);
+
+  ProgressBar bar;
+  const RenderResult r = with_memory_context(cat("rendering ", res.width, "x", res.height), [&] {
+    return render(scene, *backend, camera, settings, a.quiet ? ProgressFn{} : ProgressFn(std::ref(bar)));
+  });
+  bar.finish();
+  t = clock::now();
+  write_image(a.output, r.image);
+  if (!a.aov.empty()) write_aovs(a.aov, render_aovs(scene, *backend, camera));
+  const double write_s = seconds_since(t);
+  if (!a.quiet) {
+    const BackendInfo& info = backend->info();
+    const RenderStats& s = r.stats;
+    const std::string sampling =
+        settings.sampler == Sampler::adaptive ? "adaptive" : std::to_string(a.spp) + " spp " + a.sampler;
+    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s\n", a.output.c_str(), res.width, res.height,
+                 sampling.c_str(), info.name.c_str(), info.variant.c_str(), a.aov.empty() ? "" : " and AOVs to ",
+                 a.aov.c_str());
+    std::fprintf(stderr, "raypack: %.2f Mrays/s: %llu primary, %llu shadow, %llu reflection, %llu refraction rays\n",
+                 double(s.rays()) / s.seconds * 1e-6, (unsigned long long)s.primary, (unsigned long long)s.shadow,
+                 (unsigned long long)s.reflection, (unsigned long long)s.refraction);
+    std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB), render %.3f s, write %.3f s\n", load_s,
+                 info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
+    if (settings.sampler == Sampler::adaptive)
+      std::fprintf(stderr,
+                   "raypack: adaptive sampling traced %llu primary rays where a uniform grid at depth %d needs %llu "
+                   "(%.1f%% saved)\n",
+                   (unsigned long long)s.primary, a.adaptive_depth, (unsigned long long)s.uniform_primary,
+                   100.0 * (1.0 - double(s.primary) / double(s.uniform_primary)));
+  }
+  return 0;
+}
+
+}  // namespace rp::cli

@@ -1,0 +1,28 @@
+#pragma once
+// `raypack trace`: a ray file through one backend, the hits (with geometric normals) to a hit
+// file.
+
+#include <string>
+
+#include "backends/registry.h"
+
+namespace CLI {
+class App;
+}
+
+namespace rp::cli {
+
+struct TraceArgs {
+  std::string scene = "default", rays, output, backend{kDefaultBackend}, variant = "default";
+  std::string coherence = "incoherent";
+  int threads = 0;
+  bool quiet = false;
+
+  /// Adds the `trace` subcommand to `app` with these flags.
+  CLI::App* add_to(CLI::App& app);
+};
+
+/// Traces and writes the hit file; returns the exit status.
+int run_trace(const TraceArgs& args);
+
+}  // namespace rp::cli
