@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cerrno>
 #include <charconv>
@@ -43,15 +44,89 @@ struct BinaryFormat {
 constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 32};
 constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 28};
 
-constexpr const char* kRayCsvHeader = "ox,oy,oz,dx,dy,dz,tnear,tfar";
-constexpr const char* kHitCsvHeader = "t,prim_id,u,v,ng_x,ng_y,ng_z";
+/// The columns of a CSV file of one kind, in the order the writer writes them (line 1 of a
+/// written file is these names joined by commas); the first `required` must be in every file,
+/// the others default to `defaults` (text parsed like a value; null for required columns).
+struct CsvColumns {
+  std::array<const char*, 8> names;
+  size_t count, required;
+  std::array<const char*, 8> defaults;
+};
+constexpr CsvColumns kRayColumns{{"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"}, 8, 6,
+                                 {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "0", "inf"}};
+constexpr CsvColumns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z"}, 7, 7, {}};
 
 std::string errno_message(int e) { return std::generic_category().message(e); }
 
-bool is_csv(const std::string& path) {
+/// The format `path` names for a file of `fmt`'s kind: .csv (any case) CSV; .bin, .rays /
+/// .hits or no extension (devices such as /dev/stdout) binary; any other extension an error.
+bool is_csv(const std::string& path, const BinaryFormat& fmt) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".csv";
+  if (ext == ".csv") return true;
+  if (ext.empty() || ext == ".bin" || ext == std::string(".") + fmt.many) return false;
+  throw Error(cat(path, ": unknown ", fmt.kind, " file extension '", printable(ext), "' (.csv for text; .bin, .", fmt.many,
+                  " or none for binary)"));
+}
+
+/// `text` without blanks (spaces, tabs) at either end.
+std::string_view trim(std::string_view text) {
+  const size_t first = text.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return {};
+  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
+}
+
+/// The fields of one CSV line, blanks around each value dropped.
+std::vector<std::string_view> split_csv(std::string_view line) {
+  std::vector<std::string_view> out;
+  for (size_t start = 0;;) {
+    const size_t comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? comma : comma - start)));
+    if (comma == std::string_view::npos) return out;
+    start = comma + 1;
+  }
+}
+
+/// Line 1 of a CSV file of `columns`: for each column of the file, the field it holds. The
+/// line may start with a UTF-8 byte order mark (spreadsheets) and '#' (numpy.savetxt's
+/// header), and names may have blanks around them. Returns an empty vector with `why` set when
+/// the line is no such header.
+std::vector<size_t> parse_header(std::string_view line, const CsvColumns& columns, std::string& why) {
+  const std::string expected = [&] {
+    std::string all;
+    for (size_t f = 0; f < columns.count; ++f) all += cat(f ? "," : "", columns.names[f]);
+    return all;
+  }();
+  if (line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
+  line = trim(line);
+  if (line.starts_with('#')) line = trim(line.substr(1));
+  std::vector<size_t> field;
+  std::array<bool, 8> seen{};
+  for (const std::string_view name : split_csv(line)) {
+    size_t f = 0;
+    while (f < columns.count && name != columns.names[f]) ++f;
+    if (f == columns.count) {
+      why = field.empty() ? cat("expected a header naming the columns (", expected, ")")
+                                          : cat("unknown column '", printable(name), "' (columns: ", expected, ")");
+      return {};
+    }
+    if (seen[f]) {
+      why = cat("column '", name, "' appears twice");
+      return {};
+    }
+    seen[f] = true;
+    field.push_back(f);
+  }
+  for (size_t f = 0; f < columns.required; ++f)
+    if (!seen[f]) {
+      why = columns.required == columns.count
+                ? cat("no column '", columns.names[f], "' (columns: ", expected, ")")
+                : cat("no column '", columns.names[f], "' (columns: ", expected, "; all but ",
+                      columns.names[columns.required], columns.count - columns.required > 1 ? " and the ones after it" : "",
+                      " are needed)");
+      return {};
+    }
+  return field;
 }
 
 /// count * k in decimal, exact even when the product does not fit in 64 bits.
@@ -114,10 +189,12 @@ class InputFile {
 };
 
 /// True when `in` is CSV: by the extension of its path, or for standard input ("-") by its
-/// first line being `header`.
-bool is_csv(const InputFile& in, std::string_view header) {
-  if (in.path() == "-") return in.memory().starts_with(header);
-  return is_csv(in.path());
+/// first line being a header of `columns`.
+bool is_csv(const InputFile& in, const BinaryFormat& fmt, const CsvColumns& columns) {
+  if (in.path() != "-") return is_csv(in.path(), fmt);
+  const std::string_view text = in.memory();
+  std::string why;
+  return !parse_header(text.substr(0, text.find('\n')), columns, why).empty();
 }
 
 /// The bytes of a binary file, read in order; their total is known up front.
@@ -295,34 +372,32 @@ uint32_t parse_prim_id(const CsvPlace& at, std::string_view s) {
   return v == -1 ? kInvalidId : uint32_t(v);
 }
 
-/// Reads a CSV file whose line 1 is `header` and whose other lines hold N values each, turned
-/// into a Record by make(place, values).
-template <size_t N, typename Record, typename Make>
-std::vector<Record> read_csv(InputFile& in, std::string_view header, Make make) {
+/// Reads a CSV file of `columns` (line 1 names them, see parse_header; every other line holds
+/// one value per column), each line turned into a Record by make(place, values), the values in
+/// the order of `columns` with the defaults for absent ones.
+template <typename Record, typename Make>
+std::vector<Record> read_csv(InputFile& in, const CsvColumns& columns, Make make) {
   const std::string& path = in.path();
   LineReader lines(in);
   std::string_view line;
-  if (!lines.next(line) || line != header)
-    throw Error(cat(path, ": line 1: expected the header '", header, "'"));
+  std::string why = "empty file: expected a header naming the columns";
+  const std::vector<size_t> field = lines.next(line) ? parse_header(line, columns, why) : std::vector<size_t>();
+  if (field.empty()) throw Error(cat(path, ": line 1: ", why));
   std::vector<Record> out;
   uint64_t blank = 0;  // first blank line seen; fine only if nothing follows it
-  std::string_view values[N];
+  std::string_view values[8];
+  for (size_t f = columns.required; f < columns.count; ++f) values[f] = columns.defaults[f];
   while (lines.next(line)) {
-    if (line.empty()) {
+    if (trim(line).empty()) {
       if (blank == 0) blank = lines.number();
       continue;
     }
     if (blank != 0) throw Error(cat(path, ": line ", blank, ": blank line before the end of the data"));
-    size_t n = 0;
-    for (size_t start = 0;;) {
-      const size_t comma = line.find(',', start);
-      const std::string_view value = line.substr(start, comma == std::string_view::npos ? comma : comma - start);
-      if (n < N) values[n] = value;
-      ++n;
-      if (comma == std::string_view::npos) break;
-      start = comma + 1;
-    }
-    if (n != N) throw Error(cat(path, ": line ", lines.number(), ": ", n, n == 1 ? " value" : " values", ", expected ", N));
+    const std::vector<std::string_view> v = split_csv(line);
+    if (v.size() != field.size())
+      throw Error(cat(path, ": line ", lines.number(), ": ", v.size(), v.size() == 1 ? " value" : " values", ", expected ",
+                      field.size()));
+    for (size_t c = 0; c < v.size(); ++c) values[field[c]] = v[c];
     out.push_back(make(CsvPlace{path, lines.number()}, values));
   }
   return out;
@@ -339,11 +414,12 @@ void append_float(std::string& s, float x) {
   s.append(buf, r.ptr);
 }
 
-/// Writes `header` and one line per record, formed by line(record, text).
+/// Writes the names of `columns` and one line per record, formed by line(record, text).
 template <typename Record, typename Line>
-void write_csv(const std::string& path, std::string_view header, std::span<const Record> records, Line line) {
+void write_csv(const std::string& path, const CsvColumns& columns, std::span<const Record> records, Line line) {
   OutputFile out(path);
-  std::string text(header);
+  std::string text;
+  for (size_t f = 0; f < columns.count; ++f) text += cat(f ? "," : "", columns.names[f]);
   text += '\n';
   for (const Record& r : records) {
     line(r, text);
@@ -359,10 +435,18 @@ void write_csv(const std::string& path, std::string_view header, std::span<const
 
 }  // namespace
 
+void check_ray_file_name(const std::string& path) {
+  if (path != "-") is_csv(path, kRayFormat);
+}
+
+void check_hit_file_name(const std::string& path) {
+  if (path != "-") is_csv(path, kHitFormat);
+}
+
 std::vector<Ray> read_rays(const std::string& path) {
   InputFile in(path);
-  if (!is_csv(in, kRayCsvHeader)) return read_binary<Ray>(in, kRayFormat, decode_ray);
-  return read_csv<8, Ray>(in, kRayCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+  if (!is_csv(in, kRayFormat, kRayColumns)) return read_binary<Ray>(in, kRayFormat, decode_ray);
+  return read_csv<Ray>(in, kRayColumns, [](const CsvPlace& at, const std::string_view* s) {
     Ray r;
     r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
     r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
@@ -373,8 +457,8 @@ std::vector<Ray> read_rays(const std::string& path) {
 }
 
 void write_rays(const std::string& path, std::span<const Ray> rays) {
-  if (!is_csv(path)) return write_binary(path, kRayFormat, rays, encode_ray);
-  write_csv(path, kRayCsvHeader, rays, [](const Ray& r, std::string& s) {
+  if (!is_csv(path, kRayFormat)) return write_binary(path, kRayFormat, rays, encode_ray);
+  write_csv(path, kRayColumns, rays, [](const Ray& r, std::string& s) {
     const float v[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
     for (int i = 0; i < 8; ++i) {
       if (i) s += ',';
@@ -385,8 +469,8 @@ void write_rays(const std::string& path, std::span<const Ray> rays) {
 
 std::vector<HitRecord> read_hits(const std::string& path) {
   InputFile in(path);
-  if (!is_csv(in, kHitCsvHeader)) return read_binary<HitRecord>(in, kHitFormat, decode_hit);
-  return read_csv<7, HitRecord>(in, kHitCsvHeader, [](const CsvPlace& at, const std::string_view* s) {
+  if (!is_csv(in, kHitFormat, kHitColumns)) return read_binary<HitRecord>(in, kHitFormat, decode_hit);
+  return read_csv<HitRecord>(in, kHitColumns, [](const CsvPlace& at, const std::string_view* s) {
     HitRecord h;
     h.t = parse_float(at, s[0]);
     h.prim_id = parse_prim_id(at, s[1]);
@@ -398,8 +482,8 @@ std::vector<HitRecord> read_hits(const std::string& path) {
 }
 
 void write_hits(const std::string& path, std::span<const HitRecord> hits) {
-  if (!is_csv(path)) return write_binary(path, kHitFormat, hits, encode_hit);
-  write_csv(path, kHitCsvHeader, hits, [](const HitRecord& h, std::string& s) {
+  if (!is_csv(path, kHitFormat)) return write_binary(path, kHitFormat, hits, encode_hit);
+  write_csv(path, kHitColumns, hits, [](const HitRecord& h, std::string& s) {
     append_float(s, h.t);
     s += ',';
     s += h.prim_id == kInvalidId ? std::string("-1") : std::to_string(h.prim_id);

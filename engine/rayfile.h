@@ -2,14 +2,15 @@
 /// Ray and hit files: the batches that cross the backend seam, saved to disk so a trace can
 /// be replayed, diffed between backends or produced by another program.
 ///
-/// Two formats each, chosen by the extension: `.csv` (any case: `.CSV`, `.Csv`) is text,
-/// every other extension (or none) is binary. Both are described byte for byte below.
+/// Two formats each, chosen by the extension (any case): `.csv` is text; `.bin`, `.rays` (ray
+/// files) or `.hits` (hit files), or no extension at all (devices such as /dev/stdout), is
+/// binary; any other extension is an error naming it. Both formats are described below.
 /// Reading follows engine/input_file.h (regular files only); the name "-" reads standard
 /// input, CSV when it starts with the CSV header line, else binary. Writing follows
 /// engine/output_file.h (complete or absent; devices such as /dev/null written into, never
 /// replaced).
 ///
-/// Binary ray file (extension not .csv): a 16-byte header, then `count` 32-byte records.
+/// Binary ray file: a 16-byte header, then `count` 32-byte records.
 /// Every field is little-endian; floats are IEEE-754 binary32 stored bit for bit (-0, inf,
 /// NaN payloads and denormals survive a round trip unchanged).
 /// ```
@@ -33,19 +34,24 @@
 /// ```
 /// The file is exactly 16 + 28 * count bytes.
 ///
-/// CSV ray file: UTF-8/ASCII text, lines end in "\n" or "\r\n". Line 1 is exactly
-/// `ox,oy,oz,dx,dy,dz,tnear,tfar`; each following line is one ray as 8 comma-separated
-/// numbers in that order, no spaces, no quotes. Numbers are what std::from_chars accepts
-/// for float (decimal or exponent notation, optional leading '-', `inf`, `-inf`, `nan`,
-/// `-nan`, case-insensitive; no '+', no hex) and must be within the float32 range.
-/// Blank lines are accepted only at the end of the file. The writer formats every float as
+/// CSV ray file: UTF-8/ASCII text, lines end in "\n" or "\r\n". Line 1 names the columns,
+/// comma-separated, in any order: `ox,oy,oz,dx,dy,dz` are needed, `tnear` and `tfar` are
+/// optional (0 and inf when absent); it may start with a UTF-8 byte order mark (spreadsheets)
+/// and with '#' (numpy.savetxt's `header=`), and names may have blanks around them. Each
+/// following line is one ray, one value per column, blanks around a value allowed, no
+/// quotes. Numbers are what std::from_chars accepts for float (decimal or exponent notation,
+/// optional leading '-', `inf`, `-inf`, `nan`, `-nan`, case-insensitive; no '+', no hex) and
+/// must be within the float32 range. Blank lines are accepted only at the end of the file.
+/// The writer writes line 1 as `ox,oy,oz,dx,dy,dz,tnear,tfar` and formats every float as
 /// printf's `%.9g` in the C locale (std::to_chars, general, precision 9), which reads back
 /// to the same bits for every finite value, ±0 and ±inf; every NaN is written `nan`, so a
 /// NaN's sign and payload do not survive CSV. The writer ends every line with "\n".
+/// A numpy array `a` of shape (n, 8) is written so with
+/// `numpy.savetxt("rays.csv", a, delimiter=",", header="ox,oy,oz,dx,dy,dz,tnear,tfar")`.
 ///
-/// CSV hit file: the same rules with line 1 exactly `t,prim_id,u,v,ng_x,ng_y,ng_z` and 7
-/// values per line. prim_id is a decimal integer in [-1, 4294967294]; -1 stands for
-/// kInvalidId (a miss), so a default HitRecord (a miss) is written `inf,-1,0,0,0,0,0`.
+/// CSV hit file: the same rules with the columns `t,prim_id,u,v,ng_x,ng_y,ng_z`, all needed.
+/// prim_id is a decimal integer in [-1, 4294967294]; -1 stands for kInvalidId (a miss), so a
+/// default HitRecord (a miss) is written `inf,-1,0,0,0,0,0`.
 ///
 /// Every failure throws rp::Error with a one-line message that starts with the path and
 /// names the line (CSV) or the counts and byte sizes (binary), e.g.
@@ -74,18 +80,23 @@ struct HitRecord {
   Vec3f ng{};                                         ///< unit geometric normal; (0,0,0) on a miss
 };
 
-/// Reads rays from `path`: CSV when the extension is .csv (case-insensitive), else the binary
-/// format. Reads only; any malformed byte or line throws rp::Error naming the path and the
+/// Throws rp::Error naming `path` when its extension names no ray-file format (see the top of
+/// this header), so a command can refuse the name before any work.
+void check_ray_file_name(const std::string& path);
+
+/// The same for hit files.
+void check_hit_file_name(const std::string& path);
+
+/// Reads rays from `path` in the format its extension names (standard input "-": CSV when
+/// line 1 is a ray-file header, else binary). Reads only; any malformed byte or line throws rp::Error naming the path and the
 /// line or byte count (see the top of this header for the formats and messages).
 std::vector<Ray> read_rays(const std::string& path);
 
-/// Writes `rays` to `path` in the format the extension selects (.csv, any case: CSV; else
-/// binary), by rp::OutputFile: `path` is never half-written; on failure rp::Error
+/// Writes `rays` to `path` in the format its extension names, by rp::OutputFile: `path` is never half-written; on failure rp::Error
 /// `<path>: cannot write: <reason>` is thrown and no temporary file is left.
 void write_rays(const std::string& path, std::span<const Ray> rays);
 
-/// Reads hits from `path`: CSV when the extension is .csv (case-insensitive), else the binary
-/// format. Reads only; errors as read_rays (a ray file is rejected by its magic 'RPRY').
+/// Reads hits from `path` in the format its extension names. Reads only; errors as read_rays (a ray file is rejected by its magic 'RPRY').
 std::vector<HitRecord> read_hits(const std::string& path);
 
 /// Writes `hits` to `path` in the format the extension selects, by rp::OutputFile exactly as

@@ -697,7 +697,7 @@ Scene transformed(const Scene& s, double scale, const Vec3d& off) {
 
 std::vector<Result> run(const Scene& base, const Options& o) {
   RP_CHECK(o.make_backend, "stability: no backend factory");
-  RP_CHECK(o.rays >= 1 && o.rays <= 1u << 22, "stability: --rays ", o.rays, " is out of range (1..4194304)");
+  RP_CHECK(o.rays >= 1 && o.rays <= 1u << 22, "stability: rays per family ", o.rays, " is out of range (1..4194304)");
   for (const std::string& name : o.families)
     RP_CHECK(std::any_of(kFamilies.begin(), kFamilies.end(), [&](const auto& f) { return f.first == name; }),
              "stability: unknown family '", name, "'");

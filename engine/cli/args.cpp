@@ -107,6 +107,14 @@ void check_method(const std::string& backend_flag, const std::string& backend, c
     throw UsageError(cat(p->variant ? variant_flag : backend_flag, ": ", p->message));
 }
 
+void check_file_name(const std::string& flag, const std::string& path, void (*check)(const std::string&)) {
+  try {
+    check(path);
+  } catch (const Error& e) {
+    throw UsageError(cat(flag, ": ", e.what()));
+  }
+}
+
 Scene load_scene_or_default(const std::string& path) {
   return with_memory_context("loading " + path, [&] { return load_scene(path); });
 }

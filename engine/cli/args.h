@@ -62,6 +62,10 @@ class ThreadLimit {
 void check_method(const std::string& backend_flag, const std::string& backend, const std::string& variant_flag,
                   const std::string& variant);
 
+/// Throws UsageError naming `flag` when check(path) (e.g. rp::check_ray_file_name) refuses
+/// the file name, so a bad name is found before any work.
+void check_file_name(const std::string& flag, const std::string& path, void (*check)(const std::string&));
+
 /// The scene at `path` ('default' or a file), with an out-of-memory failure named as such.
 Scene load_scene_or_default(const std::string& path);
 

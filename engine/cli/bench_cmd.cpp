@@ -263,6 +263,7 @@ int run_bench(const BenchArgs& a) {
   usage(a.ray_file.empty() || a.scenes.size() == 1, "bench: --rays needs exactly one --scene (the rays' scene), got ",
         a.scenes.size());
   usage(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
+  if (!a.ray_file.empty()) check_file_name("--rays", a.ray_file, check_ray_file_name);
   for (const std::string& k : a.kinds)
     usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
   const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);

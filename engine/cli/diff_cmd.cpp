@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
@@ -30,8 +31,9 @@ struct DiffSide {
 CLI::App* DiffArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
   c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
-  c->add_option("--rays", rays, "primary, diffuse, random, or a ray file")->capture_default_str();
-  c->add_option("--count", count, "Generated rays (primary: the nearest packet-aligned square image)")
+  CLI::Option* k = c->add_option("--kind", kind, "Generated rays: primary, diffuse or random")->capture_default_str();
+  c->add_option("--rays", rays, "A ray file (.csv, or binary: .bin, .rays) instead of generated rays")->excludes(k);
+  c->add_option("--count", count, "Generated rays (primary: the first COUNT of the smallest packet-aligned image)")
       ->capture_default_str();
   c->add_option("--seed", seed, "Seed of generated diffuse and random rays")->capture_default_str();
   c->add_option("-a", a, "Backend A, or 'reference'")->capture_default_str();
@@ -62,18 +64,30 @@ int run_diff(const DiffArgs& a) {
   const ThreadLimit limit(a.threads);
   if (a.count == 0 || a.count > (size_t(1) << 28))
     throw UsageError(cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
+  if (a.kind != "primary" && a.kind != "diffuse" && a.kind != "random")
+    throw UsageError(cat("--kind: '", a.kind, "' is not primary, diffuse or random"));
+  if ((a.rays == "primary" || a.rays == "diffuse" || a.rays == "random") && !std::filesystem::exists(a.rays))
+    throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
+  if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
   const Scene scene = load_scene_or_default(a.scene);
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
   RaySet set;
   Coherence coherence = Coherence::incoherent;
-  if (a.rays == "primary" || a.rays == "diffuse") {
+  if (!a.rays.empty()) {
+    set.rays = with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
+  } else if (a.kind == "primary" || a.kind == "diffuse") {
+    // The smallest image of 4x2-pixel packets with at least --count pixels; primary rays are
+    // its first --count rays.
     const int side = std::max(2, int(std::ceil(std::sqrt(double(a.count)))));
     const int w = (side + 3) / 4 * 4, h = (side + 1) / 2 * 2;
     set = primary_rays(scene, w, h);
     coherence = Coherence::coherent;
-    if (a.rays == "diffuse") {
+    if (a.kind == "primary") {
+      set.rays.resize(a.count);
+      set.pixel.resize(a.count);
+    } else {
       // Bounces from the primary hits (found by the reference), as many rounds of one bounce
       // per hit as it takes to reach --count rays.
       const Reference reference(scene);
@@ -100,11 +114,10 @@ int run_diff(const DiffArgs& a) {
       set = std::move(bounces);
       coherence = Coherence::incoherent;
     }
-  } else if (a.rays == "random") {
-    set = random_rays(scene, a.count, a.seed);
   } else {
-    set.rays = with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
+    set = random_rays(scene, a.count, a.seed);
   }
+  const std::string rays_label = a.rays.empty() ? a.kind : a.rays;
   if (!a.coherence.empty()) coherence = parse_coherence("--coherence", a.coherence);
 
   std::vector<ReferenceHit> ref;
@@ -131,13 +144,13 @@ int run_diff(const DiffArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   std::FILE* const out = a.quiet ? nullptr : stdout;
-  say(out, "raypack diff: scene %s, rays %s%s, %s\n%s", a.scene.c_str(), a.rays.c_str(),
+  say(out, "raypack diff: scene %s, rays %s%s, %s\n%s", a.scene.c_str(), rays_label.c_str(),
               a.reference ? ", reference: double-precision watertight" : "",
               coherence == Coherence::coherent ? "coherent (packets)" : "incoherent (single rays)",
               format_table(d, sa.label, sb.label).c_str());
   say(out, "(%.2f s)\n", seconds);
   if (!a.json.empty()) {
-    const std::string text = to_json(d, a.scene, a.rays, sa.label, sb.label, options);
+    const std::string text = to_json(d, a.scene, rays_label, sa.label, sb.label, options);
     write_file(a.json, text);
   }
   if (!a.image.empty()) write_image(a.image, mismatch_image(d, set, sa.hits));

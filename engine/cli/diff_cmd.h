@@ -15,7 +15,9 @@ class App;
 namespace rp::cli {
 
 struct DiffArgs {
-  std::string scene = "default", rays = "primary";
+  std::string scene = "default";
+  std::string kind = "primary";  ///< generated rays: primary, diffuse or random
+  std::string rays;              ///< a ray file instead of generated rays
   size_t count = 1 << 20;
   uint64_t seed = 1;
   std::string a{kDefaultBackend}, b = "simd", variant_a = "default", variant_b = "default";

@@ -67,7 +67,7 @@ CLI::App* StabilityArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("stability", "Failure rates per method and ray family where intersection methods fail");
   c->add_option("--scene", scene, "Scene: 'default' or a file; its meshes give the mesh families")
       ->capture_default_str();
-  c->add_option("--rays", rays, "Rays per family")->check(CLI::Range(1, 1 << 22))->capture_default_str();
+  c->add_option("--count", count, "Rays per family")->check(CLI::Range(1, 1 << 22))->capture_default_str();
   c->add_option("--seed", seed, "Seed of every family's rays")->capture_default_str();
   c->add_option("--t-tolerance", t_tolerance, "Relative t difference counted as an error")
       ->check(CLI::Range(0.0, 1.0))
@@ -104,7 +104,7 @@ int run_stability(const StabilityArgs& a) {
   }
   const ThreadLimit limit(a.threads);
   stability::Options o;
-  o.rays = a.rays;
+  o.rays = a.count;
   o.seed = a.seed;
   o.t_tolerance = a.t_tolerance;
   o.families = a.families;
@@ -139,7 +139,7 @@ int run_stability(const StabilityArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::FILE* const out = a.quiet ? nullptr : stdout;
   say(out, "raypack stability: scene %s, %u rays per family, seed %llu, t tolerance %g (relative)\n",
-              a.scene.c_str(), a.rays, (unsigned long long)a.seed, a.t_tolerance);
+      a.scene.c_str(), a.count, (unsigned long long)a.seed, a.t_tolerance);
   if (out) stability::print_table(out, results);
   say(out, "(%.1f s)\n", seconds);
   if (!a.json.empty()) write_file(a.json, stability::to_json(results, a.scene, o));

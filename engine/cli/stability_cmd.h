@@ -14,7 +14,7 @@ namespace rp::cli {
 
 struct StabilityArgs {
   std::string scene = "default";
-  uint32_t rays = 4096;
+  uint32_t count = 4096;  ///< rays per family
   uint64_t seed = 1;
   double t_tolerance = 1e-4;
   std::vector<std::string> methods;   ///< backend/variant; empty: every variant worth comparing

@@ -29,8 +29,8 @@ std::vector<HitRecord> to_records(const Scene& scene, std::span<const Ray> rays,
 CLI::App* TraceArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");
   c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
-  c->add_option("--rays", rays, "Ray file (.csv, or the binary format)")->required();
-  c->add_option("-o,--output", output, "Hit file (.csv, or the binary format)")->required();
+  c->add_option("--rays", rays, "Ray file: .csv, or binary (.bin, .rays)")->required();
+  c->add_option("-o,--output", output, "Hit file: .csv, or binary (.bin, .hits)")->required();
   c->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
   c->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
   c->add_option("--coherence", coherence, "coherent (neighbouring rays as packets) or incoherent")->capture_default_str();
@@ -42,6 +42,8 @@ CLI::App* TraceArgs::add_to(CLI::App& app) {
 int run_trace(const TraceArgs& a) {
   check_method("--backend", a.backend, "--variant", a.variant);
   const Coherence coherence = parse_coherence("--coherence", a.coherence);
+  check_file_name("--rays", a.rays, check_ray_file_name);
+  check_file_name("-o", a.output, check_hit_file_name);
   const ThreadLimit limit(a.threads);
   const Scene scene = load_scene_or_default(a.scene);
   const std::vector<Ray> rays = with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });

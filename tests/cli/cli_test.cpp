@@ -133,7 +133,7 @@ TEST_F(Cli, QuietPrintsNothingOnSuccessInEverySubcommand) {
        {"render --resolution 8x8 -o " + (dir_ / "x.png").string(),
         "trace --rays " + rays.string() + " -o " + (dir_ / "hits.csv").string(), std::string("diff --count 64"),
         "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --json " + json.string(),
-        std::string("stability --rays 8 --family edges --method embree/default")}) {
+        std::string("stability --count 8 --family edges --method embree/default")}) {
     const Result r = run(args + " -q");
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_EQ(r.output, "") << args;
@@ -206,6 +206,23 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
   EXPECT_EQ(fs::file_size(bin), 16u + 2u * 28u);
 }
 
+TEST_F(Cli, AFileNameWithAnUnknownExtensionIsABadFlagFoundBeforeAnyWork) {
+  const fs::path rays = dir_ / "rays.csv";
+  std::ofstream(rays) << "ox,oy,oz,dx,dy,dz\n5,10,5,0,-1,0\n";
+  Result r = run("trace --rays " + rays.string() + " -o " + (dir_ / "hits.txt").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: -o: " + (dir_ / "hits.txt").string() +
+                          ": unknown hit file extension '.txt' (.csv for text; .bin, .hits or none for binary)\n");
+  EXPECT_FALSE(fs::exists(dir_ / "hits.txt"));
+  for (const std::string& cmd : {"trace -o " + (dir_ / "h.bin").string() + " --rays", std::string("diff --rays"),
+                                 std::string("bench --rays")}) {
+    r = run(cmd + " " + (dir_ / "rays.json").string());
+    EXPECT_EQ(r.status, 2) << cmd << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("raypack: --rays: " + (dir_ / "rays.json").string() + ": unknown ray file extension '.json'", 0), 0u)
+        << cmd << ": " << r.output;
+  }
+}
+
 TEST_F(Cli, TraceRejectsAMalformedRayFileWithStatusOne) {
   const fs::path rays = dir_ / "bad.csv";
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3\n";
@@ -217,9 +234,10 @@ TEST_F(Cli, TraceRejectsAMalformedRayFileWithStatusOne) {
 
 TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
   const fs::path json = dir_ / "d.json", image = dir_ / "d.png";
-  Result r = run("diff --rays primary --count 4096 -a embree -b simd --json " + json.string() + " --image " +
+  Result r = run("diff --kind primary --count 4096 -a embree -b simd --json " + json.string() + " --image " +
                  image.string() + " --min-agreement 99");
   ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("\n4096 rays, embree/default (A) vs simd/default (B)"), std::string::npos) << r.output;
   for (const char* word : {"agree", "tie", "hit/miss", "wrong primitive", "t error", "reference supports"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   EXPECT_NE(file_bytes(json).find("\"agreement\""), std::string::npos);
@@ -227,11 +245,24 @@ TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
   // A backend against the reference itself, demanding more agreement than float can give on
   // a scene with shared edges, must fail with status 3 when it falls short; 0 disagreements
   // would pass, so check the status matches the printed agreement.
-  r = run("diff --rays random --count 20000 -a simd -b reference --min-agreement 100");
+  r = run("diff --kind random --count 20000 -a simd -b reference --min-agreement 100");
   const bool perfect = r.output.find("agreement 100.00000%") != std::string::npos;
   EXPECT_EQ(r.status, perfect ? 0 : 3) << r.output;
   r = run("diff --rays nowhere.rays");
   EXPECT_EQ(r.status, 1) << r.output;
+  // --count is the number of rays traced, for every kind, not a rounded image size.
+  for (const char* kind : {"primary", "diffuse", "random"}) {
+    r = run(std::string("diff --count 100 --kind ") + kind);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("\n100 rays, "), std::string::npos) << kind << ": " << r.output;
+  }
+  // --rays is a ray file in every command; generated rays are a --kind.
+  r = run("diff --rays primary");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: --rays: there is no ray file 'primary'; generated rays are chosen with --kind primary\n");
+  r = run("diff --kind secondary");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: --kind: 'secondary' is not primary, diffuse or random\n");
 }
 
 TEST_F(Cli, InfoCountsTheScene) {

@@ -272,10 +272,53 @@ TEST(RayFileCsv, ExtensionIsCaseInsensitive) {
     EXPECT_EQ(read_bytes(tmp / name), "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,0,0,-1,0,10\n") << name;
     EXPECT_EQ(bits(read_rays(tmp / name).at(0)), bits(rays[0])) << name;
   }
-  for (const char* name : {"d.csv.bin", "e.txt", "csv"}) {
+  for (const char* name : {"d.csv.bin", "e.RAYS", "csv"}) {
     write_rays(tmp / name, rays);
     EXPECT_EQ(read_bytes(tmp / name).substr(0, 4), "RPRY") << name;
   }
+  // Any other extension names no format: refused on writing and reading, naming it.
+  for (const char* name : {"e.txt", "f.json", "g.hits"}) {
+    const std::string p = tmp / name, ext = fs::path(name).extension().string();
+    const std::string want = p + ": unknown ray file extension '" + ext + "' (.csv for text; .bin, .rays or none for binary)";
+    EXPECT_EQ(error_of([&] { write_rays(p, rays); }), want);
+    EXPECT_EQ(error_of([&] { check_ray_file_name(p); }), want);
+    write_bytes(p, "ox,oy,oz,dx,dy,dz\n");
+    EXPECT_EQ(error_of([&] { read_rays(p); }), want);
+  }
+  EXPECT_EQ(error_of([&] { write_hits(tmp / "h.rays", {}); }),
+            tmp / "h.rays" + ": unknown hit file extension '.rays' (.csv for text; .bin, .hits or none for binary)");
+}
+
+TEST(RayFileCsv, ReadsWhatNumpyAndSpreadsheetsWrite) {
+  TempDir tmp;
+  const std::string path = tmp / "np.csv";
+  const float inf = std::numeric_limits<float>::infinity();
+  // numpy.savetxt(..., delimiter=",", header=...): '# ' before the names, %.18e values.
+  write_bytes(path,
+              "# ox,oy,oz,dx,dy,dz,tnear,tfar\n"
+              "1.000000000000000000e+00,2.000000000000000000e+00,3.000000000000000000e+00,0.000000000000000000e+00,"
+              "0.000000000000000000e+00,-1.000000000000000000e+00,0.000000000000000000e+00,inf\n");
+  std::vector<Ray> rays = read_rays(path);
+  ASSERT_EQ(rays.size(), 1u);
+  EXPECT_EQ(bits(rays[0]), bits(Ray{{1, 2, 3}, 0, {0, 0, -1}, inf}));
+  // A spreadsheet: byte order mark, blanks after commas, columns in another order, CRLF; no
+  // tnear or tfar (0 and inf).
+  write_bytes(path, "\xEF\xBB\xBF dx, dy, dz, ox, oy, oz\r\n0, 0, -1, 1, 2, 3\r\n\t0 ,1,0 , 4,5,6\r\n");
+  rays = read_rays(path);
+  ASSERT_EQ(rays.size(), 2u);
+  EXPECT_EQ(bits(rays[0]), bits(Ray{{1, 2, 3}, 0, {0, 0, -1}, inf}));
+  EXPECT_EQ(bits(rays[1]), bits(Ray{{4, 5, 6}, 0, {0, 1, 0}, inf}));
+  write_bytes(path, "tfar,ox,oy,oz,dx,dy,dz,tnear\n10,1,2,3,0,0,-1,0.5\n");
+  EXPECT_EQ(bits(read_rays(path).at(0)), bits(Ray{{1, 2, 3}, 0.5f, {0, 0, -1}, 10}));
+  // Hits: every column needed, any order.
+  write_bytes(path, "#ng_x,ng_y,ng_z,t,u,v,prim_id\n0,1,0,2.5,0.25,0.5,7\n");
+  const std::vector<HitRecord> hits = read_hits(path);
+  ASSERT_EQ(hits.size(), 1u);
+  EXPECT_EQ(hits[0].t, 2.5f);
+  EXPECT_EQ(hits[0].prim_id, 7u);
+  EXPECT_EQ(hits[0].u, 0.25f);
+  EXPECT_EQ(hits[0].v, 0.5f);
+  EXPECT_EQ(hits[0].ng, (Vec3f{0, 1, 0}));
 }
 
 TEST(RayFileCsv, AcceptsCrlfAndTrailingBlankLines) {
@@ -416,19 +459,28 @@ TEST(RayFileErrors, TruncatedDataAndTrailingBytes) {
   EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (56 bytes) but 55 bytes follow it");
 }
 
-TEST(RayFileErrors, CsvHeaderMustMatchExactly) {
+TEST(RayFileErrors, CsvHeaderMustNameTheColumns) {
   TempDir tmp;
   const std::string p = tmp / "h.csv";
-  const std::string want_rays = p + ": line 1: expected the header 'ox,oy,oz,dx,dy,dz,tnear,tfar'";
-  const std::string want_hits = p + ": line 1: expected the header 't,prim_id,u,v,ng_x,ng_y,ng_z'";
-  for (const char* text : {"", "\n", "ox,oy,oz,dx,dy,dz,tnear\n", "ox, oy, oz, dx, dy, dz, tnear, tfar\n",
-                           "1,2,3,4,5,6,0,1\n", "OX,OY,OZ,DX,DY,DZ,TNEAR,TFAR\n"}) {
+  const std::string rays = "ox,oy,oz,dx,dy,dz,tnear,tfar", hits = "t,prim_id,u,v,ng_x,ng_y,ng_z";
+  const std::pair<std::string, std::string> cases[] = {
+      {"", "empty file: expected a header naming the columns"},
+      {"\n", "expected a header naming the columns (" + rays + ")"},
+      {"1,2,3,4,5,6,0,1\n", "expected a header naming the columns (" + rays + ")"},
+      {"OX,OY,OZ,DX,DY,DZ\n", "expected a header naming the columns (" + rays + ")"},
+      {"ox,oy,oz,dx,dy,dz,t\n", "unknown column 't' (columns: " + rays + ")"},
+      {"ox,oy,oz,dx,dy,dz,,\n", "unknown column '' (columns: " + rays + ")"},
+      {"ox,oy,oz,dx,dy,ox\n", "column 'ox' appears twice"},
+      {"ox,oy,oz,dx,dy,tnear,tfar\n",
+       "no column 'dz' (columns: " + rays + "; all but tnear and the ones after it are needed)"}};
+  for (const auto& [text, why] : cases) {
     write_bytes(p, text);
-    EXPECT_EQ(error_of([&] { read_rays(p); }), want_rays) << text;
-    EXPECT_EQ(error_of([&] { read_hits(p); }), want_hits) << text;
+    EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 1: " + why) << text;
   }
   write_rays(p, std::vector<Ray>(1));
-  EXPECT_EQ(error_of([&] { read_hits(p); }), want_hits);
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 1: expected a header naming the columns (" + hits + ")");
+  write_bytes(p, "t,prim_id,u,v,ng_x,ng_y\n");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 1: no column 'ng_z' (columns: " + hits + ")");
 }
 
 TEST(RayFileErrors, CsvWrongValueCounts) {
@@ -455,9 +507,9 @@ TEST(RayFileErrors, CsvNonNumbers) {
   write_bytes(p, head + good + "1,2,abc,4,5,6,0,1\n");
   EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": line 3: 'abc' is not a number");
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"1,,3,4,5,6,0,1", "''"},      {"1,2,3,4,5,6,0, 1", "' 1'"}, {"+1,2,3,4,5,6,0,1", "'+1'"},
+      {"1,,3,4,5,6,0,1", "''"},      {"1,2,3,4,5,6,0, ", "''"}, {"+1,2,3,4,5,6,0,1", "'+1'"},
       {"1,2,3,4,5,6,0,1e", "'1e'"},  {"1,2,3,0x10,5,6,0,1", "'0x10'"},
-      {"1,2,3,4,5,6,0,1\t", "'1?'"}, {"1,2,3,4,5,6,0,\"1\"", "'\"1\"'"},
+      {"1,2,3,4,5,6,0,1\v", "'1?'"}, {"1,2,3,4,5,6,0,\"1\"", "'\"1\"'"}, {"1,2,3,4,5,6,0,1 2", "'1 2'"},
       {"1,2,3,4,5,6,0," + std::string(40, 'z'), "'" + std::string(32, 'z') + "...'"}};
   for (const auto& [line, shown] : cases) {
     write_bytes(p, head + line + "\n");
