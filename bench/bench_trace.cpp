@@ -4,7 +4,7 @@
 // threads (TBB; --threads=N or the core count); primary and shadow rays as coherent spans,
 // diffuse rays as single rays. Scenes: the embedded default and, when ../shared/scenes is
 // present, bunny.obj, dragon.ply and Sponza from inside (bench/scenes/sponza-inside.json).
-// Rays from engine/raygen.h.
+// Rays from engine/analysis/raygen.h.
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -24,8 +24,8 @@
 
 #include "backends/registry.h"
 #include "engine/loaders/load.h"
-#include "engine/raygen.h"
-#include "engine/reference.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
 #include "engine/scene.h"
 
 #ifndef RP_SOURCE_DIR
@@ -43,7 +43,7 @@ struct RaySets {
 };
 
 /// 1024x1024 primary rays in 4x2 packets, then shadow and diffuse rays from their hits
-/// (engine/raygen.h), the hits taken from `backend`.
+/// (engine/analysis/raygen.h), the hits taken from `backend`.
 RaySets make_rays(const Scene& scene, const Backend& backend) {
   const RaySet primary = primary_rays(scene, 1024, 1024);
   std::vector<Hit> hits(primary.rays.size());

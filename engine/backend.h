@@ -51,4 +51,16 @@ class Backend {
   virtual const BackendInfo& info() const noexcept = 0;
 };
 
+/// Rays a parallel batch hands each task: whole 8-ray packets, and enough work per task to
+/// pay for the scheduling.
+inline constexpr size_t kParallelChunk = 4096;
+
+/// Traces a batch with all threads (TBB) in chunks of kParallelChunk rays, each chunk one call
+/// of backend.intersect (so a coherent span stays whole within a chunk).
+void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence);
+
+/// The same for any hits.
+void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint8_t> occluded,
+                       Coherence coherence);
+
 }  // namespace rp

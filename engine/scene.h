@@ -87,7 +87,7 @@ struct PolygonShape {
   uint32_t material = 0;
 };
 
-/// How a camera maps image positions to rays (engine/camera.h).
+/// How a camera maps image positions to rays (engine/render/camera.h).
 enum class CameraModel : uint8_t {
   pinhole,    ///< the seeds' planar projection
   panoramic,  ///< cylindrical, 360 degrees around the up axis

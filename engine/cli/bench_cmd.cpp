@@ -20,15 +20,15 @@
 #include "engine/cli/args.h"
 #include "engine/cli/build_info.h"
 #include "engine/cli/plot.h"
-#include "engine/diff.h"
+#include "engine/analysis/diff.h"
 #include "engine/error.h"
 #include "engine/input_file.h"
 #include "engine/json_text.h"
 #include "engine/output_file.h"
 #include "engine/loaders/load.h"
-#include "engine/raygen.h"
+#include "engine/analysis/raygen.h"
 #include "engine/rayfile.h"
-#include "engine/reference.h"
+#include "engine/analysis/reference.h"
 #include "engine/text.h"
 
 namespace rp::cli {

@@ -9,12 +9,12 @@
 
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
-#include "engine/diff.h"
-#include "engine/image_io.h"
+#include "engine/analysis/diff.h"
+#include "engine/render/image_io.h"
 #include "engine/output_file.h"
 #include "engine/rayfile.h"
-#include "engine/raygen.h"
-#include "engine/reference.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
 
 namespace rp::cli {
 

@@ -10,11 +10,11 @@
 #include <optional>
 #include <regex>
 
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
-#include "engine/image_io.h"
-#include "engine/render.h"
+#include "engine/render/image_io.h"
+#include "engine/render/render.h"
 
 namespace rp::cli {
 

@@ -14,7 +14,7 @@
 #include "engine/error.h"
 #include "engine/loaders/load.h"
 #include "engine/output_file.h"
-#include "engine/stability.h"
+#include "engine/analysis/stability.h"
 
 namespace rp::cli {
 

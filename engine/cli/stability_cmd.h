@@ -1,5 +1,5 @@
 #pragma once
-// `raypack stability`: failure rates per method × ray family (engine/stability.h) as a table,
+// `raypack stability`: failure rates per method × ray family (engine/analysis/stability.h) as a table,
 // JSON and a chart.
 
 #include <cstdint>

@@ -8,7 +8,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
 #include "engine/rayfile.h"
-#include "engine/raygen.h"
+#include "engine/analysis/raygen.h"
 #include "engine/text.h"
 
 namespace rp::cli {

@@ -13,9 +13,9 @@
 #include <tuple>
 
 #include "backends/registry.h"
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 #include "engine/error.h"
-#include "engine/render.h"
+#include "engine/render/render.h"
 #include "oracle.h"
 #include "tests/support/scenes.h"
 

@@ -6,9 +6,9 @@
 #include <cmath>
 
 #include "backends/registry.h"
-#include "engine/diff.h"
-#include "engine/raygen.h"
-#include "engine/reference.h"
+#include "engine/analysis/diff.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
 
 namespace rp {
 namespace {

@@ -25,7 +25,7 @@
 
 #include "backends/registry.h"
 #include "engine/geometry/triangle.h"
-#include "engine/raygen.h"
+#include "engine/analysis/raygen.h"
 #include "engine/scene.h"
 #include "tests/support/scenes.h"
 

@@ -7,7 +7,7 @@
 #include <cstdio>
 
 #include "backends/registry.h"
-#include "engine/render.h"
+#include "engine/render/render.h"
 
 namespace rp {
 namespace {

@@ -14,8 +14,8 @@
 #include "engine/geometry/quadric.h"
 #include "engine/geometry/triangle.h"
 #include "engine/loaders/load.h"
-#include "engine/reference.h"
-#include "engine/stability.h"
+#include "engine/analysis/reference.h"
+#include "engine/analysis/stability.h"
 
 namespace rp {
 namespace {

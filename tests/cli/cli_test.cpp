@@ -12,7 +12,7 @@
 #include <string>
 #include <tuple>
 
-#include "engine/image_io.h"
+#include "engine/render/image_io.h"
 #include "engine/rayfile.h"
 #include "engine/text.h"
 

@@ -7,9 +7,9 @@
 #include <random>
 #include <set>
 
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 #include "engine/error.h"
-#include "engine/render.h"
+#include "engine/render/render.h"
 
 namespace rp {
 namespace {

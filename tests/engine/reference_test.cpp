@@ -1,7 +1,7 @@
-// The double-precision reference (engine/reference.h): closed-form answers, watertightness,
+// The double-precision reference (engine/analysis/reference.h): closed-form answers, watertightness,
 // exact agreement with a brute-force double loop, invalid rays, the tie rule, determinism.
 
-#include "engine/reference.h"
+#include "engine/analysis/reference.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -22,7 +22,7 @@
 
 #include "backends/registry.h"
 #include "engine/rayfile.h"
-#include "engine/reference.h"
+#include "engine/analysis/reference.h"
 #include "tests/fuzz/fuzz_file.h"
 
 namespace {

@@ -3,7 +3,7 @@
 /// methods fail (SPEC section 9).
 ///
 /// Every family is a scene and a seeded set of float rays; the double-precision reference
-/// (engine/reference.h), exact for those float rays and float vertices, is the oracle. A
+/// (engine/analysis/reference.h), exact for those float rays and float vertices, is the oracle. A
 /// method is a backend variant (every family) or a scalar routine of engine/geometry (the
 /// families whose rays name the primitives they aim at: its "fan"). Each ray is classified
 /// against the reference; see Counts for the failure kinds and classify() in stability.cpp

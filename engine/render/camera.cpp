@@ -1,4 +1,4 @@
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 
 #include <algorithm>
 #include <cmath>

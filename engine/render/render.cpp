@@ -1,4 +1,4 @@
-#include "engine/render.h"
+#include "engine/render/render.h"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>

@@ -1,4 +1,4 @@
-#include "engine/image_io.h"
+#include "engine/render/image_io.h"
 
 #include <OpenImageIO/imageio.h>
 

@@ -1,12 +1,10 @@
-#include "engine/raygen.h"
-
-#include <tbb/parallel_for.h>
+#include "engine/analysis/raygen.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 #include "engine/error.h"
 #include "engine/offset.h"
 
@@ -108,25 +106,6 @@ RaySet random_rays(const Scene& scene, size_t count, uint64_t seed) {
     rs.rays.push_back({org, 0.0f, target - org, std::numeric_limits<float>::infinity()});
   }
   return rs;
-}
-
-namespace {
-constexpr size_t kChunk = 4096;
-}
-
-void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) {
-  tbb::parallel_for(size_t(0), (rays.size() + kChunk - 1) / kChunk, [&](size_t c) {
-    const size_t begin = c * kChunk, n = std::min(kChunk, rays.size() - begin);
-    backend.intersect(rays.subspan(begin, n), hits.subspan(begin, n), coherence);
-  });
-}
-
-void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint8_t> occluded,
-                       Coherence coherence) {
-  tbb::parallel_for(size_t(0), (rays.size() + kChunk - 1) / kChunk, [&](size_t c) {
-    const size_t begin = c * kChunk, n = std::min(kChunk, rays.size() - begin);
-    backend.occluded(rays.subspan(begin, n), occluded.subspan(begin, n), coherence);
-  });
 }
 
 }  // namespace rp

@@ -1,4 +1,4 @@
-#include "engine/diff.h"
+#include "engine/analysis/diff.h"
 
 #include <algorithm>
 #include <cmath>

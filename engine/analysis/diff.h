@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/raygen.h"
-#include "engine/reference.h"
-#include "engine/render.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
+#include "engine/render/render.h"
 #include "engine/scene.h"
 
 namespace rp {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "engine/backend.h"
-#include "engine/camera.h"
+#include "engine/render/camera.h"
 #include "engine/scene.h"
 
 namespace rp {

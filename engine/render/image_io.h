@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "engine/render.h"
+#include "engine/render/render.h"
 
 namespace rp {
 

@@ -1,4 +1,4 @@
-#include "engine/stability.h"
+#include "engine/analysis/stability.h"
 
 #include <nlohmann/json.hpp>
 
@@ -14,7 +14,7 @@
 #include "engine/geometry/sphere.h"
 #include "engine/geometry/triangle.h"
 #include "engine/offset.h"
-#include "engine/reference.h"
+#include "engine/analysis/reference.h"
 
 namespace rp::stability {
 

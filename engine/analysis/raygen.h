@@ -1,5 +1,5 @@
 #pragma once
-/// Ray sets shared by `raypack diff`, `raypack trace` users and the benchmarks: camera rays in
+/// Ray sets shared by `raypack diff`, `raypack bench`, the tests and the benchmarks: camera rays in
 /// 4x2 packets, shadow and diffuse rays from their hits, and random rays around a scene.
 
 #include <cstdint>
@@ -53,10 +53,5 @@ RaySet diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const H
 /// `count` rays from random points on the sphere around the scene's bounds (radius twice the
 /// bounding sphere's) towards random points inside the bounds, seeded.
 RaySet random_rays(const Scene& scene, size_t count, uint64_t seed);
-
-/// Traces a batch with all threads (TBB) in chunks of 4096 rays (whole packets).
-void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence);
-void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint8_t> occluded,
-                       Coherence coherence);
 
 }  // namespace rp

@@ -1,4 +1,4 @@
-#include "engine/reference.h"
+#include "engine/analysis/reference.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
