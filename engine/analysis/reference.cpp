@@ -180,12 +180,7 @@ Reference::Reference(const Scene& scene) {
   }
   for (uint32_t i = 0; i < scene.quadrics().size(); ++i) {
     const Quadric<float>& q = scene.quadrics()[i].quadric;
-    Quadric<double> d;
-    d.A = q.A; d.B = q.B; d.C = q.C; d.D = q.D; d.E = q.E;
-    d.F = q.F; d.G = q.G; d.H = q.H; d.I = q.I; d.J = q.J;
-    d.center = Vec3d(q.center);
-    d.clip = Box3d(Vec3d(q.clip.lo), Vec3d(q.clip.hi));
-    quadrics_.push_back(d);
+    quadrics_.push_back(quadric_cast<double>(q));
     // A hit point, as computed, lies in the clip box: the float clip box bounds it exactly.
     analytic_boxes_.push_back(q.clip);
     items.push_back(make_item(q.clip, quadric_base_ + i));

@@ -1,6 +1,6 @@
 #pragma once
 /// `raypack stability`: failure rates of intersection methods on ray families built where
-/// methods fail (SPEC section 9).
+/// methods fail (README: "Stability where methods fail").
 ///
 /// Every family is a scene and a seeded set of float rays; the double-precision reference
 /// (engine/analysis/reference.h), exact for those float rays and float vertices, is the oracle. A
@@ -82,10 +82,5 @@ void print_table(std::FILE* out, const std::vector<Result>& results);
 
 /// The results as JSON text (an object with "results": [...] and the options used).
 std::string to_json(const std::vector<Result>& results, const std::string& scene_name, const Options& options);
-
-/// A copy of `scene` with every position p replaced by round(scale * p + offset) (computed in
-/// double): meshes, spheres, quadrics (coefficients rescaled), polygons, planes, lights and
-/// camera. The geometry the methods see is then the float rounding of the moved scene.
-Scene transformed(const Scene& scene, double scale, const Vec3d& offset);
 
 }  // namespace rp::stability

@@ -227,6 +227,18 @@ struct Quadric {
 using Quadricf = Quadric<float>;
 using Quadricd = Quadric<double>;
 
+/// `q` with every coefficient, the center and the clip box converted to To (exactly, for float
+/// to double: the double-precision reference and the tests evaluate the very float quadric).
+template <typename To, typename From>
+constexpr Quadric<To> quadric_cast(const Quadric<From>& q) {
+  Quadric<To> d;
+  d.A = To(q.A); d.B = To(q.B); d.C = To(q.C); d.D = To(q.D); d.E = To(q.E);
+  d.F = To(q.F); d.G = To(q.G); d.H = To(q.H); d.I = To(q.I); d.J = To(q.J);
+  d.center = Vec3<To>(q.center);
+  d.clip = Box3<To>(Vec3<To>(q.clip.lo), Vec3<To>(q.clip.hi));
+  return d;
+}
+
 /// A ray whose direction is divided by the power of two `scale` that brings its largest
 /// |component| into [1, 2), with tnear and tfar multiplied by it: the same points at the
 /// scaled parameters, and every product with the direction scaled exactly (no rounding

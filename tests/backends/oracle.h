@@ -25,13 +25,7 @@ struct OracleHit {
 
 inline Vec3d to_d(const Vec3f& v) { return Vec3d(v); }
 
-inline Quadric<double> to_d(const Quadric<float>& q) {
-  Quadric<double> d;
-  d.A = q.A; d.B = q.B; d.C = q.C; d.D = q.D; d.E = q.E; d.F = q.F; d.G = q.G; d.H = q.H; d.I = q.I; d.J = q.J;
-  d.center = to_d(q.center);
-  d.clip = Box3d(to_d(q.clip.lo), to_d(q.clip.hi));
-  return d;
-}
+inline Quadric<double> to_d(const Quadric<float>& q) { return quadric_cast<double>(q); }
 
 /// Closest hit of `ray` (converted exactly to double) in [tnear, tfar]; invalid rays miss.
 inline OracleHit oracle_intersect(const Scene& s, const Ray& ray) {

@@ -16,6 +16,7 @@
 #include "engine/loaders/load.h"
 #include "engine/analysis/reference.h"
 #include "engine/analysis/stability.h"
+#include "engine/scene_transform.h"
 
 namespace rp {
 namespace {
@@ -151,7 +152,7 @@ TEST(Stability, TransformedSceneGivesTheSameHitsOnTheMovedRays) {
   const Scene scene = load_scene("default");
   const double scale = 4.0;
   const Vec3d offset{3.0, -2.0, 1.0};
-  const Scene moved = stability::transformed(scene, scale, offset);
+  const Scene moved = transformed(scene, scale, offset);
   ASSERT_EQ(moved.prim_count(), scene.prim_count());
   const Reference a(scene), b(moved);
   std::mt19937 rng(3);

@@ -1,0 +1,16 @@
+#pragma once
+/// Moving and scaling a whole scene, for the stability families that test methods far from the
+/// origin and at extreme scales (engine/analysis/stability.h).
+
+#include "engine/math.h"
+#include "engine/scene.h"
+
+namespace rp {
+
+/// A copy of `scene` with every position p replaced by round(scale * p + offset) (computed in
+/// double): meshes, spheres, quadrics (coefficients rescaled), polygons, planes, lights and
+/// camera. The geometry the methods see is then the float rounding of the moved scene. Throws
+/// rp::Error unless scale is finite and > 0.
+Scene transformed(const Scene& scene, double scale, const Vec3d& offset);
+
+}  // namespace rp
