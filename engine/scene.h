@@ -89,7 +89,7 @@ struct PolygonShape {
 
 /// How a camera maps image positions to rays (engine/render/camera.h).
 enum class CameraModel : uint8_t {
-  pinhole,    ///< the seeds' planar projection
+  pinhole,    ///< the lecture notes' planar projection
   panoramic,  ///< cylindrical, 360 degrees around the up axis
   fisheye,    ///< equidistant: angle from the view axis proportional to image radius
   thin_lens,  ///< pinhole placement with a lens of radius `aperture` focused at `focus_distance`

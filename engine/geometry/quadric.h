@@ -325,7 +325,7 @@ Intersection<T> intersect_quadric(const RayT<T>& ray, const Quadric<T>& q) {
   return sr.unscaled(quadric_pick_root(r, q, t0, t1));
 }
 
-/// The same test with the textbook roots (-b -+ sqrt(b^2 - 4ac)) / 2a (the seeds' algebraic
+/// The same test with the textbook roots (-b -+ sqrt(b^2 - 4ac)) / 2a (the lecture notes' algebraic
 /// method): cancellation when b^2 >> 4ac loses the near root of a far or grazing ray. Kept as
 /// the baseline `raypack stability` measures; raypack renders with intersect_quadric.
 template <typename T>

@@ -30,7 +30,7 @@ struct SlabHit {
   T t_exit = -std::numeric_limits<T>::infinity();
 };
 
-/// Slab interval of the 1D ray x(t) = org + t*dir against [lo, hi] (closed), by the seeds'
+/// Slab interval of the 1D ray x(t) = org + t*dir against [lo, hi] (closed), by the lecture notes'
 /// formula t = (face - org) / dir with the swap. Preconditions: org finite, no NaN.
 /// dir == +-0: the whole line (-inf, +inf) when lo <= org <= hi, else empty.
 /// dir == +-inf: each finite face is crossed at t = 0 (the limit of ever larger dir), so the
@@ -38,7 +38,7 @@ struct SlabHit {
 template <typename T>
 SlabInterval<T> slab_interval(T org, T dir, T lo, T hi) {
   constexpr T inf = std::numeric_limits<T>::infinity();
-  // Parallel to the slab: inside (closed) -> no constraint, outside -> empty (seeds,
+  // Parallel to the slab: inside (closed) -> no constraint, outside -> empty (lecture notes "Ray-Surface Intersection",
   // "Ray-AABB Intersection: Slab Method, Edge Case"), decided by comparison instead of the
   // 0/0 the plain formula would give for an origin on a face.
   if (dir == T(0)) {
@@ -67,7 +67,7 @@ SlabInterval<T> slab_interval(T org, T dir, T lo, T hi) {
 /// slab_interval).
 template <typename T>
 SlabHit<T> intersect_box(const RayT<T>& r, const Box3<T>& b) {
-  // Kay & Kajiya 1986, "Ray Tracing Complex Scenes", SIGGRAPH; in the seeds' form (lecture
+  // Kay & Kajiya 1986, "Ray Tracing Complex Scenes", SIGGRAPH; in the lecture notes' form (lecture
   // notes, "Ray-AABB Intersection: Slab Method, Algorithm", steps 1-4), with the overlap
   // against [tnear, tfar] instead of t_exit >= 0.
   if (!is_finite(r.org) || r.dir.x != r.dir.x || r.dir.y != r.dir.y || r.dir.z != r.dir.z ||

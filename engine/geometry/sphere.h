@@ -1,5 +1,5 @@
 #pragma once
-/// Scalar reference ray/sphere tests: the numerically careful one, the seeds' geometric one
+/// Scalar reference ray/sphere tests: the numerically careful one, the lecture notes' geometric one
 /// and the textbook one (kept on purpose as the inaccurate baseline for stability studies).
 ///
 /// Every intersect_sphere_* routine takes a center c and a radius (> 0), works for origins
@@ -80,7 +80,7 @@ Intersection<T> intersect_sphere_algebraic(const RayT<T>& r, const Vec3<T>& c, T
   return sphere_pick_root(r, c, radius, c_coef / q, q / a);
 }
 
-/// Ray/sphere test by the seeds' geometric method with early rejection.
+/// Ray/sphere test by the lecture notes' geometric method with early rejection.
 template <typename T>
 Intersection<T> intersect_sphere_geometric(const RayT<T>& r, const Vec3<T>& c, T radius) {
   // Lecture notes, "Ray-Sphere Intersection: Geometric Method", steps 1-7, generalized to a

@@ -40,7 +40,7 @@ template <typename T>
 Intersection<T> intersect_triangle_mt(const RayT<T>& r, const Vec3<T>& v0, const Vec3<T>& v1,
                                       const Vec3<T>& v2) {
   // Möller & Trumbore 1997, "Fast, Minimum Storage Ray/Triangle Intersection", JGT 2(1),
-  // section 2; in the seeds' notation [t, b1, b2] = [S2.E2, S1.S, S2.D] / (S1.E1).
+  // section 2; in the lecture notes' notation [t, b1, b2] = [S2.E2, S1.S, S2.D] / (S1.E1).
   const Vec3<T> e1 = v1 - v0;
   const Vec3<T> e2 = v2 - v0;
   const Vec3<T> s1 = cross(r.dir, e2);

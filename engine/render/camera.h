@@ -1,5 +1,5 @@
 #pragma once
-/// Cameras that turn image positions into primary rays: the seeds' pinhole, a cylindrical
+/// Cameras that turn image positions into primary rays: the lecture notes' pinhole, a cylindrical
 /// panorama, an equidistant fisheye and a thin lens for depth of field.
 
 #include <optional>
@@ -9,7 +9,7 @@
 
 namespace rp {
 
-/// All four models share the camera frame of the seeds (lecture "Ray Tracing Basics", eye
+/// All four models share the camera frame of the lecture notes (lecture "Ray Tracing Basics", eye
 /// rays): w = normalize(look_at - eye), u = normalize(w x up), v = u x w.
 ///
 /// - pinhole: for pixel (i, j), j counted from the bottom row,

@@ -188,7 +188,7 @@ uint64_t sample_tile(const Scene& scene, const Backend& backend, const Camera& c
   return primary;
 }
 
-/// The seeds' adaptive sampling for the tile at (x0, y0): colours at the pixel-grid corners;
+/// The lecture notes' adaptive sampling for the tile at (x0, y0): colours at the pixel-grid corners;
 /// a cell whose four corner colours differ by more than the threshold (in any channel) is
 /// split into four, which needs the midpoints of its edges and its centre, down to cells of
 /// 1/2^depth pixel; a pixel is the area-weighted mean of its cells' corner averages. Corner

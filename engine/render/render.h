@@ -1,6 +1,6 @@
 #pragma once
 /// The renderer: primary rays in 4x2-pixel packets, Blinn-Phong shading with shadow rays,
-/// Whitted mirror reflection and refraction with Fresnel, the seeds' pixel samplers
+/// Whitted mirror reflection and refraction with Fresnel, the lecture notes' pixel samplers
 /// (uniform grid, random, stratified, adaptive), tiles in parallel (TBB), deterministic for
 /// any thread count.
 

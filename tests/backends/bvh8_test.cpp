@@ -180,7 +180,7 @@ TEST(Bvh8Build, NoNodeCouldAbsorbAChildNode) {
   }
 }
 
-/// The seeds' rule: longest axis, centroid median, balanced. Halving n until it fits a leaf
+/// The lecture notes' rule: longest axis, centroid median, balanced. Halving n until it fits a leaf
 /// of 4 leaves every leaf with 2..4 primitives (5 splits into 2 + 3); SAH has no such floor.
 /// Triangles only: an analytic primitive takes a leaf of its own.
 TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {

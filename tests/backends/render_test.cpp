@@ -1,4 +1,4 @@
-// The renderer over real backends: the seeds' adaptive sampling, the two backends' images,
+// The renderer over real backends: the lecture notes' adaptive sampling, the two backends' images,
 // Whitted refraction through a glass sphere.
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Pinhole camera against the seeds' pixel mapping, and the sample pattern.
+// Pinhole camera against the lecture notes' pixel mapping, and the sample pattern.
 
 #include <gtest/gtest.h>
 
@@ -22,7 +22,7 @@ TEST(Camera, RaysFollowTheSeedsPixelMapping) {
   const double ym = std::tan(60.0 * kPi / 360.0), xm = double(nx) / ny * ym;
   for (int i : {0, 17, 63})
     for (int row : {0, 20, 47}) {
-      const int j = ny - 1 - row;  // the seeds count j from the bottom
+      const int j = ny - 1 - row;  // the lecture notes count j from the bottom
       const double x = ((i + 0.5) / nx * 2 - 1) * xm, y = ((j + 0.5) / ny * 2 - 1) * ym;
       const Vec3d want = normalize(Vec3d{x, y, -1.0});
       const Ray r = cam.generate(i + 0.5f, row + 0.5f);
@@ -135,7 +135,7 @@ TEST(PixelSample, StratifiedSamplesCoverEveryStratum) {
     }
     EXPECT_EQ(cells.size(), size_t(m * m)) << m << "x" << m;
   }
-  EXPECT_EQ(pixel_sample(1, 2, 0, 1).x, 0.5f);  // one sample: the pixel centre, as the seeds say
+  EXPECT_EQ(pixel_sample(1, 2, 0, 1).x, 0.5f);  // one sample: the pixel centre, as the lecture notes say
 }
 
 TEST(PixelSample, StreamsDependOnSeedPixelAndSample) {
