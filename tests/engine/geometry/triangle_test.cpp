@@ -1,0 +1,254 @@
+// Triangle routines against each other and long double oracles on seeded random rays; the
+// Embree barycentric convention; watertightness on shared edges.
+
+#include <gtest/gtest.h>
+
+#include "tests/support/geometry.h"
+
+namespace rp {
+namespace {
+
+using namespace rp::test;
+
+struct TriangleReference {
+  L det_rel;  // |det| / (|d| |e1| |e2|): sine-like conditioning of the system
+  L t, b1, b2;
+};
+
+template <typename T>
+TriangleReference triangle_reference(const RayT<T>& r, const Vec3<T>& v0, const Vec3<T>& v1,
+                                     const Vec3<T>& v2) {
+  const Vec3<L> o(r.org), d(r.dir), p0(v0), p1(v1), p2(v2);
+  const Vec3<L> e1 = p1 - p0, e2 = p2 - p0, b = o - p0;
+  const L det = det3_columns(-d, e1, e2);
+  const L norm = length(d) * length(e1) * length(e2);
+  return {std::abs(det) / norm, det3_columns(b, e1, e2) / det, det3_columns(-d, b, e2) / det,
+          det3_columns(-d, e1, b) / det};
+}
+
+/// Random triangle and a ray aimed near it (barycentrics of the aim point in [-0.25, 1.25]),
+/// with a random direction length and, for a quarter of the cases, a random finite interval.
+template <typename T>
+struct TriangleCase {
+  Vec3<T> v0, v1, v2;
+  RayT<T> ray;
+};
+
+template <typename T>
+TriangleCase<T> random_triangle_case(std::mt19937& rng) {
+  TriangleCase<T> c;
+  c.v0 = uniform_vec<T>(rng, -2, 2);
+  c.v1 = uniform_vec<T>(rng, -2, 2);
+  c.v2 = uniform_vec<T>(rng, -2, 2);
+  const Vec3<T> o = uniform_vec<T>(rng, -5, 5);
+  const T b1 = uniform<T>(rng, -0.25, 1.25);
+  const T b2 = uniform<T>(rng, -0.25, 1.25);
+  const Vec3<T> target = c.v0 + (c.v1 - c.v0) * b1 + (c.v2 - c.v0) * b2;
+  const T scale = uniform<T>(rng, 0.1, 10);
+  c.ray = make_ray(o, (target - o) * scale);
+  const int kind = int(rng() % 4);
+  if (kind == 1) {
+    c.ray.tnear = uniform<T>(rng, -0.5, 0.2) / scale;
+    c.ray.tfar = uniform<T>(rng, 0.05, 2) / scale;
+  } else if (kind == 2) {
+    c.ray.tnear = -kInfT<T>;
+  }
+  return c;
+}
+
+TEST(TriangleProperty, FourMethodsAgreeOnRandomRaysDouble) {
+  std::mt19937 rng(12345);
+  int checked = 0, hits = 0;
+  const auto methods = triangle_methods<double>();
+  for (int i = 0; i < 30000; ++i) {
+    const TriangleCase<double> c = random_triangle_case<double>(rng);
+    const TriangleReference ref = triangle_reference(c.ray, c.v0, c.v1, c.v2);
+    // Excluded: ill-conditioned systems (ray nearly parallel, sliver triangles), aim points
+    // within 1e-9 of an edge, and t within 1e-9 of an interval end.
+    if (ref.det_rel < 1e-6L) continue;
+    const L edge = std::min({std::abs(ref.b1), std::abs(ref.b2), std::abs(1 - ref.b1 - ref.b2)});
+    if (edge < 1e-9L) continue;
+    if (close_rel<L>(ref.t, c.ray.tnear, 1e-9L) || close_rel<L>(ref.t, c.ray.tfar, 1e-9L)) continue;
+    const bool ref_hit = ref.b1 >= 0 && ref.b2 >= 0 && ref.b1 + ref.b2 <= 1 &&
+                         ref.t >= c.ray.tnear && ref.t <= c.ray.tfar;
+    ++checked;
+    hits += ref_hit;
+    const Intersection<double> base = intersect_triangle_mt(c.ray, c.v0, c.v1, c.v2);
+    for (const auto& m : methods) {
+      const Intersection<double> h = m.fn(c.ray, c.v0, c.v1, c.v2);
+      ASSERT_EQ(h.hit, ref_hit) << m.name << " case " << i;
+      ASSERT_EQ(h.hit, base.hit) << m.name << " case " << i;
+      if (!h.hit) {
+        EXPECT_EQ(h.t, kInfT<double>);
+        continue;
+      }
+      EXPECT_TRUE(close_rel<L>(h.t, ref.t, 1e-9L)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel<L>(h.u, ref.b1, 1e-9L)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel<L>(h.v, ref.b2, 1e-9L)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel(h.t, base.t, 1e-9)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel(h.u, base.u, 1e-9)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel(h.v, base.v, 1e-9)) << m.name << " case " << i;
+    }
+  }
+  EXPECT_GE(checked, 10000);
+  EXPECT_GE(hits, 2000);
+}
+
+TEST(TriangleProperty, FourMethodsAgreeOnRandomRaysFloat) {
+  std::mt19937 rng(777);
+  int checked = 0;
+  for (int i = 0; i < 30000; ++i) {
+    const TriangleCase<float> c = random_triangle_case<float>(rng);
+    const TriangleReference ref = triangle_reference(c.ray, c.v0, c.v1, c.v2);
+    if (ref.det_rel < 1e-2L) continue;
+    const L edge = std::min({std::abs(ref.b1), std::abs(ref.b2), std::abs(1 - ref.b1 - ref.b2)});
+    if (edge < 1e-4L) continue;
+    if (close_rel<L>(ref.t, c.ray.tnear, 1e-4L) || close_rel<L>(ref.t, c.ray.tfar, 1e-4L)) continue;
+    const bool ref_hit = ref.b1 >= 0 && ref.b2 >= 0 && ref.b1 + ref.b2 <= 1 &&
+                         ref.t >= c.ray.tnear && ref.t <= c.ray.tfar;
+    ++checked;
+    for (const auto& m : triangle_methods<float>()) {
+      const Intersection<float> h = m.fn(c.ray, c.v0, c.v1, c.v2);
+      ASSERT_EQ(h.hit, ref_hit) << m.name << " case " << i;
+      if (!h.hit) continue;
+      EXPECT_TRUE(close_rel<L>(h.t, ref.t, 1e-4L)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel<L>(h.u, ref.b1, 1e-4L)) << m.name << " case " << i;
+      EXPECT_TRUE(close_rel<L>(h.v, ref.b2, 1e-4L)) << m.name << " case " << i;
+    }
+  }
+  EXPECT_GE(checked, 10000);
+}
+
+TEST(TriangleProperty, HitsLieOnTheTriangleAndInTheInterval) {
+  std::mt19937 rng(99);
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const TriangleCase<double> c = random_triangle_case<double>(rng);
+    const Vec3d n = normalize(triangle_normal(c.v0, c.v1, c.v2));
+    for (const auto& m : triangle_methods<double>()) {
+      const Intersection<double> h = m.fn(c.ray, c.v0, c.v1, c.v2);
+      if (!h.hit) continue;
+      ++hits;
+      EXPECT_GE(h.t, c.ray.tnear);
+      EXPECT_LE(h.t, c.ray.tfar);
+      EXPECT_GE(h.u, 0.0);
+      EXPECT_GE(h.v, 0.0);
+      EXPECT_LE(h.u + h.v, 1.0);
+      const Vec3d p = c.ray.at(h.t);
+      const Vec3d q = c.v0 * (1 - h.u - h.v) + c.v1 * h.u + c.v2 * h.v;
+      const double scale = length(c.ray.org) + length(c.ray.dir * h.t) + 2;
+      EXPECT_LE(length(p - q), 1e-9 * scale) << m.name << " case " << i;
+      EXPECT_LE(std::abs(dot(n, p - c.v0)), 1e-9 * scale) << m.name << " case " << i;
+    }
+  }
+  EXPECT_GE(hits, 10000);
+}
+
+TEST(TriangleProperty, BarycentricsFollowEmbreeConvention) {
+  const Vec3d v0{0, 0, 0}, v1{4, 0, 0}, v2{0, 4, 0};
+  struct Aim {
+    Vec3d p;
+    double u, v;
+  };
+  // Interior points only: a ray aimed exactly at a vertex or edge of a lone triangle may
+  // miss it by rounding (watertightness is a property of shared edges, tested below).
+  for (const Aim& a : {Aim{{1, 2, 0}, 0.25, 0.5}, Aim{{2, 1, 0}, 0.5, 0.25},
+                       Aim{{3.5, 0.25, 0}, 0.875, 0.0625}, Aim{{0.25, 3.5, 0}, 0.0625, 0.875},
+                       Aim{{0.25, 0.25, 0}, 0.0625, 0.0625}}) {
+    for (const Vec3d& o : {Vec3d{0.5, 0.25, 3}, Vec3d{-1, 2, -5}}) {
+      for (const auto& m : triangle_methods<double>()) {
+        const Intersection<double> h = m.fn(make_ray(o, a.p - o), v0, v1, v2);
+        ASSERT_TRUE(h.hit) << m.name;
+        EXPECT_NEAR(h.t, 1.0, 1e-14) << m.name;
+        EXPECT_NEAR(h.u, a.u, 1e-14) << m.name;
+        EXPECT_NEAR(h.v, a.v, 1e-14) << m.name;
+        const Vec3d q = v0 * (1 - h.u - h.v) + v1 * h.u + v2 * h.v;
+        EXPECT_LE(length(q - a.p), 1e-13) << m.name;
+      }
+    }
+  }
+  EXPECT_EQ(triangle_normal(v0, v1, v2), (Vec3d{0, 0, 16}));
+}
+
+TEST(TriangleProperty, DegenerateTriangleAndParallelRayMiss) {
+  const Vec3d a{0, 0, 0}, b{1, 1, 1}, c{2, 2, 2};
+  const Vec3d v0{0, 0, 0}, v1{1, 0, 0}, v2{0, 1, 0};
+  for (const auto& m : triangle_methods<double>()) {
+    EXPECT_FALSE(m.fn(make_ray<double>({0.5, 0.5, 3}, {-0.125, 0.25, -1}), a, b, c).hit) << m.name;
+    EXPECT_FALSE(m.fn(make_ray<double>({0.1, 0.1, 0}, {1, 0, 0}), v0, v1, v2).hit) << m.name;
+    EXPECT_FALSE(m.fn(make_ray<double>({0.1, 0.1, 1}, {1, 0, 0}), v0, v1, v2).hit) << m.name;
+    EXPECT_FALSE(m.fn(make_ray<double>({0.1, 0.1, 1}, {0, 0, 0}), v0, v1, v2).hit) << m.name;
+  }
+}
+
+// Float edge functions that round to exactly 0 are re-evaluated in double (Woop et al. 2013,
+// section 3.3). Ray along +z from the origin; in 2D B = (1, 1+e), C = (-(1+e), -(1+2e)),
+// e = 2^-23: cx*by - cy*bx is -e^2 exactly but 0 in float. The origin is just outside edge BC
+// of ABC (A = (-1, 1)) and just inside it for DCB (D = (1, -1)): exactly one is hit.
+TEST(TriangleProperty, WatertightFloatResolvesEdgeFunctionsThatRoundToZero) {
+  const float e = std::ldexp(1.0f, -23);
+  const Vec3f a{-1, 1, 1}, b{1, 1 + e, 1}, c{-(1 + e), -(1 + 2 * e), 1}, d{1, -1, 1};
+  ASSERT_EQ(c.x * b.y - c.y * b.x, 0.0f);
+  ASSERT_LT(double(c.x) * b.y - double(c.y) * b.x, 0.0);
+  const Ray r = make_ray<float>({0, 0, 0}, {0, 0, 1});
+  EXPECT_FALSE(intersect_triangle_watertight(r, a, b, c).hit);
+  const Intersection<float> h = intersect_triangle_watertight(r, d, c, b);
+  ASSERT_TRUE(h.hit);
+  EXPECT_EQ(h.t, 1.0f);
+}
+
+// A closed, star-shaped mesh (a latitude/longitude sphere with random vertex radii) seen from
+// near its center: every ray must hit at least one triangle, including rays aimed exactly at
+// float points on shared edges and at shared vertices. That is the watertightness property.
+TEST(TriangleProperty, WatertightNeverLeaksThroughSharedEdgesFloat) {
+  std::mt19937 rng(4242);
+  constexpr int kLat = 6, kLon = 9;
+  std::vector<Vec3f> verts;
+  verts.push_back({0, uniform<float>(rng, 0.8f, 1.2f), 0});  // north pole
+  for (int i = 1; i < kLat; ++i) {
+    for (int j = 0; j < kLon; ++j) {
+      const double theta = kPi * i / kLat, phi = 2 * kPi * j / kLon;
+      const float rad = uniform<float>(rng, 0.8f, 1.2f);
+      verts.push_back(Vec3f(Vec3d{std::sin(theta) * std::cos(phi), std::cos(theta),
+                                  std::sin(theta) * std::sin(phi)} *
+                            double(rad)));
+    }
+  }
+  verts.push_back({0, -uniform<float>(rng, 0.8f, 1.2f), 0});  // south pole
+  const int south = int(verts.size()) - 1;
+  const auto ring = [&](int i, int j) { return 1 + (i - 1) * kLon + (j % kLon); };
+  std::vector<std::array<int, 3>> tris;
+  for (int j = 0; j < kLon; ++j) tris.push_back({0, ring(1, j + 1), ring(1, j)});
+  for (int i = 1; i + 1 < kLat; ++i) {
+    for (int j = 0; j < kLon; ++j) {
+      tris.push_back({ring(i, j), ring(i, j + 1), ring(i + 1, j)});
+      tris.push_back({ring(i, j + 1), ring(i + 1, j + 1), ring(i + 1, j)});
+    }
+  }
+  for (int j = 0; j < kLon; ++j) tris.push_back({south, ring(kLat - 1, j), ring(kLat - 1, j + 1)});
+
+  int leaks = 0, mt_leaks = 0;
+  constexpr int kRays = 20000;
+  for (int n = 0; n < kRays; ++n) {
+    const Vec3f o = uniform_vec<float>(rng, -0.05f, 0.05f);
+    const auto& tri = tris[rng() % tris.size()];
+    const Vec3f a = verts[tri[rng() % 3]];
+    const Vec3f b = verts[tri[rng() % 3]];
+    // Aim at a vertex (a == b) or at a float point on the edge ab.
+    const float s = uniform<float>(rng, 0.0f, 1.0f);
+    const Vec3f target = a + (b - a) * s;
+    const Ray r = make_ray<float>(o, target - o);
+    int found = 0, mt_found = 0;
+    for (const auto& t : tris) {
+      found += intersect_triangle_watertight(r, verts[t[0]], verts[t[1]], verts[t[2]]).hit;
+      mt_found += intersect_triangle_mt(r, verts[t[0]], verts[t[1]], verts[t[2]]).hit;
+    }
+    leaks += found == 0;
+    mt_leaks += mt_found == 0;
+  }
+  EXPECT_EQ(leaks, 0);
+  RecordProperty("moller_trumbore_leaks", mt_leaks);
+}
+
+}  // namespace
+}  // namespace rp
