@@ -102,6 +102,10 @@
 ///   <path>.file: <resolved path>: the file has no triangles
 ///   <path>: <a Scene check's message>                              (kept as a safety net)
 
+///
+/// One file of about 680 lines on purpose: the format's specification above (110 lines) and
+/// the one reader that enforces it line by line, so a rule and its check are read together.
+
 #include <algorithm>
 #include <array>
 #include <cctype>

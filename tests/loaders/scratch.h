@@ -1,6 +1,6 @@
 #pragma once
 // A scratch folder shared by the loader tests of this binary: files written there by name,
-// the whole folder removed when the tests end.
+// the whole folder removed when the tests end; and loading such a file, or its error message.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -8,6 +8,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+
+#include "engine/loaders/load.h"
+#include "engine/scene.h"
+#include "tests/support/error_of.h"
 
 namespace rp::test {
 
@@ -37,6 +41,43 @@ inline std::string write_file(const std::string& name, const std::string& bytes)
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), std::streamsize(bytes.size()));
   return path.string();
+}
+
+
+inline Scene obj_scene(const std::string& name, const std::string& text) {
+  Scene scene;
+  load_obj(write_file(name, text), scene);
+  return scene;
+}
+
+inline Scene ply_scene(const std::string& name, const std::string& bytes) {
+  Scene scene;
+  load_ply(write_file(name, bytes), scene);
+  return scene;
+}
+
+inline std::string obj_error(const std::string& name, const std::string& text) {
+  const std::string path = write_file(name, text);
+  return error_of([&] {
+    Scene s;
+    load_obj(path, s);
+  });
+}
+
+inline std::string ply_error(const std::string& name, const std::string& bytes) {
+  const std::string path = write_file(name, bytes);
+  return error_of([&] {
+    Scene s;
+    load_ply(path, s);
+  });
+}
+
+inline std::string path_of(const std::string& name) { return (scratch() / name).string(); }
+
+/// The (unnormalised) normal of triangle t of m, in double.
+inline Vec3d tri_cross(const TriangleMesh& m, uint32_t t) {
+  const Vec3d a(m.vertex(t, 0)), b(m.vertex(t, 1)), c(m.vertex(t, 2));
+  return cross(b - a, c - a);
 }
 
 }  // namespace rp::test
