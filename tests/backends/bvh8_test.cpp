@@ -16,30 +16,10 @@
 #include "backends/simd/kernels.h"
 #include "engine/geometry/slab.h"
 #include "engine/geometry/triangle.h"
+#include "tests/support/scenes.h"
 
 namespace rp::bvh8 {
 namespace {
-
-Scene soup(uint32_t seed, int count, bool with_degenerate) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f), s(-0.1f, 0.1f);
-  TriangleMesh m;
-  m.name = "soup";
-  for (int i = 0; i < count; ++i) {
-    const Vec3f c{u(rng), u(rng), u(rng)};
-    for (int k = 0; k < 3; ++k) m.positions.push_back(c + Vec3f{s(rng), s(rng), s(rng)});
-    const uint32_t b = uint32_t(m.positions.size() - 3);
-    m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
-    if (with_degenerate && i % 50 == 0) m.indices.insert(m.indices.end(), {b, b, b + 1});  // zero area
-  }
-  Scene sc;
-  sc.add_mesh(std::move(m));
-  sc.add_sphere({{0.5f, 0.5f, 0.5f}, 0.2f, 0});
-  sc.add_quadric({Quadric<float>::cylinder({-0.5f, 0.0f, 0.3f}, 0.2f, 0.2f, 0.4f, 1), 0});
-  const std::vector<Vec3f> tri{{0, 0, 1.5f}, {1, 0, 1.5f}, {0, 1, 1.5f}};
-  sc.add_polygon(tri, 0);
-  return sc;
-}
 
 /// prim_ids of a leaf.
 std::vector<uint32_t> leaf_prims(const Bvh8& t, int32_t ref) {
@@ -59,7 +39,7 @@ std::vector<int32_t> leaves(const Bvh8& t) {
 
 TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
   for (SplitRule rule : {SplitRule::sah, SplitRule::median}) {
-    const Scene sc = soup(1, 3000, true);
+    const Scene sc = test::mixed_soup(1, 3000, true);
     const Bvh8 t = build(sc, {rule, 8});
     std::multiset<uint32_t> seen;
     const std::vector<int32_t> refs = leaves(t);
@@ -106,7 +86,7 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
 }
 
 TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
-  const Scene sc = soup(2, 2000, false);
+  const Scene sc = test::mixed_soup(2, 2000, false);
   const Bvh8 t = build(sc, {});
   std::function<Box3f(int32_t)> bounds_below = [&](int32_t ref) {
     Box3f b;
@@ -139,7 +119,7 @@ TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
 }
 
 TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
-  const Scene sc = soup(3, 60000, false);  // large enough for the parallel recursion
+  const Scene sc = test::mixed_soup(3, 60000, false);  // large enough for the parallel recursion
   auto run = [&](int threads) {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
     return build(sc, {});
@@ -156,7 +136,7 @@ TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
 /// area) and change nothing else. Also checks that child counts add up.
 TEST(Bvh8Build, NoNodeCouldAbsorbAChildNode) {
   for (SplitRule rule : {SplitRule::sah, SplitRule::median}) {
-    const Scene sc = soup(5, 20000, false);
+    const Scene sc = test::mixed_soup(5, 20000, false);
     const Bvh8 t = build(sc, {rule, 8});
     auto width = [&](const Bvh8Node& n) {
       int k = 0;
@@ -185,7 +165,7 @@ TEST(Bvh8Build, NoNodeCouldAbsorbAChildNode) {
 /// Triangles only: an analytic primitive takes a leaf of its own.
 TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   Scene sc;
-  sc.add_mesh(soup(4, 5000, false).meshes()[0]);
+  sc.add_mesh(test::mixed_soup(4, 5000, false).meshes()[0]);
   const Bvh8 t = build(sc, {SplitRule::median, 4});
   uint32_t lo = 99, hi = 0;
   for (int32_t ref : leaves(t)) {

@@ -7,6 +7,7 @@
 
 #include "engine/error.h"
 #include "engine/scene.h"
+#include "tests/support/error_of.h"
 
 namespace rp {
 namespace {
@@ -45,12 +46,7 @@ TEST(SceneNumbering, MeshesThenSpheresQuadricsPolygonsPlanes) {
 }
 
 void expect_error(const std::function<void()>& f, const std::string& message) {
-  try {
-    f();
-    ADD_FAILURE() << "expected error: " << message;
-  } catch (const Error& e) {
-    EXPECT_EQ(e.what(), message);
-  }
+  EXPECT_EQ(test::error_of(f), message);
 }
 
 TEST(SceneValidation, BadMeshesAreRejectedWithTheReason) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/math.h"
+#include "engine/geometry/quadric.h"
 #include "engine/ray.h"
 #include "engine/scene.h"
 
@@ -123,6 +124,30 @@ inline std::vector<Ray> axis_rays() {
           rays.push_back(r);
         }
   return rays;
+}
+
+/// A triangle soup in [-1.1, 1.1]^3 (every 50th triangle followed by a zero-area one when
+/// `with_degenerate`), a sphere, a clipped cylinder and a triangular polygon: every primitive
+/// kind a BVH holds.
+inline Scene mixed_soup(uint32_t seed, int count, bool with_degenerate) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f), s(-0.1f, 0.1f);
+  TriangleMesh m;
+  m.name = "soup";
+  for (int i = 0; i < count; ++i) {
+    const Vec3f c{u(rng), u(rng), u(rng)};
+    for (int k = 0; k < 3; ++k) m.positions.push_back(c + Vec3f{s(rng), s(rng), s(rng)});
+    const uint32_t b = uint32_t(m.positions.size() - 3);
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
+    if (with_degenerate && i % 50 == 0) m.indices.insert(m.indices.end(), {b, b, b + 1});  // zero area
+  }
+  Scene sc;
+  sc.add_mesh(std::move(m));
+  sc.add_sphere({{0.5f, 0.5f, 0.5f}, 0.2f, 0});
+  sc.add_quadric({Quadric<float>::cylinder({-0.5f, 0.0f, 0.3f}, 0.2f, 0.2f, 0.4f, 1), 0});
+  const std::vector<Vec3f> tri{{0, 0, 1.5f}, {1, 0, 1.5f}, {0, 1, 1.5f}};
+  sc.add_polygon(tri, 0);
+  return sc;
 }
 
 }  // namespace rp::test
