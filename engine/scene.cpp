@@ -135,7 +135,7 @@ void Scene::add_light(const DirectionalLight& l) {
   directional_lights_.push_back(l);
 }
 
-PrimRef Scene::locate(uint32_t id) const {
+PrimLocation Scene::locate(uint32_t id) const {
   if (id < triangle_count_) {
     // Last mesh whose base is <= id.
     auto it = std::upper_bound(mesh_base_.begin(), mesh_base_.end(), id) - 1;
@@ -159,7 +159,7 @@ Box3f Scene::bounds() const {
 }
 
 Box3f Scene::prim_bounds(uint32_t id) const {
-  const PrimRef ref = locate(id);
+  const PrimLocation ref = locate(id);
   switch (ref.kind) {
     case PrimKind::sphere: {
       const Sphere& s = spheres_[ref.shape];
@@ -177,7 +177,7 @@ Box3f Scene::prim_bounds(uint32_t id) const {
 }
 
 Intersection<float> Scene::intersect_analytic(uint32_t id, const Ray& ray) const {
-  const PrimRef ref = locate(id);
+  const PrimLocation ref = locate(id);
   switch (ref.kind) {
     case PrimKind::sphere: {
       const Sphere& s = spheres_[ref.shape];
@@ -210,7 +210,7 @@ bool Scene::occluded_by_any_plane(const Ray& ray) const {
 
 SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
   SurfacePoint sp;
-  const PrimRef ref = locate(hit.prim_id);
+  const PrimLocation ref = locate(hit.prim_id);
   switch (ref.kind) {
     case PrimKind::triangle: {
       const TriangleMesh& m = meshes_[ref.shape];

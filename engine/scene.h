@@ -113,7 +113,7 @@ const char* to_string(PrimKind k);
 
 /// Where a prim_id lives: its kind, the index of the shape of that kind (mesh index for
 /// triangles) and, for triangles, the triangle index within the mesh.
-struct PrimRef {
+struct PrimLocation {
   PrimKind kind;
   uint32_t shape;
   uint32_t local;
@@ -174,7 +174,7 @@ class Scene {
   uint32_t prim_count() const { return plane_base() + uint32_t(planes_.size()); }
 
   /// Kind and index of prim_id (< prim_count()).
-  PrimRef locate(uint32_t prim_id) const;
+  PrimLocation locate(uint32_t prim_id) const;
   /// Bounds of every bounded primitive (planes excluded); empty box for an empty scene.
   Box3f bounds() const;
   /// Bounds of a sphere, quadric (its clip box) or polygon; prim_id in [sphere_base(), plane_base()).

@@ -266,7 +266,7 @@ Reference::Reference(const Scene& scene) {
         p.prim_id = items[i].prim_id;
         leaf_index_[p.prim_id] = uint32_t(i);
         if (p.prim_id < sphere_base_) {
-          const PrimRef ref = scene.locate(p.prim_id);
+          const PrimLocation ref = scene.locate(p.prim_id);
           for (int c = 0; c < 3; ++c) p.v[c] = scene.meshes()[ref.shape].vertex(ref.local, c);
         } else {
           p.v[0] = p.v[1] = p.v[2] = Vec3f(0.0f);

@@ -48,7 +48,7 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
       for (uint32_t id : leaf_prims(t, ref)) seen.insert(id);
     size_t degenerate = 0;
     for (uint32_t id = 0; id < sc.prim_count() - sc.planes().size(); ++id) {
-      const PrimRef r = sc.locate(id);
+      const PrimLocation r = sc.locate(id);
       bool zero_area = false;
       if (r.kind == PrimKind::triangle) {
         const TriangleMesh& m = sc.meshes()[r.shape];
@@ -92,7 +92,7 @@ TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
     Box3f b;
     if (is_leaf(ref)) {
       for (uint32_t id : leaf_prims(t, ref)) {
-        const PrimRef r = sc.locate(id);
+        const PrimLocation r = sc.locate(id);
         if (r.kind == PrimKind::triangle)
           for (int k = 0; k < 3; ++k) b.extend(sc.meshes()[r.shape].vertex(r.local, k));
         else

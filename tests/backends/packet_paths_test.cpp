@@ -54,7 +54,7 @@ uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
 /// True when hit h of ray r is a hit of its primitive's own scalar test (a triangle's, by the
 /// variant's test, or an analytic primitive's).
 bool own_test_hits(const Scene& s, const Ray& r, const Hit& h, bool watertight) {
-  const PrimRef ref = s.locate(h.prim_id);
+  const PrimLocation ref = s.locate(h.prim_id);
   if (ref.kind != PrimKind::triangle) return true;
   const TriangleMesh& m = s.meshes()[ref.shape];
   const Vec3f a = m.vertex(ref.local, 0), b = m.vertex(ref.local, 1), c = m.vertex(ref.local, 2);

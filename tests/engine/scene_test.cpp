@@ -35,7 +35,7 @@ TEST(SceneNumbering, MeshesThenSpheresQuadricsPolygonsPlanes) {
   const uint32_t shapes[] = {0, 0, 1, 1, 0, 0, 0, 0};
   const uint32_t locals[] = {0, 1, 0, 1, 0, 0, 0, 0};
   for (uint32_t id = 0; id < s.prim_count(); ++id) {
-    const PrimRef r = s.locate(id);
+    const PrimLocation r = s.locate(id);
     EXPECT_EQ(r.kind, kinds[id]) << id;
     EXPECT_EQ(r.shape, shapes[id]) << id;
     EXPECT_EQ(r.local, locals[id]) << id;
