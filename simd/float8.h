@@ -71,6 +71,32 @@ inline float reduce_max(const float8& v) {
   return _mm256_cvtss_f32(m);
 }
 
+/// Lanes from eight 32-bit integers at the 32-byte aligned `lanes`, each 0 (false) or -1
+/// (true: every bit set, as a comparison gives).
+inline mask8 load_mask(const int32_t* lanes) {
+  return mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(lanes))));
+}
+
+/// Stores m at the 32-byte aligned `lanes` as eight 32-bit integers: -1 for true, 0 for false.
+inline void store_mask(int32_t* lanes, const mask8& m) {
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), _mm256_castps_si256(__m256(m)));
+}
+
+/// Every bit set in lanes n..7 and clear in lanes 0..n-1 (n = 0..8): what
+/// load_unaligned_nan_past ORs into a load to make the lanes past the first n NaN.
+inline float8 nan_past(uint32_t n) {
+  alignas(32) static constexpr int32_t kOnes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+  return _mm256_castsi256_ps(~_mm256_loadu_si256(reinterpret_cast<const __m256i*>(kOnes + 8 - n)));
+}
+
+/// Eight floats from unaligned `p` with the lanes set in `past` (nan_past(n)) made NaN: the
+/// first n floats of a partial block. All 32 bytes are read, so the floats after the first n
+/// must be readable; their values are dropped. One OR per load, where a masked load
+/// (VMASKMOVPS) is slower.
+inline float8 load_unaligned_nan_past(const float* p, const float8& past) {
+  return _mm256_or_ps(_mm256_loadu_ps(p), past);
+}
+
 /// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
 inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
 

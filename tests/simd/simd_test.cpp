@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -203,12 +204,39 @@ TEST(MaskFromBits, RoundTripsThroughMovemaskForAll256Patterns) {
     const mask8 m = mask_from_bits(bits);
     EXPECT_EQ(movemask(m), bits);
     // Each lane is all ones or all zeros, as a comparison would give; xsimd's select needs that.
-    alignas(32) float lanes[8];
-    _mm256_store_ps(lanes, __m256(m));
-    for (int i = 0; i < 8; ++i)
-      EXPECT_EQ(bits_of(lanes[i]), (bits >> i) & 1 ? 0xffffffffu : 0u) << "bits " << bits << " lane " << i;
+    alignas(32) int32_t lanes[8];
+    store_mask(lanes, m);
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(lanes[i], (bits >> i) & 1 ? -1 : 0) << "bits " << bits << " lane " << i;
     // Only bits 0..7 name lanes.
     EXPECT_EQ(movemask(mask_from_bits(bits | 0xabcdef00u)), bits);
+  }
+}
+
+TEST(LoadMask, RoundTripsThroughStoreMaskForAll256Patterns) {
+  for (uint32_t bits = 0; bits < 256; ++bits) {
+    alignas(32) int32_t in[8], out[8];
+    for (int i = 0; i < 8; ++i) in[i] = (bits >> i) & 1 ? -1 : 0;
+    const mask8 m = load_mask(in);
+    EXPECT_EQ(movemask(m), bits);
+    store_mask(out, m);
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(out[i], in[i]) << "bits " << bits << " lane " << i;
+  }
+}
+
+TEST(LoadUnalignedNanPast, KeepsTheFirstNLanesBitExactlyAndSetsEveryBitOfTheRest) {
+  std::mt19937 rng(kSeed + 7);
+  for (int round = 0; round < 50; ++round) {
+    uint32_t in[16];
+    for (uint32_t& b : in) b = rng();  // every bit pattern: NaNs, -0, denormals included
+    float block[16];
+    std::memcpy(block, in, sizeof in);
+    for (uint32_t n = 0; n <= 8; ++n)
+      for (int at = 0; at < 8; ++at) {  // every alignment of the first float
+        const Lanes got = unpack(load_unaligned_nan_past(block + at, nan_past(n)));
+        for (uint32_t i = 0; i < 8; ++i)
+          ASSERT_EQ(bits_of(got[i]), i < n ? in[size_t(at) + i] : 0xffffffffu)
+              << "n " << n << " at " << at << " lane " << i;
+      }
   }
 }
 
