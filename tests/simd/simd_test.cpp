@@ -1,6 +1,6 @@
-// Tests for simd/float8.h: every helper against a plain scalar loop over its lanes, on seeded
-// random packets and on hand-picked special values (NaN, +-inf, +-0, denormals, FLT_MAX) in
-// every lane position.
+// Tests for simd/float8.h and simd/float4.h: every helper against a plain scalar loop over its
+// lanes, on seeded random packets and on hand-picked special values (NaN, +-inf, +-0,
+// denormals, FLT_MAX) in every lane position.
 //
 // Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::simd) and
 // with -ffp-contract=off (from rp::warnings); CMake gives both. Without -ffp-contract=off the
@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cfloat>
@@ -24,6 +25,7 @@
 #include <vector>
 
 #include "engine/math.h"
+#include "simd/float4.h"
 #include "simd/float8.h"
 
 #if !defined(__AVX2__) || !defined(__FMA__)
@@ -417,6 +419,60 @@ TEST(Compress, PacksSelectedLanesInLaneOrderForAll256Patterns) {
     }
   }
   EXPECT_EQ(bad.count(), 0);
+}
+
+using Lanes4 = std::array<float, 4>;
+
+Lanes4 unpack4(float4 v) {
+  alignas(16) Lanes4 l;
+  store4(l.data(), v);
+  return l;
+}
+
+TEST(Float4, Load3KeepsThreeLanesBitExactlyAndZeroesTheFourth) {
+  std::mt19937 rng(kSeed + 8);
+  for (int round = 0; round < 1000; ++round) {
+    uint32_t in[4];
+    for (uint32_t& b : in) b = rng();  // every bit pattern, the fourth too
+    float block[4];
+    std::memcpy(block, in, sizeof in);
+    const Lanes4 got = unpack4(load3(block));
+    for (int i = 0; i < 3; ++i) ASSERT_EQ(bits_of(got[size_t(i)]), in[i]) << "lane " << i;
+    ASSERT_EQ(bits_of(got[3]), 0u);
+    const Lanes4 all = unpack4(load4(block));
+    for (int i = 0; i < 4; ++i) ASSERT_EQ(bits_of(all[size_t(i)]), in[i]) << "load4 lane " << i;
+  }
+}
+
+TEST(Float4, MinAndMaxMatchTheMinpsRuleBitExactly) {
+  Mismatches bad;
+  for (const auto& [a, b] : binary_cases(kSeed + 9))
+    for (size_t half = 0; half < 8; half += 4) {
+      const Lanes4 mn = unpack4(min4(load4(a.data() + half), load4(b.data() + half)));
+      const Lanes4 mx = unpack4(max4(load4(a.data() + half), load4(b.data() + half)));
+      for (size_t i = 0; i < 4; ++i)
+        if (bits_of(mn[i]) != bits_of(minps(a[half + i], b[half + i])) ||
+            bits_of(mx[i]) != bits_of(maxps(a[half + i], b[half + i])))
+          bad.add("a " + show(a[half + i]) + " b " + show(b[half + i]) + ": min " + show(mn[i]) + " max " +
+                  show(mx[i]));
+    }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(Float4, TruncateAndClampGiveTheScalarBinIndex) {
+  // The builder's bin index, 4-wide, against its scalar form std::clamp(int(x), 0, top) over
+  // values around every bin edge of 8, 16 and 32 bins, and beyond either end.
+  std::mt19937 rng(kSeed + 10);
+  for (int32_t top : {7, 15, 31}) {
+    for (int round = 0; round < 5000; ++round) {
+      alignas(16) Lanes4 x;
+      for (float& f : x) f = std::uniform_real_distribution<float>(-2.0f, float(top) + 3.0f)(rng);
+      if (round % 4 == 0) x[size_t(round / 4 % 4)] = float(round / 16 % (top + 2));  // exactly on an edge
+      alignas(16) int32_t got[4];
+      store4(got, min4(max4(truncate4(load4(x.data())), splat4(0)), splat4(top)));
+      for (size_t i = 0; i < 4; ++i) ASSERT_EQ(got[i], std::clamp(int(x[i]), 0, top)) << show(x[i]) << " top " << top;
+    }
+  }
 }
 
 /// Eight 3-vectors in SoA, aligned for Vec3x8::load.
