@@ -1,7 +1,7 @@
 #pragma once
 /// The 8-wide SIMD vocabulary, pinned to AVX2+FMA. xsimd's default batch is 16 lanes under
 /// AVX-512, so every 8-wide type names its architecture explicitly. Include this only from
-/// translation units compiled for AVX2+FMA (link rp::simd, which sets the flags).
+/// translation units compiled for AVX2+FMA (link rp::avx2, which sets the flags).
 ///
 /// xsimd 8.1 has no batch_bool::mask() and no reduce_min/max; they are added here, once.
 /// Functions over lanes take a `mask8 active` last where they have one.

@@ -2,7 +2,7 @@
 // lanes, on seeded random packets and on hand-picked special values (NaN, +-inf, +-0,
 // denormals, FLT_MAX) in every lane position.
 //
-// Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::simd) and
+// Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::avx2) and
 // with -ffp-contract=off (from rp::warnings); CMake gives both. Without -ffp-contract=off the
 // compiler may fuse a*b + c into one FMA, in the scalar oracle or in the 8-wide code, and the
 // bit-exact Vec3x8 tests fail; Float8Build.NoFmaContraction names that cause directly.
@@ -29,7 +29,7 @@
 #include "simd/float8.h"
 
 #if !defined(__AVX2__) || !defined(__FMA__)
-#error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::simd)"
+#error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::avx2)"
 #endif
 
 namespace rp::simd {
