@@ -19,11 +19,9 @@ namespace rp::simd {
 
 using Arch = xsimd::fma3<xsimd::avx2>;
 using float8 = xsimd::batch<float, Arch>;
-using int8 = xsimd::batch<int32_t, Arch>;
 using mask8 = xsimd::batch_bool<float, Arch>;
 
 static_assert(float8::size == 8, "raypack's packets are 8 rays wide");
-static_assert(int8::size == 8, "raypack's packets are 8 rays wide");
 
 /// Bit i set when lane i of m is true (bits 8..31 clear).
 inline uint32_t movemask(const mask8& m) { return uint32_t(_mm256_movemask_ps(__m256(m))); }
@@ -100,24 +98,12 @@ inline float8 load_unaligned_nan_past(const float* p, const float8& past) {
 /// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
 inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
 
-/// Index of the lowest set bit (bits != 0).
-inline int first_lane(uint32_t bits) { return std::countr_zero(bits); }
 /// Number of set bits.
 inline int lane_count(uint32_t bits) { return std::popcount(bits); }
 
 /// Lane i of v in every lane (i in 0..7): one permute, no trip through memory.
 inline float8 broadcast_lane(const float8& v, int i) {
   return _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(i));
-}
-
-/// Lanes of v whose bit is set in `bits`, packed to the front in lane order (the rest are
-/// unspecified); returns how many. The compress step xsimd 8.1 lacks.
-inline int compress(uint32_t bits, const float8& v, float* out) {
-  alignas(32) float lanes[8];
-  v.store_aligned(lanes);
-  int n = 0;
-  for (; bits; bits &= bits - 1) out[n++] = lanes[std::countr_zero(bits)];
-  return n;
 }
 
 /// Transposes the 8x8 matrix whose row i is m[i], in place: afterwards lane i of m[j] is the
@@ -174,18 +160,7 @@ struct Vec3x8 {
   }
 };
 
-inline Vec3x8 operator+(const Vec3x8& a, const Vec3x8& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 inline Vec3x8 operator-(const Vec3x8& a, const Vec3x8& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3x8 operator*(const Vec3x8& a, const float8& s) { return {a.x * s, a.y * s, a.z * s}; }
-
-/// Dot product evaluated exactly as the scalar rp::dot ((ax*bx + ay*by) + az*bz, no FMA), so
-/// that 8-wide kernels give the bits of the scalar routines.
-inline float8 dot(const Vec3x8& a, const Vec3x8& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-/// Cross product evaluated exactly as the scalar rp::cross (no FMA).
-inline Vec3x8 cross(const Vec3x8& a, const Vec3x8& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
 
 /// Cross product with one FMA per component, in the order of rp::cross_fma (and Embree's
 /// Vec3 cross): fms(a.y, b.z, a.z * b.y), ...
@@ -196,11 +171,6 @@ inline Vec3x8 cross_fma(const Vec3x8& a, const Vec3x8& b) {
 /// Dot product with two FMAs, in the order of rp::dot_fma: fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
 inline float8 dot_fma(const Vec3x8& a, const Vec3x8& b) {
   return xsimd::fma(a.x, b.x, xsimd::fma(a.y, b.y, a.z * b.z));
-}
-
-/// Lane-wise choice: m ? a : b.
-inline Vec3x8 select(const mask8& m, const Vec3x8& a, const Vec3x8& b) {
-  return {xsimd::select(m, a.x, b.x), xsimd::select(m, a.y, b.y), xsimd::select(m, a.z, b.z)};
 }
 
 }  // namespace rp::simd
