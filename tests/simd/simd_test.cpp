@@ -3,7 +3,7 @@
 // denormals, FLT_MAX) in every lane position.
 //
 // Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::avx2) and
-// with -ffp-contract=off (from rp::warnings); CMake gives both. Without -ffp-contract=off the
+// with -ffp-contract=off (from rp::fp_strict); CMake gives both. Without -ffp-contract=off the
 // compiler may fuse a*b + c into one FMA, in scalar or in 8-wide code, and the kernels lose
 // the bits of their scalar twins; Float8Build.NoFmaContraction names that cause directly.
 
