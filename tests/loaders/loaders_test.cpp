@@ -1,6 +1,7 @@
 /// Scene-file loaders: OBJ (+MTL) through tinyobjloader, PLY by hand, load_scene dispatch.
 /// Small files are written to a scratch folder by the tests themselves; the real models of
-/// ../shared/scenes are checked against the triangle counts of its README when present.
+/// RAYPACK_SHARED_SCENES (CMake; ../shared/scenes by default) are checked against the triangle
+/// counts of its README when present.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -776,7 +777,7 @@ class RealModels : public testing::TestWithParam<RealModel> {};
 
 TEST_P(RealModels, TriangleCountMatchesTheReadme) {
   const fs::path dir = RP_SHARED_SCENES;
-  if (!fs::is_directory(dir)) GTEST_SKIP() << "../shared/scenes is absent: real-model loader checks not run";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir.string() << " is absent: real-model loader checks not run";
   const RealModel& model = GetParam();
   const std::string path = (dir / model.file).string();
   const auto start = std::chrono::steady_clock::now();
