@@ -1,5 +1,6 @@
 #pragma once
-/// Rays, hits and 8-ray packets: the data that crosses the backend seam.
+/// Rays and hits: the data that crosses the backend seam, as spans of Ray in and spans of Hit
+/// out (engine/backend.h). Packets are each backend's own layout and never cross it.
 ///
 /// Hit convention (every backend, every routine): a surface point at parameter t counts
 /// only when tnear <= t <= tfar (both ends closed). Directions are never normalized by
@@ -89,32 +90,5 @@ struct Hit {
 /// single-ray (incoherent) traversal. Primary rays from 4x2 pixel blocks are coherent;
 /// diffuse bounces are not.
 enum class Coherence : uint8_t { coherent, incoherent };
-
-/// Eight rays in SoA, lane i valid when bit i of `active` is set. 264 bytes.
-struct RayPacket8 {
-  alignas(32) float org_x[8], org_y[8], org_z[8];
-  alignas(32) float dir_x[8], dir_y[8], dir_z[8];
-  alignas(32) float tnear[8], tfar[8];
-  uint32_t active = 0;  ///< bit mask of valid lanes
-
-  /// Lane i from / to AoS.
-  void set(int i, const Ray& r) {
-    org_x[i] = r.org.x; org_y[i] = r.org.y; org_z[i] = r.org.z;
-    dir_x[i] = r.dir.x; dir_y[i] = r.dir.y; dir_z[i] = r.dir.z;
-    tnear[i] = r.tnear; tfar[i] = r.tfar;
-    active |= 1u << i;
-  }
-  Ray get(int i) const {
-    return {{org_x[i], org_y[i], org_z[i]}, tnear[i], {dir_x[i], dir_y[i], dir_z[i]}, tfar[i]};
-  }
-};
-
-/// Eight hits in SoA, matching a RayPacket8 lane for lane.
-struct HitPacket8 {
-  alignas(32) float t[8], u[8], v[8];
-  alignas(32) uint32_t prim_id[8];
-
-  Hit get(int i) const { return {t[i], prim_id[i], u[i], v[i]}; }
-};
 
 }  // namespace rp

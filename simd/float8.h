@@ -1,7 +1,7 @@
 #pragma once
 /// The 8-wide SIMD vocabulary, pinned to AVX2+FMA. xsimd's default batch is 16 lanes under
 /// AVX-512, so every 8-wide type names its architecture explicitly. Include this only from
-/// translation units compiled for AVX2+FMA (link rp::simd, which sets the flags).
+/// translation units compiled for AVX2+FMA (link rp::avx2, which sets the flags).
 ///
 /// xsimd 8.1 has no batch_bool::mask() and no reduce_min/max; they are added here, once.
 /// Functions over lanes take a `mask8 active` last where they have one.
@@ -19,11 +19,9 @@ namespace rp::simd {
 
 using Arch = xsimd::fma3<xsimd::avx2>;
 using float8 = xsimd::batch<float, Arch>;
-using int8 = xsimd::batch<int32_t, Arch>;
 using mask8 = xsimd::batch_bool<float, Arch>;
 
 static_assert(float8::size == 8, "raypack's packets are 8 rays wide");
-static_assert(int8::size == 8, "raypack's packets are 8 rays wide");
 
 /// Bit i set when lane i of m is true (bits 8..31 clear).
 inline uint32_t movemask(const mask8& m) { return uint32_t(_mm256_movemask_ps(__m256(m))); }
@@ -71,27 +69,41 @@ inline float reduce_max(const float8& v) {
   return _mm256_cvtss_f32(m);
 }
 
+/// Lanes from eight 32-bit integers at the 32-byte aligned `lanes`, each 0 (false) or -1
+/// (true: every bit set, as a comparison gives).
+inline mask8 load_mask(const int32_t* lanes) {
+  return mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(lanes))));
+}
+
+/// Stores m at the 32-byte aligned `lanes` as eight 32-bit integers: -1 for true, 0 for false.
+inline void store_mask(int32_t* lanes, const mask8& m) {
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), _mm256_castps_si256(__m256(m)));
+}
+
+/// Every bit set in lanes n..7 and clear in lanes 0..n-1 (n = 0..8): what
+/// load_unaligned_nan_past ORs into a load to make the lanes past the first n NaN.
+inline float8 nan_past(uint32_t n) {
+  alignas(32) static constexpr int32_t kOnes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
+  return _mm256_castsi256_ps(~_mm256_loadu_si256(reinterpret_cast<const __m256i*>(kOnes + 8 - n)));
+}
+
+/// Eight floats from unaligned `p` with the lanes set in `past` (nan_past(n)) made NaN: the
+/// first n floats of a partial block. All 32 bytes are read, so the floats after the first n
+/// must be readable; their values are dropped. One OR per load, where a masked load
+/// (VMASKMOVPS) is slower.
+inline float8 load_unaligned_nan_past(const float* p, const float8& past) {
+  return _mm256_or_ps(_mm256_loadu_ps(p), past);
+}
+
 /// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
 inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
 
-/// Index of the lowest set bit (bits != 0).
-inline int first_lane(uint32_t bits) { return std::countr_zero(bits); }
 /// Number of set bits.
 inline int lane_count(uint32_t bits) { return std::popcount(bits); }
 
 /// Lane i of v in every lane (i in 0..7): one permute, no trip through memory.
 inline float8 broadcast_lane(const float8& v, int i) {
   return _mm256_permutevar8x32_ps(v, _mm256_set1_epi32(i));
-}
-
-/// Lanes of v whose bit is set in `bits`, packed to the front in lane order (the rest are
-/// unspecified); returns how many. The compress step xsimd 8.1 lacks.
-inline int compress(uint32_t bits, const float8& v, float* out) {
-  alignas(32) float lanes[8];
-  v.store_aligned(lanes);
-  int n = 0;
-  for (; bits; bits &= bits - 1) out[n++] = lanes[std::countr_zero(bits)];
-  return n;
 }
 
 /// Transposes the 8x8 matrix whose row i is m[i], in place: afterwards lane i of m[j] is the
@@ -148,18 +160,7 @@ struct Vec3x8 {
   }
 };
 
-inline Vec3x8 operator+(const Vec3x8& a, const Vec3x8& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 inline Vec3x8 operator-(const Vec3x8& a, const Vec3x8& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3x8 operator*(const Vec3x8& a, const float8& s) { return {a.x * s, a.y * s, a.z * s}; }
-
-/// Dot product evaluated exactly as the scalar rp::dot ((ax*bx + ay*by) + az*bz, no FMA), so
-/// that 8-wide kernels give the bits of the scalar routines.
-inline float8 dot(const Vec3x8& a, const Vec3x8& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-/// Cross product evaluated exactly as the scalar rp::cross (no FMA).
-inline Vec3x8 cross(const Vec3x8& a, const Vec3x8& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
 
 /// Cross product with one FMA per component, in the order of rp::cross_fma (and Embree's
 /// Vec3 cross): fms(a.y, b.z, a.z * b.y), ...
@@ -170,11 +171,6 @@ inline Vec3x8 cross_fma(const Vec3x8& a, const Vec3x8& b) {
 /// Dot product with two FMAs, in the order of rp::dot_fma: fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
 inline float8 dot_fma(const Vec3x8& a, const Vec3x8& b) {
   return xsimd::fma(a.x, b.x, xsimd::fma(a.y, b.y, a.z * b.z));
-}
-
-/// Lane-wise choice: m ? a : b.
-inline Vec3x8 select(const mask8& m, const Vec3x8& a, const Vec3x8& b) {
-  return {xsimd::select(m, a.x, b.x), xsimd::select(m, a.y, b.y), xsimd::select(m, a.z, b.z)};
 }
 
 }  // namespace rp::simd

@@ -1,7 +1,6 @@
 #include "backends/embree/embree_backend.h"
 
 #include <embree3/rtcore.h>
-#include <xmmintrin.h>
 
 #include <algorithm>
 #include <atomic>
@@ -11,6 +10,7 @@
 
 #include "engine/error.h"
 #include "engine/geometry/triangle.h"
+#include "simd/flush_denormals.h"
 
 namespace rp::embree {
 
@@ -78,19 +78,6 @@ Device& device_for(const std::string& config) {
   }
   return *d;
 }
-
-/// Flush-to-zero and denormals-are-zero for the calling thread while it traces, as Embree
-/// asks of every thread that calls it; the caller's MXCSR is restored afterwards.
-class FlushDenormals {
- public:
-  FlushDenormals() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
-  ~FlushDenormals() { _mm_setcsr(saved_); }
-  FlushDenormals(const FlushDenormals&) = delete;
-  FlushDenormals& operator=(const FlushDenormals&) = delete;
-
- private:
-  unsigned int saved_;
-};
 
 /// What the user-geometry callbacks see: the scene and the kind's first prim_id.
 struct UserData {
@@ -272,7 +259,7 @@ class EmbreeBackend final : public Backend {
   }
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
-    FlushDenormals ftz;
+    simd::FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) hits[i] = valid_ray(rays[i]) ? intersect1(q, i) : Hit{};
@@ -286,7 +273,7 @@ class EmbreeBackend final : public Backend {
   }
 
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
-    FlushDenormals ftz;
+    simd::FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {

@@ -3,8 +3,6 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <atomic>
 #include <bit>
@@ -18,10 +16,14 @@
 
 #include "backends/simd/bvh8.h"
 #include "engine/error.h"
+#include "simd/float4.h"
 
 namespace rp::bvh8 {
 
 namespace {
+
+using simd::float4;
+using simd::int4;
 
 /// A primitive's box and the point the splits sort it by (triangle centroid, the seeds'
 /// "centre of mass"; box centre for analytic primitives). Trivial, so that the build's array
@@ -52,15 +54,13 @@ using RefArray = std::vector<PrimRef, NoInitAllocator<PrimRef>>;
 
 /// Four floats of a PrimRef from float `at` (0: box.lo, 3: box.hi); the fourth lane holds the
 /// next field and is never used.
-inline __m128 load4(const PrimRef& r, int at) { return _mm_loadu_ps(reinterpret_cast<const float*>(&r) + at); }
+inline float4 load4(const PrimRef& r, int at) { return simd::load4(reinterpret_cast<const float*>(&r) + at); }
 /// The centroid with a zero fourth lane (the prim_id's bits would be a denormal float).
-inline __m128 load_centroid(const PrimRef& r) {
-  return _mm_and_ps(load4(r, 6), _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)));
-}
-inline Box3f to_box(__m128 lo, __m128 hi) {
+inline float4 load_centroid(const PrimRef& r) { return simd::load3(r.centroid); }
+inline Box3f to_box(float4 lo, float4 hi) {
   alignas(16) float l[4], h[4];
-  _mm_store_ps(l, lo);
-  _mm_store_ps(h, hi);
+  simd::store4(l, lo);
+  simd::store4(h, hi);
   return Box3f({l[0], l[1], l[2]}, {h[0], h[1], h[2]});
 }
 
@@ -136,14 +136,15 @@ class Builder {
   /// large ranges (min and max are exact, so the result does not depend on how the range is
   /// cut).
   struct Bounds {
-    __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity()), hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
-    __m128 clo = lo, chi = hi;
+    float4 lo = simd::splat4(std::numeric_limits<float>::infinity());
+    float4 hi = simd::splat4(-std::numeric_limits<float>::infinity());
+    float4 clo = lo, chi = hi;
     uint32_t analytic = 0;
     void join(const Bounds& o) {
-      lo = _mm_min_ps(lo, o.lo);
-      hi = _mm_max_ps(hi, o.hi);
-      clo = _mm_min_ps(clo, o.clo);
-      chi = _mm_max_ps(chi, o.chi);
+      lo = simd::min4(lo, o.lo);
+      hi = simd::max4(hi, o.hi);
+      clo = simd::min4(clo, o.clo);
+      chi = simd::max4(chi, o.chi);
       analytic += o.analytic;
     }
   };
@@ -155,11 +156,11 @@ class Builder {
     auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bounds b) {
       for (uint32_t i = r.begin(); i < r.end(); ++i) {
         const PrimRef& p = refs_[i];
-        const __m128 c = load_centroid(p);
-        b.lo = _mm_min_ps(b.lo, load4(p, 0));
-        b.hi = _mm_max_ps(b.hi, load4(p, 3));
-        b.clo = _mm_min_ps(b.clo, c);
-        b.chi = _mm_max_ps(b.chi, c);
+        const float4 c = load_centroid(p);
+        b.lo = simd::min4(b.lo, load4(p, 0));
+        b.hi = simd::max4(b.hi, load4(p, 3));
+        b.clo = simd::min4(b.clo, c);
+        b.chi = simd::max4(b.chi, c);
         b.analytic += p.prim_id >= first_analytic_;
       }
       return b;
@@ -175,22 +176,22 @@ class Builder {
   /// of a centroid in one 4-wide step, each bin box a 4-wide min/max (in parallel for large
   /// ranges; unions and integer sums are exact, so the bins do not depend on the cut either).
   struct Bins {
-    __m128 lo[3][kBins], hi[3][kBins];
+    float4 lo[3][kBins], hi[3][kBins];
     uint32_t count[3][kBins];
     int nbins;
     explicit Bins(int n) : nbins(n) {
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < n; ++b) {
-          lo[a][b] = _mm_set1_ps(std::numeric_limits<float>::infinity());
-          hi[a][b] = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+          lo[a][b] = simd::splat4(std::numeric_limits<float>::infinity());
+          hi[a][b] = simd::splat4(-std::numeric_limits<float>::infinity());
           count[a][b] = 0;
         }
     }
     void join(const Bins& o) {
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < nbins; ++b) {
-          lo[a][b] = _mm_min_ps(lo[a][b], o.lo[a][b]);
-          hi[a][b] = _mm_max_ps(hi[a][b], o.hi[a][b]);
+          lo[a][b] = simd::min4(lo[a][b], o.lo[a][b]);
+          hi[a][b] = simd::max4(hi[a][b], o.hi[a][b]);
           count[a][b] += o.count[a][b];
         }
     }
@@ -203,20 +204,20 @@ class Builder {
     const float nb = float(nbins);
     const Vec3f scale{extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
                       extent.z > 0.0f ? nb / extent.z : 0.0f};
-    const __m128 origin = _mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
-    const __m128 scale4 = _mm_setr_ps(scale.x, scale.y, scale.z, 0.0f);
-    const __m128i top = _mm_set1_epi32(nbins - 1), zero = _mm_setzero_si128();
+    const float4 origin = simd::make_float4(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
+    const float4 scale4 = simd::make_float4(scale.x, scale.y, scale.z, 0.0f);
+    const int4 top = simd::splat4(nbins - 1), zero = simd::splat4(0);
     auto scan_into = [&](const tbb::blocked_range<uint32_t>& r, Bins& b) {
       for (uint32_t i = r.begin(); i < r.end(); ++i) {
         const PrimRef& p = refs_[i];
         // bin_of for x, y, z at once: the same subtraction, product and truncation
-        const __m128 t = _mm_mul_ps(_mm_sub_ps(load_centroid(p), origin), scale4);
+        const float4 t = (load_centroid(p) - origin) * scale4;
         alignas(16) int32_t k[4];
-        _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_min_epi32(_mm_max_epi32(_mm_cvttps_epi32(t), zero), top));
-        const __m128 lo = load4(p, 0), hi = load4(p, 3);
+        simd::store4(k, simd::min4(simd::max4(simd::truncate4(t), zero), top));
+        const float4 lo = load4(p, 0), hi = load4(p, 3);
         for (int a = 0; a < 3; ++a) {
-          b.lo[a][k[a]] = _mm_min_ps(b.lo[a][k[a]], lo);
-          b.hi[a][k[a]] = _mm_max_ps(b.hi[a][k[a]], hi);
+          b.lo[a][k[a]] = simd::min4(b.lo[a][k[a]], lo);
+          b.hi[a][k[a]] = simd::max4(b.hi[a][k[a]], hi);
           ++b.count[a][k[a]];
         }
       }

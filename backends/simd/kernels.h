@@ -301,12 +301,6 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
   return moller_trumbore8(org, dir, v0, e1, e2, simd::cross_fma(e2, e1), tnear, tfar);
 }
 
-/// The lane mask of the first n lanes (n = 0..8).
-inline __m256i first_lanes(uint32_t n) {
-  alignas(32) static constexpr int32_t kOnes[16] = {-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0};
-  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kOnes + 8 - n));
-}
-
 /// The primitives of a leaf of n (rows at `rows`, see Tri8) as Vec3x8: v0, p1, p2 (edges or
 /// vertices). Each row is one unaligned 8-wide load, which for n < 8 reads on into the next
 /// row or leaf (Bvh8::leaf_data ends in kLeafPad floats for the last one); those lanes are
@@ -315,8 +309,8 @@ inline __m256i first_lanes(uint32_t n) {
 struct LeafView {
   Vec3x8 v0, p1, p2;
   LeafView(const float* rows, uint32_t n) {
-    const __m256 past = _mm256_castsi256_ps(~first_lanes(n));  // all ones: a NaN
-    auto row = [&](uint32_t i) { return float8(_mm256_or_ps(_mm256_loadu_ps(rows + i * n), past)); };
+    const float8 past = simd::nan_past(n);
+    auto row = [&](uint32_t i) { return simd::load_unaligned_nan_past(rows + i * n, past); };
     v0 = {row(0), row(1), row(2)};
     p1 = {row(3), row(4), row(5)};
     p2 = {row(6), row(7), row(8)};
@@ -378,8 +372,8 @@ struct WatertightRays {
     org = Vec3x8::load(ox, oy, oz);
     dir = Vec3x8::load(dx, dy, dz);
     for (int j = 0; j < 3; ++j) {
-      is_x[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[2 * j]))));
-      is_y[j] = mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(a[2 * j + 1]))));
+      is_x[j] = simd::load_mask(a[2 * j]);
+      is_y[j] = simd::load_mask(a[2 * j + 1]);
     }
     sx = float8::load_aligned(fx);
     sy = float8::load_aligned(fy);
@@ -429,7 +423,7 @@ inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& 
     out.v.store_aligned(hv);
     tfar.store_aligned(tf);
     r.tnear.store_aligned(tn);
-    _mm256_store_si256(reinterpret_cast<__m256i*>(hit), _mm256_castps_si256(__m256(out.hit)));
+    simd::store_mask(hit, out.hit);
     for (uint32_t bits = exact; bits; bits &= bits - 1) {
       const int l = std::countr_zero(bits);
       const Ray ray{r.org.lane(l), tn[l], r.dir.lane(l), tf[l]};
@@ -439,8 +433,7 @@ inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& 
       hu[l] = h.u;
       hv[l] = h.v;
     }
-    out = {mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(hit)))),
-           float8::load_aligned(ht), float8::load_aligned(hu), float8::load_aligned(hv)};
+    out = {simd::load_mask(hit), float8::load_aligned(ht), float8::load_aligned(hu), float8::load_aligned(hv)};
   }
   return out;
 }

@@ -387,8 +387,8 @@ class LargePacketTraversal {
     group_beam(w, members, n, octant, gb);
     Stack st;
     Entry* stack = st.at;
-    int sp = 0;
-    stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    stack[0] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    int sp = 1;
     uint8_t which[kMaxPackets];
     uint32_t lanes[kMaxPackets];
     while (sp > 0) {
@@ -437,8 +437,8 @@ class LargePacketTraversal {
     group_beam(w, members, n, octant, gb);
     Stack st;
     Entry* stack = st.at;
-    int sp = 0;
-    stack[sp++] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    stack[0] = {0, 0, uint8_t(n - 1), t_.bvh().bounds.lo, t_.bvh().bounds.hi};
+    int sp = 1;
     int live_packets = 0;
     for (int k = 0; k < n; ++k) live_packets += w.packets[members[k]].live != 0;
     auto occlude = [&](int i, uint32_t found) {  // packet index i

@@ -329,8 +329,8 @@ class Traversal {
     const typename Kernel::Single kr(r);
     const float8 tfar8(r.tfar);
     int32_t stack[kStackSize];
-    int sp = 0;
-    stack[sp++] = root;
+    stack[0] = root;
+    int sp = 1;
     while (sp > 0) {
       const int32_t ref = stack[--sp];
       if (!is_leaf(ref)) {
@@ -360,8 +360,8 @@ class Traversal {
   void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                       std::span<const Ray> rays, PacketHits& h) const noexcept {
     PacketEntry stack[kStackSize];
-    int sp = 0;
-    stack[sp++] = {root, mask};
+    stack[0] = {root, mask};
+    int sp = 1;
     while (sp > 0) {
       const PacketEntry e = stack[--sp];
       if (simd::lane_count(e.mask) <= kSingleRayLanes) {
@@ -440,8 +440,8 @@ class Traversal {
   uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
                       std::span<const Ray> rays, const float8& tfar) const noexcept {
     PacketEntry stack[kStackSize];
-    int sp = 0;
-    stack[sp++] = {root, live};
+    stack[0] = {root, live};
+    int sp = 1;
     uint32_t done = 0;
     while (sp > 0 && live & ~done) {
       PacketEntry e = stack[--sp];

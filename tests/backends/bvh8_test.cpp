@@ -1,6 +1,6 @@
 // The simd backend's 8-wide BVH and kernels: structure invariants, determinism across thread
 // counts, and the 8-wide kernels against the scalar routines of engine/geometry.
-// Built for AVX2+FMA with -ffp-contract=off (CMake links rp::simd and rp::warnings).
+// Built for AVX2+FMA with -ffp-contract=off (CMake links rp::avx2 and rp::fp_strict).
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -158,18 +158,5 @@ TEST(DefaultScene, HasEveryPrimitiveKindAndAFiftyThousandTriangleMesh) {
   EXPECT_TRUE(is_finite(b.lo) && is_finite(b.hi));
 }
 
-TEST(RayPacket8, LanesRoundTripAndSetTheActiveMask) {
-  RayPacket8 p;
-  EXPECT_EQ(p.active, 0u);
-  for (int i : {0, 3, 7}) p.set(i, Ray{{float(i), 1, 2}, 0.5f, {0, -0.0f, 1}, float(10 + i)});
-  EXPECT_EQ(p.active, (1u << 0) | (1u << 3) | (1u << 7));
-  const Ray r = p.get(3);
-  EXPECT_EQ(r.org, (Vec3f{3, 1, 2}));
-  EXPECT_EQ(r.dir, (Vec3f{0, -0.0f, 1}));
-  EXPECT_TRUE(std::signbit(r.dir.y));
-  EXPECT_EQ(r.tnear, 0.5f);
-  EXPECT_EQ(r.tfar, 13.0f);
-}
-
 }  // namespace
 }  // namespace rp

@@ -1,5 +1,6 @@
 // load_scene: the embedded default, dispatch by extension, lights from the bounds; and the real
-// models of ../shared/scenes against the triangle counts of its README, when present.
+// models of RAYPACK_SHARED_SCENES (CMake; ../shared/scenes by default) against the triangle
+// counts of its README, when present.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -88,7 +89,7 @@ class RealModels : public testing::TestWithParam<RealModel> {};
 
 TEST_P(RealModels, TriangleCountMatchesTheReadme) {
   const fs::path dir = RP_SHARED_SCENES;
-  if (!fs::is_directory(dir)) GTEST_SKIP() << "../shared/scenes is absent: real-model loader checks not run";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir.string() << " is absent: real-model loader checks not run";
   const RealModel& model = GetParam();
   const std::string path = (dir / model.file).string();
   const auto start = std::chrono::steady_clock::now();

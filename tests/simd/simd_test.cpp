@@ -1,20 +1,22 @@
-// Tests for simd/float8.h: every helper against a plain scalar loop over its lanes, on seeded
-// random packets and on hand-picked special values (NaN, +-inf, +-0, denormals, FLT_MAX) in
-// every lane position.
+// Tests for simd/float8.h and simd/float4.h: every helper against a plain scalar loop over its
+// lanes, on seeded random packets and on hand-picked special values (NaN, +-inf, +-0,
+// denormals, FLT_MAX) in every lane position.
 //
-// Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::simd) and
-// with -ffp-contract=off (from rp::warnings); CMake gives both. Without -ffp-contract=off the
-// compiler may fuse a*b + c into one FMA, in the scalar oracle or in the 8-wide code, and the
-// bit-exact Vec3x8 tests fail; Float8Build.NoFmaContraction names that cause directly.
+// Build: this translation unit must be compiled for AVX2+FMA (-mavx2 -mfma, from rp::avx2) and
+// with -ffp-contract=off (from rp::fp_strict); CMake gives both. Without -ffp-contract=off the
+// compiler may fuse a*b + c into one FMA, in scalar or in 8-wide code, and the kernels lose
+// the bits of their scalar twins; Float8Build.NoFmaContraction names that cause directly.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -23,10 +25,11 @@
 #include <vector>
 
 #include "engine/math.h"
+#include "simd/float4.h"
 #include "simd/float8.h"
 
 #if !defined(__AVX2__) || !defined(__FMA__)
-#error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::simd)"
+#error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::avx2)"
 #endif
 
 namespace rp::simd {
@@ -165,7 +168,8 @@ TEST(Float8Build, NoFmaContraction) {
   volatile float vx = 1.0f + 0x1p-12f, vc = -(1.0f + 0x1p-11f);
   const Vec3f a{vx, 1.0f, 0.0f}, b{vx, vc, 0.0f};
   EXPECT_EQ(rp::dot(a, b), 0.0f) << "scalar code was FMA-contracted: compile with -ffp-contract=off";
-  EXPECT_EQ(unpack(dot(Vec3x8(a), Vec3x8(b)))[0], 0.0f)
+  const float8 x(vx), c(vc), one(1.0f), zero(0.0f);
+  EXPECT_EQ(unpack(x * x + one * c + zero * zero)[0], 0.0f)
       << "8-wide code was FMA-contracted: compile with -ffp-contract=off";
 }
 
@@ -203,12 +207,39 @@ TEST(MaskFromBits, RoundTripsThroughMovemaskForAll256Patterns) {
     const mask8 m = mask_from_bits(bits);
     EXPECT_EQ(movemask(m), bits);
     // Each lane is all ones or all zeros, as a comparison would give; xsimd's select needs that.
-    alignas(32) float lanes[8];
-    _mm256_store_ps(lanes, __m256(m));
-    for (int i = 0; i < 8; ++i)
-      EXPECT_EQ(bits_of(lanes[i]), (bits >> i) & 1 ? 0xffffffffu : 0u) << "bits " << bits << " lane " << i;
+    alignas(32) int32_t lanes[8];
+    store_mask(lanes, m);
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(lanes[i], (bits >> i) & 1 ? -1 : 0) << "bits " << bits << " lane " << i;
     // Only bits 0..7 name lanes.
     EXPECT_EQ(movemask(mask_from_bits(bits | 0xabcdef00u)), bits);
+  }
+}
+
+TEST(LoadMask, RoundTripsThroughStoreMaskForAll256Patterns) {
+  for (uint32_t bits = 0; bits < 256; ++bits) {
+    alignas(32) int32_t in[8], out[8];
+    for (int i = 0; i < 8; ++i) in[i] = (bits >> i) & 1 ? -1 : 0;
+    const mask8 m = load_mask(in);
+    EXPECT_EQ(movemask(m), bits);
+    store_mask(out, m);
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(out[i], in[i]) << "bits " << bits << " lane " << i;
+  }
+}
+
+TEST(LoadUnalignedNanPast, KeepsTheFirstNLanesBitExactlyAndSetsEveryBitOfTheRest) {
+  std::mt19937 rng(kSeed + 7);
+  for (int round = 0; round < 50; ++round) {
+    uint32_t in[16];
+    for (uint32_t& b : in) b = rng();  // every bit pattern: NaNs, -0, denormals included
+    float block[16];
+    std::memcpy(block, in, sizeof in);
+    for (uint32_t n = 0; n <= 8; ++n)
+      for (int at = 0; at < 8; ++at) {  // every alignment of the first float
+        const Lanes got = unpack(load_unaligned_nan_past(block + at, nan_past(n)));
+        for (uint32_t i = 0; i < 8; ++i)
+          ASSERT_EQ(bits_of(got[i]), i < n ? in[size_t(at) + i] : 0xffffffffu)
+              << "n " << n << " at " << at << " lane " << i;
+      }
   }
 }
 
@@ -337,14 +368,6 @@ TEST(ReduceMax, MatchesScalarMaxOverSpecialValues) { expect_reduce_matches(false
 TEST(ReduceMin, IgnoresNanLanesInEveryPattern) { expect_reduce_matches(true, nan_pattern_packets(true)); }
 TEST(ReduceMax, IgnoresNanLanesInEveryPattern) { expect_reduce_matches(false, nan_pattern_packets(false)); }
 
-TEST(FirstLane, MatchesScalarScanForAllNonZeroPatterns) {
-  for (uint32_t bits = 1; bits < 256; ++bits) {
-    int want = 0;
-    while (!((bits >> want) & 1)) ++want;
-    EXPECT_EQ(first_lane(bits), want) << "bits " << bits;
-  }
-}
-
 TEST(LaneCount, MatchesScalarCountForAllPatterns) {
   for (uint32_t bits = 0; bits < 256; ++bits) {
     int want = 0;
@@ -368,27 +391,58 @@ TEST(BroadcastLane, CopiesTheChosenLaneBitExactlyToEveryLane) {
   }
 }
 
-TEST(Compress, PacksSelectedLanesInLaneOrderForAll256Patterns) {
-  constexpr uint32_t kGuard = 0xdeadbeef;
-  std::mt19937 rng(kSeed + 4);
+using Lanes4 = std::array<float, 4>;
+
+Lanes4 unpack4(float4 v) {
+  alignas(16) Lanes4 l;
+  store4(l.data(), v);
+  return l;
+}
+
+TEST(Float4, Load3KeepsThreeLanesBitExactlyAndZeroesTheFourth) {
+  std::mt19937 rng(kSeed + 8);
+  for (int round = 0; round < 1000; ++round) {
+    uint32_t in[4];
+    for (uint32_t& b : in) b = rng();  // every bit pattern, the fourth too
+    float block[4];
+    std::memcpy(block, in, sizeof in);
+    const Lanes4 got = unpack4(load3(block));
+    for (int i = 0; i < 3; ++i) ASSERT_EQ(bits_of(got[size_t(i)]), in[i]) << "lane " << i;
+    ASSERT_EQ(bits_of(got[3]), 0u);
+    const Lanes4 all = unpack4(load4(block));
+    for (int i = 0; i < 4; ++i) ASSERT_EQ(bits_of(all[size_t(i)]), in[i]) << "load4 lane " << i;
+  }
+}
+
+TEST(Float4, MinAndMaxMatchTheMinpsRuleBitExactly) {
   Mismatches bad;
-  for (uint32_t bits = 0; bits < 256; ++bits) {
-    for (int rep = 0; rep < 64; ++rep) {
-      const Lanes v = rep % 4 ? random_lanes(rng) : random_special_lanes(rng);
-      std::vector<uint32_t> want;
-      for (int i = 0; i < 8; ++i)
-        if ((bits >> i) & 1) want.push_back(bits_of(v[i]));
-      // out holds 8 floats; the 8 after it must stay untouched.
-      float out[16];
-      for (float& f : out) f = from_bits(kGuard);
-      const int n = compress(bits, pack(v), out);
-      bool ok = n == int(want.size());
-      for (size_t i = 0; ok && i < want.size(); ++i) ok = bits_of(out[i]) == want[i];
-      for (int i = 8; i < 16; ++i) ok = ok && bits_of(out[i]) == kGuard;
-      if (!ok) bad.add("compress bits " + std::to_string(bits) + " of " + show(v) + ": n " + std::to_string(n));
+  for (const auto& [a, b] : binary_cases(kSeed + 9))
+    for (size_t half = 0; half < 8; half += 4) {
+      const Lanes4 mn = unpack4(min4(load4(a.data() + half), load4(b.data() + half)));
+      const Lanes4 mx = unpack4(max4(load4(a.data() + half), load4(b.data() + half)));
+      for (size_t i = 0; i < 4; ++i)
+        if (bits_of(mn[i]) != bits_of(minps(a[half + i], b[half + i])) ||
+            bits_of(mx[i]) != bits_of(maxps(a[half + i], b[half + i])))
+          bad.add("a " + show(a[half + i]) + " b " + show(b[half + i]) + ": min " + show(mn[i]) + " max " +
+                  show(mx[i]));
+    }
+  EXPECT_EQ(bad.count(), 0);
+}
+
+TEST(Float4, TruncateAndClampGiveTheScalarBinIndex) {
+  // The builder's bin index, 4-wide, against its scalar form std::clamp(int(x), 0, top) over
+  // values around every bin edge of 8, 16 and 32 bins, and beyond either end.
+  std::mt19937 rng(kSeed + 10);
+  for (int32_t top : {7, 15, 31}) {
+    for (int round = 0; round < 5000; ++round) {
+      alignas(16) Lanes4 x;
+      for (float& f : x) f = std::uniform_real_distribution<float>(-2.0f, float(top) + 3.0f)(rng);
+      if (round % 4 == 0) x[size_t(round / 4 % 4)] = float(round / 16 % (top + 2));  // exactly on an edge
+      alignas(16) int32_t got[4];
+      store4(got, min4(max4(truncate4(load4(x.data())), splat4(0)), splat4(top)));
+      for (size_t i = 0; i < 4; ++i) ASSERT_EQ(got[i], std::clamp(int(x[i]), 0, top)) << show(x[i]) << " top " << top;
     }
   }
-  EXPECT_EQ(bad.count(), 0);
 }
 
 /// Eight 3-vectors in SoA, aligned for Vec3x8::load.
@@ -402,11 +456,10 @@ struct SoA {
 
 struct Vec3Case {
   SoA a, b;
-  Lanes s;
 };
 
 /// Random cases, special-only cases, and every ordered pair of specials in every lane of each
-/// component of a and b (s takes b's specials; the other components random).
+/// component of a and b (the other components random).
 std::vector<Vec3Case> vec3_cases() {
   std::mt19937 rng(kSeed + 5);
   std::vector<Vec3Case> cases;
@@ -416,7 +469,6 @@ std::vector<Vec3Case> vec3_cases() {
     Vec3Case c;
     c.a.x = gen(), c.a.y = gen(), c.a.z = gen();
     c.b.x = gen(), c.b.y = gen(), c.b.z = gen();
-    c.s = gen();
     cases.push_back(c);
   }
   for (int comp = 0; comp < 3; ++comp) {
@@ -426,7 +478,6 @@ std::vector<Vec3Case> vec3_cases() {
       c.b.x = random_lanes(rng), c.b.y = random_lanes(rng), c.b.z = random_lanes(rng);
       c.a.component(comp) = pa;
       c.b.component(comp) = pb;
-      c.s = pb;
       cases.push_back(c);
     });
   }
@@ -443,7 +494,7 @@ void expect_vec3_op(const char* name, const std::function<Vec3x8(const Vec3Case&
       const Vec3f want = scalar(c, i);
       if (!same_value(got.lane(i), want))
         bad.add(std::string(name) + " lane " + std::to_string(i) + ": a " + show(c.a.lane(i)) + " b " +
-                show(c.b.lane(i)) + " s " + show(c.s[i]) + ": want " + show(want) + " got " + show(got.lane(i)));
+                show(c.b.lane(i)) + ": want " + show(want) + " got " + show(got.lane(i)));
     }
   }
   EXPECT_EQ(bad.count(), 0);
@@ -496,60 +547,10 @@ TEST(Vec3x8, BroadcastFromVec3fFillsEveryLane) {
   }
 }
 
-TEST(Vec3x8, AddMatchesScalarBits) {
-  expect_vec3_op(
-      "+", [](const Vec3Case& c) { return c.a.load() + c.b.load(); },
-      [](const Vec3Case& c, int i) { return c.a.lane(i) + c.b.lane(i); });
-}
-
 TEST(Vec3x8, SubtractMatchesScalarBits) {
   expect_vec3_op(
       "-", [](const Vec3Case& c) { return c.a.load() - c.b.load(); },
       [](const Vec3Case& c, int i) { return c.a.lane(i) - c.b.lane(i); });
-}
-
-TEST(Vec3x8, ScaleMatchesScalarBits) {
-  expect_vec3_op(
-      "* float8", [](const Vec3Case& c) { return c.a.load() * pack(c.s); },
-      [](const Vec3Case& c, int i) { return c.a.lane(i) * c.s[i]; });
-}
-
-TEST(Vec3x8, DotMatchesScalarBits) {
-  // dot is a float8; it goes in x of the Vec3x8 the checker wants (y, z zero on both sides).
-  const float8 zero(0.0f);
-  expect_vec3_op(
-      "dot", [&](const Vec3Case& c) { return Vec3x8(dot(c.a.load(), c.b.load()), zero, zero); },
-      [](const Vec3Case& c, int i) { return Vec3f{rp::dot(c.a.lane(i), c.b.lane(i)), 0.0f, 0.0f}; });
-}
-
-TEST(Vec3x8, CrossMatchesScalarBits) {
-  expect_vec3_op(
-      "cross", [](const Vec3Case& c) { return cross(c.a.load(), c.b.load()); },
-      [](const Vec3Case& c, int i) { return rp::cross(c.a.lane(i), c.b.lane(i)); });
-}
-
-TEST(Vec3x8, SelectMatchesScalarChoiceBitExactly) {
-  Mismatches bad;
-  const std::vector<Vec3Case> cases = vec3_cases();
-  for (size_t n = 0; n < cases.size(); ++n) {
-    const Vec3Case& c = cases[n];
-    // Masks from bit patterns (all 256 in turn) and from comparisons with NaN lanes.
-    const uint32_t pattern = uint32_t(n % 256);
-    uint32_t less = 0;
-    for (int i = 0; i < 8; ++i) less |= uint32_t(c.a.x[i] < c.b.x[i]) << i;
-    const std::pair<mask8, uint32_t> masks[] = {{mask_from_bits(pattern), pattern},
-                                                {pack(c.a.x) < pack(c.b.x), less}};
-    for (const auto& [m, bits] : masks) {
-      const Vec3x8 got = select(m, c.a.load(), c.b.load());
-      for (int i = 0; i < 8; ++i) {
-        const Vec3f want = (bits >> i) & 1 ? c.a.lane(i) : c.b.lane(i);
-        if (!same_bits(got.lane(i), want))
-          bad.add("select bits " + std::to_string(bits) + " lane " + std::to_string(i) + ": want " + show(want) +
-                  " got " + show(got.lane(i)));
-      }
-    }
-  }
-  EXPECT_EQ(bad.count(), 0);
 }
 
 }  // namespace
