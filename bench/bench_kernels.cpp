@@ -67,7 +67,7 @@ std::vector<Tri8> random_blocks(TriangleLayout layout) {
 }
 
 /// One triangle test x8: one ray against the 8 triangles of a block. prepare(ray) is the
-/// per-ray set-up traversal does once per ray (outside the timing); kernel(prepared, block) -> Mt8.
+/// per-ray set-up traversal does once per ray (outside the timing); kernel(prepared, block) -> TriHit8.
 template <typename Prepare, typename Kernel>
 void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare prepare, Kernel kernel) {
   const std::vector<Tri8> blocks = random_blocks(layout);
@@ -75,7 +75,7 @@ void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare pre
   for (int k = 0; k < kSets; ++k) rays.push_back(prepare(random_ray()));
   size_t hits = 0, i = 0;
   for (auto _ : state) {
-    const Mt8 h = kernel(rays[i], LeafView(blocks[i]));
+    const TriHit8 h = kernel(rays[i], LeafView(blocks[i]));
     hits += size_t(std::popcount(simd::movemask(h.hit)));
     benchmark::DoNotOptimize(h.t);
     i = (i + 1) % kSets;

@@ -69,16 +69,29 @@ inline float reduce_max(const float8& v) {
   return _mm256_cvtss_f32(m);
 }
 
-/// Lanes from eight 32-bit integers at the 32-byte aligned `lanes`, each 0 (false) or -1
-/// (true: every bit set, as a comparison gives).
-inline mask8 load_mask(const int32_t* lanes) {
-  return mask8(_mm256_castsi256_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(lanes))));
-}
-
-/// Stores m at the 32-byte aligned `lanes` as eight 32-bit integers: -1 for true, 0 for false.
+/// Stores m at the 32-byte aligned `lanes` as eight 32-bit integers: -1 for true, 0 for false
+/// (the raw lanes, as the tests inspect them; a mask goes to scalar code as movemask bits).
 inline void store_mask(int32_t* lanes, const mask8& m) {
   _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), _mm256_castps_si256(__m256(m)));
 }
+
+/// N float8 values as scalars, for the few places 8-wide code goes lane by lane and back (a
+/// rare scalar fallback, a per-lane callback, rays gathered or hits written one at a time):
+/// `lanes[k][l]` is lane l of the k-th value, `load(k)` the k-th value again, with whatever
+/// the scalar loop wrote. Constructed from values (stored once) or empty (to be filled).
+template <size_t N>
+struct Spill {
+  alignas(32) float lanes[N][8];
+
+  Spill() = default;
+  template <class... V>
+    requires(sizeof...(V) == N)
+  explicit Spill(const V&... v) {
+    size_t k = 0;
+    (v.store_aligned(lanes[k++]), ...);
+  }
+  float8 load(size_t k) const { return float8::load_aligned(lanes[k]); }
+};
 
 /// Every bit set in lanes n..7 and clear in lanes 0..n-1 (n = 0..8): what
 /// load_unaligned_nan_past ORs into a load to make the lanes past the first n NaN.

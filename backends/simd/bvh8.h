@@ -82,7 +82,7 @@ struct HugePageAllocator {
 
 enum class SplitRule : uint8_t {
   sah,     ///< binned surface-area heuristic (16 bins per axis), the default
-  median,  ///< the seeds' rule: longest axis of the centroids, balanced median split
+  median,  ///< the lecture notes' rule: longest axis of the centroids, balanced median split
 };
 
 /// What the leaf blocks store for a triangle (see Tri8).

@@ -25,7 +25,7 @@ namespace {
 using simd::float4;
 using simd::int4;
 
-/// A primitive's box and the point the splits sort it by (triangle centroid, the seeds'
+/// A primitive's box and the point the splits sort it by (triangle centroid, the lecture notes'
 /// "centre of mass"; box centre for analytic primitives). Trivial, so that the build's array
 /// of them is allocated without a serial zeroing pass and first touched by the parallel loop
 /// that fills it (see RefArray).
@@ -288,7 +288,7 @@ class Builder {
     return (m == begin || m == end) ? object_median(begin, end) : m;
   }
 
-  /// The seeds' rule: split the longest axis of the node's box at the median centroid, so
+  /// The lecture notes' rule: split the longest axis of the node's box at the median centroid, so
   /// both halves hold the same number of primitives.
   uint32_t median_split(uint32_t begin, uint32_t end, const Box3f& box) {
     const int axis = max_abs_axis(box.extent());

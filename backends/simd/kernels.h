@@ -54,7 +54,7 @@ struct SingleRay {
   }
 };
 
-/// Slab test ×8: one ray against the 8 child boxes of `n` (seeds' slab method; the swap is
+/// Slab test ×8: one ray against the 8 child boxes of `n` (the lecture notes' slab method; the swap is
 /// the octant's near/far choice). Returns the bit mask of children hit within [tnear, tfar]
 /// and their entry distances. An entry distance may exceed the true one by the same slack
 /// the exit is granted, so a caller that later compares it with a hit distance must compare
@@ -263,8 +263,9 @@ inline uint32_t intersect_box_octant(const RayPacket& p, const bool neg[3], cons
   return simd::movemask(t_enter <= xsimd::fma(t_exit, float8(kSlabPad), p.abs_pad));
 }
 
-/// Result of moller_trumbore8: lanes that hit, with t and the barycentrics (u, v).
-struct Mt8 {
+/// Result of an 8-wide triangle test (moller_trumbore8, watertight8): lanes that hit, with t and
+/// the barycentrics (u, v).
+struct TriHit8 {
   mask8 hit;
   float8 t, u, v;
 };
@@ -278,7 +279,7 @@ struct Mt8 {
 /// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
 /// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite. The
 /// first form takes Ng = e2 x e1 computed once per triangle (by cross_fma: the same bits).
-inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+inline TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
                             const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
   const Vec3x8 c = v0 - org;
   const Vec3x8 r = simd::cross_fma(c, dir);
@@ -296,7 +297,7 @@ inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& 
 }
 
 /// The same, with the normal Ng = e2 x e1 computed here (cross_fma, as the scalar routine).
-inline Mt8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+inline TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
                             const Vec3x8& e2, const float8& tnear, const float8& tfar) {
   return moller_trumbore8(org, dir, v0, e1, e2, simd::cross_fma(e2, e1), tnear, tfar);
 }
@@ -334,8 +335,9 @@ struct WatertightRays {
   /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
   /// caller masks them).
   WatertightRays(const Ray* rays, size_t n) {
-    alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], fx[8], fy[8], fz[8], tn[8];
-    alignas(32) int32_t a[6][8];
+    simd::Spill<10> s;
+    auto& [ox, oy, oz, dx, dy, dz, fx, fy, fz, tn] = s.lanes;
+    uint32_t x_bits[3] = {0, 0, 0}, y_bits[3] = {0, 0, 0};  // lane i: axis k_j is x / is y
     const size_t lanes = n == 1 ? 1 : 8;
     for (size_t i = 0; i < lanes; ++i) {
       const Ray& r = rays[i < n ? i : 0];
@@ -348,8 +350,8 @@ struct WatertightRays {
       fz[i] = 1.0f / r.dir[kz];
       k[0] = kx, k[1] = ky, k[2] = kz;
       for (int j = 0; j < 3; ++j) {
-        a[2 * j][i] = k[j] == 0 ? -1 : 0;
-        a[2 * j + 1][i] = k[j] == 1 ? -1 : 0;
+        x_bits[j] |= uint32_t(k[j] == 0) << i;
+        y_bits[j] |= uint32_t(k[j] == 1) << i;
       }
       ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
       dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
@@ -369,16 +371,16 @@ struct WatertightRays {
       }
       return;
     }
-    org = Vec3x8::load(ox, oy, oz);
-    dir = Vec3x8::load(dx, dy, dz);
+    org = {s.load(0), s.load(1), s.load(2)};
+    dir = {s.load(3), s.load(4), s.load(5)};
     for (int j = 0; j < 3; ++j) {
-      is_x[j] = simd::load_mask(a[2 * j]);
-      is_y[j] = simd::load_mask(a[2 * j + 1]);
+      is_x[j] = simd::mask_from_bits(x_bits[j]);
+      is_y[j] = simd::mask_from_bits(y_bits[j]);
     }
-    sx = float8::load_aligned(fx);
-    sy = float8::load_aligned(fy);
-    sz = float8::load_aligned(fz);
-    tnear = float8::load_aligned(tn);
+    sx = s.load(6);
+    sy = s.load(7);
+    sz = s.load(8);
+    tnear = s.load(9);
   }
 
   /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz).
@@ -396,7 +398,7 @@ struct WatertightRays {
 /// edge's value for two triangles only when the vertices are the same floats, so the test
 /// takes the vertices (Tri8 in the vertex layout), never edges. Serves one ray against 8
 /// triangles and 8 rays against one triangle.
-inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
+inline TriHit8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
                        const float8& tfar) {
   const Vec3x8 a = v0 - r.org, b = v1 - r.org, c = v2 - r.org;
   const float8 a_z = r.axis(a, 2), b_z = r.axis(b, 2), c_z = r.axis(c, 2);
@@ -411,29 +413,24 @@ inline Mt8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& 
   const float8 sign = xsimd::select(det < zero, float8(-1.0f), one);
   const float8 t_signed = t_scaled * sign, abs_det = det * sign;
   const float8 t = t_scaled / det;
-  Mt8 out{~mixed & (det != zero) & (t_signed >= r.tnear * abs_det) & (t_signed <= tfar * abs_det) &
+  TriHit8 out{~mixed & (det != zero) & (t_signed >= r.tnear * abs_det) & (t_signed <= tfar * abs_det) &
               (t >= r.tnear) & (t <= tfar) & (t < inf) & (t > -inf),
           t, v / det, w / det};
   const uint32_t exact = simd::movemask((u == zero) | (v == zero) | (w == zero));
   if (exact) {  // rare: decide those lanes in double precision, by the scalar routine
-    alignas(32) float ht[8], hu[8], hv[8], tf[8], tn[8];
-    alignas(32) int32_t hit[8];
-    out.t.store_aligned(ht);
-    out.u.store_aligned(hu);
-    out.v.store_aligned(hv);
-    tfar.store_aligned(tf);
-    r.tnear.store_aligned(tn);
-    simd::store_mask(hit, out.hit);
+    simd::Spill<5> s(out.t, out.u, out.v, tfar, r.tnear);
+    auto& [ht, hu, hv, tf, tn] = s.lanes;
+    uint32_t hit = simd::movemask(out.hit);
     for (uint32_t bits = exact; bits; bits &= bits - 1) {
       const int l = std::countr_zero(bits);
       const Ray ray{r.org.lane(l), tn[l], r.dir.lane(l), tf[l]};
       const Intersection<float> h = intersect_triangle_watertight(ray, v0.lane(l), v1.lane(l), v2.lane(l));
-      hit[l] = h.hit ? -1 : 0;
+      hit = h.hit ? hit | 1u << l : hit & ~(1u << l);
       ht[l] = h.t;
       hu[l] = h.u;
       hv[l] = h.v;
     }
-    out = {simd::load_mask(hit), float8::load_aligned(ht), float8::load_aligned(hu), float8::load_aligned(hv)};
+    out = {simd::mask_from_bits(hit), s.load(0), s.load(1), s.load(2)};
   }
   return out;
 }

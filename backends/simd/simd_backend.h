@@ -12,7 +12,7 @@
 
 namespace rp::bvh8 {
 
-/// Variants: "default" (binned SAH build, Möller–Trumbore), "median" (the seeds' rule: longest
+/// Variants: "default" (binned SAH build, Möller–Trumbore), "median" (the lecture notes' rule: longest
 /// axis, centroid median, balanced), "watertight" (SAH build, the watertight triangle test of
 /// Woop, Benthin and Wald 2013: no ray passes between triangles that share an edge). Every
 /// variant traverses with conservative (padded) box tests.

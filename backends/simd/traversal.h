@@ -20,6 +20,7 @@
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/kernels.h"
+#include "backends/simd/packet.h"
 #include "engine/error.h"
 #include "engine/scene.h"
 
@@ -31,181 +32,6 @@ inline constexpr int kStackSize = 1024;
 
 /// A packet entry with at most this many active lanes continues as single rays.
 inline constexpr int kSingleRayLanes = 2;
-
-/// Primitive k of a leaf of n: rows `row`, `row` + 1, `row` + 2 (see Tri8), in every lane.
-inline Vec3x8 row3(const float* rows, uint32_t n, uint32_t row, uint32_t k) {
-  return Vec3x8(Vec3f{rows[row * n + k], rows[(row + 1) * n + k], rows[(row + 2) * n + k]});
-}
-
-/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
-/// edge layout. Single: one ray against a leaf's primitives; Triangle: one primitive of a leaf
-/// in every lane, with its normal computed once; Packet: the 8 rays of a packet against one
-/// Triangle.
-struct MtKernel {
-  static constexpr TriangleLayout kLayout = TriangleLayout::edges;
-  struct Single {
-    Vec3x8 org, dir;
-    float8 tnear;
-    explicit Single(const Ray& r) : org(r.org), dir(r.dir), tnear(r.tnear) {}
-    /// Lane `lane` of packet p (the ray `r`), from the packet's registers.
-    Single(const RayPacket& p, int lane, const Ray&)
-        : org(p.org.broadcast(lane)), dir(p.dir.broadcast(lane)), tnear(simd::broadcast_lane(p.tnear, lane)) {}
-    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
-      const LeafView lv(rows, n);
-      return moller_trumbore8(org, dir, lv.v0, lv.p1, lv.p2, tnear, tfar);
-    }
-  };
-  struct Triangle {
-    Vec3x8 v0, e1, e2, ng;
-    Triangle() = default;
-    Triangle(const float* rows, uint32_t n, uint32_t k)
-        : v0(row3(rows, n, 0, k)), e1(row3(rows, n, 3, k)), e2(row3(rows, n, 6, k)), ng(simd::cross_fma(e2, e1)) {}
-  };
-  struct Packet {
-    const RayPacket* p = nullptr;
-    Packet() = default;
-    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet) {}
-    Mt8 test(const Triangle& t, const float8& tfar) const {
-      return moller_trumbore8(p->org, p->dir, t.v0, t.e1, t.e2, t.ng, p->tnear, tfar);
-    }
-  };
-};
-
-/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the vertex
-/// layout; the traversal around it is the same conservative one.
-struct WatertightKernel {
-  static constexpr TriangleLayout kLayout = TriangleLayout::vertices;
-  struct Single {
-    WatertightRays r;
-    explicit Single(const Ray& ray) : r(&ray, 1) {}
-    Single(const RayPacket&, int, const Ray& ray) : r(&ray, 1) {}
-    Mt8 block(const float* rows, uint32_t n, const float8& tfar) const {
-      const LeafView lv(rows, n);
-      return watertight8(r, lv.v0, lv.p1, lv.p2, tfar);
-    }
-  };
-  struct Triangle {
-    Vec3x8 v0, v1, v2;
-    Triangle() = default;
-    Triangle(const float* rows, uint32_t n, uint32_t k)
-        : v0(row3(rows, n, 0, k)), v1(row3(rows, n, 3, k)), v2(row3(rows, n, 6, k)) {}
-  };
-  struct Packet {
-    WatertightRays r;
-    Packet() = default;
-    Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
-    Mt8 test(const Triangle& t, const float8& tfar) const { return watertight8(r, t.v0, t.v1, t.v2, tfar); }
-  };
-};
-
-/// The lanes of 8 rays in SoA that pass rp::valid_ray (engine/ray.h), decided exactly as it
-/// decides: every comparison is false for a NaN.
-inline uint32_t valid_lanes(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& tfar) {
-  const float8 range(kMaxCoordinate), lo(kMinDirection), hi(kMaxDirection), zero(0.0f);
-  const mask8 origin = (xsimd::abs(org.x) <= range) & (xsimd::abs(org.y) <= range) & (xsimd::abs(org.z) <= range);
-  const float8 largest = xsimd::max(xsimd::abs(dir.x), xsimd::max(xsimd::abs(dir.y), xsimd::abs(dir.z)));
-  const mask8 not_nan = (dir.x == dir.x) & (dir.y == dir.y) & (dir.z == dir.z);
-  const mask8 direction = (largest >= lo) & (largest <= hi) & not_nan;
-  return simd::movemask(origin & direction & (tnear >= zero) & (tnear <= tfar));
-}
-
-/// Loads up to 8 rays into `p` with their tfar; invalid rays and missing lanes are inactive
-/// (and get harmless values: origin 0, direction (1, 1, 1), tnear 0, tfar -1). Returns the
-/// active lanes. Eight rays (32 bytes each, the float fields in the order org, tnear, dir,
-/// tfar) load as one 8x8 transpose.
-inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfar) {
-  static_assert(sizeof(Ray) == 32 && offsetof(Ray, tnear) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tfar) == 28);
-  uint32_t active = 0;
-  if (rays.size() >= 8) {
-    float8 m[8];
-    simd::load_rows8(&rays[0].org.x, m);
-    simd::transpose8x8(m);
-    active = valid_lanes({m[0], m[1], m[2]}, {m[4], m[5], m[6]}, m[3], m[7]);
-    const mask8 on = simd::mask_from_bits(active);
-    const float8 zero(0.0f), one(1.0f);
-    p.org = {xsimd::select(on, m[0], zero), xsimd::select(on, m[1], zero), xsimd::select(on, m[2], zero)};
-    p.dir = {xsimd::select(on, m[4], one), xsimd::select(on, m[5], one), xsimd::select(on, m[6], one)};
-    p.tnear = xsimd::select(on, m[3], zero);
-    tfar = xsimd::select(on, m[7], float8(-1.0f));
-  } else {
-    alignas(32) float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], tn[8], tf[8];
-    for (size_t i = 0; i < 8; ++i) {
-      const bool ok = i < rays.size() && valid_ray(rays[i]);
-      const Ray r = ok ? rays[i] : Ray{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 1.0f, 1.0f}, -1.0f};
-      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
-      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
-      tn[i] = r.tnear; tf[i] = r.tfar;
-      active |= uint32_t(ok) << i;
-    }
-    p.org = Vec3x8::load(ox, oy, oz);
-    p.dir = Vec3x8::load(dx, dy, dz);
-    p.tnear = float8::load_aligned(tn);
-    tfar = float8::load_aligned(tf);
-  }
-  const float8 one(1.0f);
-  p.inv = {one / p.dir.x, one / p.dir.y, one / p.dir.z};
-  // Sign bit, so that -0 (inverse -inf) takes the far plane first like a negative direction.
-  p.neg_x = simd::sign_mask(p.dir.x);
-  p.neg_y = simd::sign_mask(p.dir.y);
-  p.neg_z = simd::sign_mask(p.dir.z);
-  p.oi = {p.org.x * p.inv.x, p.org.y * p.inv.y, p.org.z * p.inv.z};
-  p.abs_pad = xsimd::max(xsimd::abs(p.oi.x), xsimd::max(xsimd::abs(p.oi.y), xsimd::abs(p.oi.z))) * float8(0x1p-23f);
-  return active;
-}
-
-/// The closest hits found so far for the 8 lanes of a packet: t (the lane's tfar), u, v and
-/// the primitive (kInvalidId for none).
-struct PacketHits {
-  float8 tfar, u, v;
-  alignas(32) uint32_t prim[8];
-
-  /// Runs f(lane, hit) for each lane of `mask` on that lane's closest hit as a scalar Hit
-  /// (t = the lane's tfar), which f may improve: the lanes are stored once, then reloaded.
-  template <class F>
-  void each_lane(uint32_t mask, F&& f) {
-    alignas(32) float tf[8], uu[8], vv[8];
-    tfar.store_aligned(tf);
-    u.store_aligned(uu);
-    v.store_aligned(vv);
-    for (uint32_t b = mask; b; b &= b - 1) {
-      const int lane = std::countr_zero(b);
-      Hit hit{tf[lane], prim[lane], uu[lane], vv[lane]};
-      f(lane, hit);
-      tf[lane] = hit.t;
-      uu[lane] = hit.u;
-      vv[lane] = hit.v;
-      prim[lane] = hit.prim_id;
-    }
-    tfar = float8::load_aligned(tf);
-    u = float8::load_aligned(uu);
-    v = float8::load_aligned(vv);
-  }
-};
-
-/// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
-/// that order children near-first, and the beam that culls them.
-template <class Kernel>
-struct PacketSetup {
-  typename Kernel::Packet kp;
-  float8 sx, sy, sz;
-  PacketBeam beam;
-  PacketSetup() = default;
-  PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active) : kp(p, rays), beam(p, active) {
-    // The packet's direction signs from its first active ray, as +-1 per axis.
-    const Vec3f d = p.dir.lane(std::countr_zero(active));
-    sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);
-    sy = float8(std::signbit(d.y) ? -1.0f : 1.0f);
-    sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
-  }
-};
-
-/// The keys that order a node's children near-first along direction signs (sx, sy, sz): sum
-/// over axes of sign * (lo + hi), one 8-wide op; the nearest child has the smallest key.
-inline float8 near_first_keys(const Bvh8Node& n, const float8& sx, const float8& sy, const float8& sz) {
-  return sx * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
-         sy * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
-         sz * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
-}
 
 /// Single-ray and 8-ray packet traversal of one tree (see the top of this file).
 template <class Kernel>
@@ -299,7 +125,7 @@ class Traversal {
             best = {ah.t, id, ah.u, ah.v};
           }
         } else {
-          const Mt8 h = kr.block(rows, n, float8(tfar));
+          const TriHit8 h = kr.block(rows, n, float8(tfar));
           if (const uint32_t bits = simd::movemask(h.hit) & ((1u << n) - 1)) {
             const float tmin = simd::reduce_min(
                 xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
@@ -410,7 +236,7 @@ class Traversal {
                     PacketHits& h) const noexcept {
     const uint32_t slots = (1u << n) - 1;
     h.each_lane(mask, [&](int lane, Hit& hit) {
-      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(hit.t));
+      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(hit.t));
       const uint32_t bits = simd::movemask(m.hit) & slots;
       if (!bits) return;
       const float tmin =
@@ -429,7 +255,7 @@ class Traversal {
     uint32_t found = 0;
     for (uint32_t b = mask; b; b &= b - 1) {
       const int lane = std::countr_zero(b);
-      const Mt8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, simd::broadcast_lane(tfar, lane));
+      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, simd::broadcast_lane(tfar, lane));
       if (simd::movemask(m.hit) & ((1u << n) - 1)) found |= b & (~b + 1);
     }
     return found;
@@ -514,10 +340,8 @@ class Traversal {
   /// Writes the hits of a packet's rays, field by field (no 16-byte reload of a Hit built in
   /// pieces), and lets the unbounded planes take the hits of its active lanes.
   void store_hits(std::span<const Ray> rays, uint32_t active, const PacketHits& h, std::span<Hit> hits) const noexcept {
-    alignas(32) float tf[8], uu[8], vv[8];
-    h.tfar.store_aligned(tf);
-    h.u.store_aligned(uu);
-    h.v.store_aligned(vv);
+    const simd::Spill<3> s(h.tfar, h.u, h.v);
+    const auto& [tf, uu, vv] = s.lanes;
     for (size_t i = 0; i < rays.size(); ++i) {
       Hit& out = hits[i];
       const bool hit = h.prim[i] != kInvalidId;  // an inactive lane never gets a primitive
@@ -531,7 +355,7 @@ class Traversal {
 
   /// Takes the hits `m` of primitive `id` for the lanes of `mask`: closer ones, and ones at
   /// the same t when `id` is lower (the closest-hit rule at the top of this file).
-  static void update(PacketHits& h, const Mt8& m, uint32_t mask, uint32_t id) {
+  static void update(PacketHits& h, const TriHit8& m, uint32_t mask, uint32_t id) {
     uint32_t bits = simd::movemask(m.hit) & mask;
     if (!bits) return;
     if (const uint32_t ties = simd::movemask(m.t == h.tfar) & bits)  // rare: exactly equal t

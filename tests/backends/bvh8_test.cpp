@@ -228,7 +228,7 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
 }
 
 /// Lane l of an 8-wide triangle test's result, as a scalar Intersection.
-Intersection<float> lane_of(const Mt8& h, int l) {
+Intersection<float> lane_of(const TriHit8& h, int l) {
   alignas(32) float t[8], u[8], v[8];
   h.t.store_aligned(t);
   h.u.store_aligned(u);
@@ -280,7 +280,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
     Ray r{org, 0.0f, (v0[k] + (v1[k] - v0[k]) * a + (v2[k] - v0[k]) * b) - org, iter % 3 ? 100.0f : 0.7f};
     if (iter % 11 == 0) r.dir.y = -0.0f;
     const LeafView lv(rows.data(), n);
-    const Mt8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), lv.v0, lv.p1, lv.p2, float8(r.tnear), float8(r.tfar));
+    const TriHit8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), lv.v0, lv.p1, lv.p2, float8(r.tnear), float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
       if (l >= int(n)) {
         ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
@@ -292,7 +292,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
       ++hits;
       expect_same_bits(lane_of(h, l), s);
       // The same triangle broadcast against the ray broadcast (the packet form).
-      const Mt8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v0[l] - v1[l]),
+      const TriHit8 p = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), Vec3x8(v0[l]), Vec3x8(v0[l] - v1[l]),
                                      Vec3x8(v2[l] - v0[l]), float8(r.tnear), float8(r.tfar));
       EXPECT_EQ(simd::movemask(p.hit), 0xffu);
       EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));
@@ -326,7 +326,7 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
     Ray r{org, 0.0f, target - org, iter % 4 ? 100.0f : 0.9f};
     if (iter % 13 == 0) r.dir.x = -0.0f;
     const LeafView lv(rows.data(), n);
-    const Mt8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.p1, lv.p2, float8(r.tfar));
+    const TriHit8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.p1, lv.p2, float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
       if (l >= int(n)) {
         ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
@@ -340,7 +340,7 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
       expect_same_bits(lane_of(h, l), s);
       // 8 rays (the same one) against the triangle broadcast: the packet form.
       const Ray eight[8] = {r, r, r, r, r, r, r, r};
-      const Mt8 p = watertight8(WatertightRays(eight, 8), Vec3x8(v[0][l]), Vec3x8(v[1][l]), Vec3x8(v[2][l]),
+      const TriHit8 p = watertight8(WatertightRays(eight, 8), Vec3x8(v[0][l]), Vec3x8(v[1][l]), Vec3x8(v[2][l]),
                                 float8(r.tfar));
       EXPECT_EQ(simd::movemask(p.hit), 0xffu);
       EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));

@@ -215,14 +215,23 @@ TEST(MaskFromBits, RoundTripsThroughMovemaskForAll256Patterns) {
   }
 }
 
-TEST(LoadMask, RoundTripsThroughStoreMaskForAll256Patterns) {
-  for (uint32_t bits = 0; bits < 256; ++bits) {
-    alignas(32) int32_t in[8], out[8];
-    for (int i = 0; i < 8; ++i) in[i] = (bits >> i) & 1 ? -1 : 0;
-    const mask8 m = load_mask(in);
-    EXPECT_EQ(movemask(m), bits);
-    store_mask(out, m);
-    for (int i = 0; i < 8; ++i) EXPECT_EQ(out[i], in[i]) << "bits " << bits << " lane " << i;
+TEST(Spill, GivesEachValuesLanesAndLoadsBackWhatTheScalarLoopWrote) {
+  std::mt19937 rng(kSeed + 3);
+  std::uniform_int_distribution<size_t> pick(0, kSpecials.size() - 1);
+  for (int round = 0; round < 50; ++round) {
+    Lanes a, b, c;
+    for (int l = 0; l < 8; ++l) a[l] = kSpecials[pick(rng)], b[l] = kSpecials[pick(rng)], c[l] = kSpecials[pick(rng)];
+    Spill<3> s(pack(a), pack(b), pack(c));
+    const Lanes* in[3] = {&a, &b, &c};
+    for (size_t k = 0; k < 3; ++k)
+      for (int l = 0; l < 8; ++l) EXPECT_EQ(bits_of(s.lanes[k][l]), bits_of((*in[k])[l])) << "value " << k << " lane " << l;
+    const int edited = round % 8;  // one lane of the middle value rewritten by "scalar code"
+    s.lanes[1][edited] = float(round);
+    b[edited] = float(round);
+    for (size_t k = 0; k < 3; ++k) {
+      const Lanes back = unpack(s.load(k));
+      for (int l = 0; l < 8; ++l) EXPECT_EQ(bits_of(back[l]), bits_of((*in[k])[l])) << "value " << k << " lane " << l;
+    }
   }
 }
 

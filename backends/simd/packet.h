@@ -1,0 +1,195 @@
+#pragma once
+/// What the traversals (traversal.h, large_packet.h) set up per ray and per 8-ray packet: the
+/// triangle tests as the traversal calls them (MtKernel for the default variant, WatertightKernel
+/// for the watertight one: one ray against a leaf, or a packet against one triangle), 8 rays
+/// loaded into SoA with their valid lanes, the closest hits so far (PacketHits), a packet's
+/// one-time set-up (PacketSetup) and the near-first order of a node's children. AVX2+FMA
+/// translation units only.
+
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <span>
+
+#include "backends/simd/bvh8.h"
+#include "backends/simd/kernels.h"
+#include "engine/ray.h"
+#include "simd/float8.h"
+
+namespace rp::bvh8 {
+
+/// Primitive k of a leaf of n: rows `row`, `row` + 1, `row` + 2 (see Tri8), in every lane.
+inline Vec3x8 row3(const float* rows, uint32_t n, uint32_t row, uint32_t k) {
+  return Vec3x8(Vec3f{rows[row * n + k], rows[(row + 1) * n + k], rows[(row + 2) * n + k]});
+}
+
+/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
+/// edge layout. Single: one ray against a leaf's primitives; Triangle: one primitive of a leaf
+/// in every lane, with its normal computed once; Packet: the 8 rays of a packet against one
+/// Triangle.
+struct MtKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::edges;
+  struct Single {
+    Vec3x8 org, dir;
+    float8 tnear;
+    explicit Single(const Ray& r) : org(r.org), dir(r.dir), tnear(r.tnear) {}
+    /// Lane `lane` of packet p (the ray `r`), from the packet's registers.
+    Single(const RayPacket& p, int lane, const Ray&)
+        : org(p.org.broadcast(lane)), dir(p.dir.broadcast(lane)), tnear(simd::broadcast_lane(p.tnear, lane)) {}
+    TriHit8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return moller_trumbore8(org, dir, lv.v0, lv.p1, lv.p2, tnear, tfar);
+    }
+  };
+  struct Triangle {
+    Vec3x8 v0, e1, e2, ng;
+    Triangle() = default;
+    Triangle(const float* rows, uint32_t n, uint32_t k)
+        : v0(row3(rows, n, 0, k)), e1(row3(rows, n, 3, k)), e2(row3(rows, n, 6, k)), ng(simd::cross_fma(e2, e1)) {}
+  };
+  struct Packet {
+    const RayPacket* p = nullptr;
+    Packet() = default;
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet) {}
+    TriHit8 test(const Triangle& t, const float8& tfar) const {
+      return moller_trumbore8(p->org, p->dir, t.v0, t.e1, t.e2, t.ng, p->tnear, tfar);
+    }
+  };
+};
+
+/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the vertex
+/// layout; the traversal around it is the same conservative one.
+struct WatertightKernel {
+  static constexpr TriangleLayout kLayout = TriangleLayout::vertices;
+  struct Single {
+    WatertightRays r;
+    explicit Single(const Ray& ray) : r(&ray, 1) {}
+    Single(const RayPacket&, int, const Ray& ray) : r(&ray, 1) {}
+    TriHit8 block(const float* rows, uint32_t n, const float8& tfar) const {
+      const LeafView lv(rows, n);
+      return watertight8(r, lv.v0, lv.p1, lv.p2, tfar);
+    }
+  };
+  struct Triangle {
+    Vec3x8 v0, v1, v2;
+    Triangle() = default;
+    Triangle(const float* rows, uint32_t n, uint32_t k)
+        : v0(row3(rows, n, 0, k)), v1(row3(rows, n, 3, k)), v2(row3(rows, n, 6, k)) {}
+  };
+  struct Packet {
+    WatertightRays r;
+    Packet() = default;
+    Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
+    TriHit8 test(const Triangle& t, const float8& tfar) const { return watertight8(r, t.v0, t.v1, t.v2, tfar); }
+  };
+};
+
+/// The lanes of 8 rays in SoA that pass rp::valid_ray (engine/ray.h), decided exactly as it
+/// decides: every comparison is false for a NaN.
+inline uint32_t valid_lanes(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& tfar) {
+  const float8 range(kMaxCoordinate), lo(kMinDirection), hi(kMaxDirection), zero(0.0f);
+  const mask8 origin = (xsimd::abs(org.x) <= range) & (xsimd::abs(org.y) <= range) & (xsimd::abs(org.z) <= range);
+  const float8 largest = xsimd::max(xsimd::abs(dir.x), xsimd::max(xsimd::abs(dir.y), xsimd::abs(dir.z)));
+  const mask8 not_nan = (dir.x == dir.x) & (dir.y == dir.y) & (dir.z == dir.z);
+  const mask8 direction = (largest >= lo) & (largest <= hi) & not_nan;
+  return simd::movemask(origin & direction & (tnear >= zero) & (tnear <= tfar));
+}
+
+/// Loads up to 8 rays into `p` with their tfar; invalid rays and missing lanes are inactive
+/// (and get harmless values: origin 0, direction (1, 1, 1), tnear 0, tfar -1). Returns the
+/// active lanes. Eight rays (32 bytes each, the float fields in the order org, tnear, dir,
+/// tfar) load as one 8x8 transpose.
+inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfar) {
+  static_assert(sizeof(Ray) == 32 && offsetof(Ray, tnear) == 12 && offsetof(Ray, dir) == 16 && offsetof(Ray, tfar) == 28);
+  uint32_t active = 0;
+  if (rays.size() >= 8) {
+    float8 m[8];
+    simd::load_rows8(&rays[0].org.x, m);
+    simd::transpose8x8(m);
+    active = valid_lanes({m[0], m[1], m[2]}, {m[4], m[5], m[6]}, m[3], m[7]);
+    const mask8 on = simd::mask_from_bits(active);
+    const float8 zero(0.0f), one(1.0f);
+    p.org = {xsimd::select(on, m[0], zero), xsimd::select(on, m[1], zero), xsimd::select(on, m[2], zero)};
+    p.dir = {xsimd::select(on, m[4], one), xsimd::select(on, m[5], one), xsimd::select(on, m[6], one)};
+    p.tnear = xsimd::select(on, m[3], zero);
+    tfar = xsimd::select(on, m[7], float8(-1.0f));
+  } else {
+    simd::Spill<8> s;
+    auto& [ox, oy, oz, dx, dy, dz, tn, tf] = s.lanes;
+    for (size_t i = 0; i < 8; ++i) {
+      const bool ok = i < rays.size() && valid_ray(rays[i]);
+      const Ray r = ok ? rays[i] : Ray{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 1.0f, 1.0f}, -1.0f};
+      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
+      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
+      tn[i] = r.tnear; tf[i] = r.tfar;
+      active |= uint32_t(ok) << i;
+    }
+    p.org = {s.load(0), s.load(1), s.load(2)};
+    p.dir = {s.load(3), s.load(4), s.load(5)};
+    p.tnear = s.load(6);
+    tfar = s.load(7);
+  }
+  const float8 one(1.0f);
+  p.inv = {one / p.dir.x, one / p.dir.y, one / p.dir.z};
+  // Sign bit, so that -0 (inverse -inf) takes the far plane first like a negative direction.
+  p.neg_x = simd::sign_mask(p.dir.x);
+  p.neg_y = simd::sign_mask(p.dir.y);
+  p.neg_z = simd::sign_mask(p.dir.z);
+  p.oi = {p.org.x * p.inv.x, p.org.y * p.inv.y, p.org.z * p.inv.z};
+  p.abs_pad = xsimd::max(xsimd::abs(p.oi.x), xsimd::max(xsimd::abs(p.oi.y), xsimd::abs(p.oi.z))) * float8(0x1p-23f);
+  return active;
+}
+
+/// The closest hits found so far for the 8 lanes of a packet: t (the lane's tfar), u, v and
+/// the primitive (kInvalidId for none).
+struct PacketHits {
+  float8 tfar, u, v;
+  alignas(32) uint32_t prim[8];
+
+  /// Runs f(lane, hit) for each lane of `mask` on that lane's closest hit as a scalar Hit
+  /// (t = the lane's tfar), which f may improve: the lanes are stored once, then reloaded.
+  template <class F>
+  void each_lane(uint32_t mask, F&& f) {
+    simd::Spill<3> s(tfar, u, v);
+    auto& [tf, uu, vv] = s.lanes;
+    for (uint32_t b = mask; b; b &= b - 1) {
+      const int lane = std::countr_zero(b);
+      Hit hit{tf[lane], prim[lane], uu[lane], vv[lane]};
+      f(lane, hit);
+      tf[lane] = hit.t;
+      uu[lane] = hit.u;
+      vv[lane] = hit.v;
+      prim[lane] = hit.prim_id;
+    }
+    tfar = s.load(0);
+    u = s.load(1);
+    v = s.load(2);
+  }
+};
+
+/// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
+/// that order children near-first, and the beam that culls them.
+template <class Kernel>
+struct PacketSetup {
+  typename Kernel::Packet kp;
+  float8 sx, sy, sz;
+  PacketBeam beam;
+  PacketSetup() = default;
+  PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active) : kp(p, rays), beam(p, active) {
+    // The packet's direction signs from its first active ray, as +-1 per axis.
+    const Vec3f d = p.dir.lane(std::countr_zero(active));
+    sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);
+    sy = float8(std::signbit(d.y) ? -1.0f : 1.0f);
+    sz = float8(std::signbit(d.z) ? -1.0f : 1.0f);
+  }
+};
+
+/// The keys that order a node's children near-first along direction signs (sx, sy, sz): sum
+/// over axes of sign * (lo + hi), one 8-wide op; the nearest child has the smallest key.
+inline float8 near_first_keys(const Bvh8Node& n, const float8& sx, const float8& sy, const float8& sz) {
+  return sx * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
+         sy * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
+         sz * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
+}
+
+}  // namespace rp::bvh8
