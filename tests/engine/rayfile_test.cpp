@@ -101,7 +101,7 @@ std::vector<HitRecord> special_hits() {
 }
 
 /// Rays made of seeded random bit patterns (NaNs included), enough to cross read/write chunks.
-std::vector<Ray> random_rays(size_t n) {
+std::vector<Ray> bit_pattern_rays(size_t n) {
   std::mt19937 rng(20240611);
   std::vector<Ray> rays(n);
   for (Ray& r : rays) {
@@ -126,7 +126,7 @@ void expect_csv_equal(const std::array<uint32_t, 8>& want, const std::array<uint
 TEST(RayFileBinary, RoundTripIsBitExact) {
   TempDir tmp;
   const std::string path = tmp / "rays.bin";
-  for (const std::vector<Ray>& rays : {special_rays(), random_rays(5000), std::vector<Ray>{}}) {
+  for (const std::vector<Ray>& rays : {special_rays(), bit_pattern_rays(5000), std::vector<Ray>{}}) {
     write_rays(path, rays);
     EXPECT_EQ(fs::file_size(path), 16 + 32 * rays.size());
     const std::vector<Ray> back = read_rays(path);
@@ -191,7 +191,7 @@ void with_stdin(const std::string& bytes, F&& f) {
 }
 
 TEST(RayFileRead, DashReadsStandardInputInEitherFormat) {
-  const std::vector<Ray> rays = random_rays(3000);
+  const std::vector<Ray> rays = bit_pattern_rays(3000);
   std::string bytes = header("RPRY", 1, rays.size());
   for (const Ray& r : rays) {
     const float f[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
@@ -243,7 +243,7 @@ TEST(HitFileBinary, LayoutIsHeaderThenTPrimUVNormal) {
 TEST(RayFileCsv, RoundTripKeepsEveryBitButNanPayloads) {
   TempDir tmp;
   const std::string path = tmp / "rays.csv";
-  for (const std::vector<Ray>& rays : {special_rays(), random_rays(5000), std::vector<Ray>{}}) {
+  for (const std::vector<Ray>& rays : {special_rays(), bit_pattern_rays(5000), std::vector<Ray>{}}) {
     write_rays(path, rays);
     const std::vector<Ray> back = read_rays(path);
     ASSERT_EQ(back.size(), rays.size());
@@ -581,11 +581,11 @@ TEST(RayFileWrite, ADirectoryTargetIsRefusedAndNothingIsLeft) {
 TEST(RayFileWrite, RewriteReplacesTheWholeFile) {
   TempDir tmp;
   const std::string p = tmp / "r.csv";
-  write_rays(p, random_rays(100));
+  write_rays(p, bit_pattern_rays(100));
   write_rays(p, std::vector<Ray>{{{1, 2, 3}, 0, {4, 5, 6}, 7}});
   EXPECT_EQ(read_bytes(p), "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3,4,5,6,0,7\n");
   const std::string b = tmp / "r.bin";
-  write_rays(b, random_rays(100));
+  write_rays(b, bit_pattern_rays(100));
   write_rays(b, std::vector<Ray>(1));
   EXPECT_EQ(fs::file_size(b), 48u);
   EXPECT_EQ(tmp.entries(), (std::set<std::string>{"r.csv", "r.bin"}));

@@ -167,7 +167,7 @@ Scene random_scene(uint32_t seed, int soup, Vec3f offset) {
 
 /// Random rays (through the scene), axis-parallel rays from grid points with +-0 in the other
 /// components, rays aimed at grid points, a quarter with finite tfar, some with tnear > 0.
-std::vector<Ray> random_rays(uint32_t seed, int count, Vec3f offset) {
+std::vector<Ray> grid_and_random_rays(uint32_t seed, int count, Vec3f offset) {
   std::mt19937 rng(seed);
   std::vector<Ray> rays;
   for (int n = 0; n < count; ++n) {
@@ -448,14 +448,14 @@ TEST(ReferenceWatertight, PhantomHitOfARayLyingInATrianglesPlaneIsDropped) {
 TEST(ReferenceAgreement, EqualsBruteForceBitForBitOnRandomScenes) {
   for (uint32_t seed : {1u, 2u, 3u}) {
     const Scene s = random_scene(seed, 300, {0, 0, 0});
-    expect_matches_brute_force(s, random_rays(seed + 100, 3000, {0, 0, 0}), "random_scene");
+    expect_matches_brute_force(s, grid_and_random_rays(seed + 100, 3000, {0, 0, 0}), "random_scene");
   }
 }
 
 TEST(ReferenceAgreement, EqualsBruteForceFarFromTheOrigin) {
   const Vec3f offset{1024.0f, -512.0f, 2048.0f};
   const Scene s = random_scene(11, 300, offset);
-  expect_matches_brute_force(s, random_rays(111, 3000, offset), "offset_scene");
+  expect_matches_brute_force(s, grid_and_random_rays(111, 3000, offset), "offset_scene");
 }
 
 TEST(ReferenceAgreement, EqualsBruteForceOnADeepBvhBuiltInParallel) {
@@ -463,7 +463,7 @@ TEST(ReferenceAgreement, EqualsBruteForceOnADeepBvhBuiltInParallel) {
   Scene s = random_scene(21, 12000, {0, 0, 0});
   s.add_mesh(quantized_uv_sphere(64, 32, {-1.0f, 0.5f, 0.25f}, 1.25f));
   EXPECT_GT(s.prim_count(), 16000u);
-  expect_matches_brute_force(s, random_rays(121, 600, {0, 0, 0}), "deep_bvh");
+  expect_matches_brute_force(s, grid_and_random_rays(121, 600, {0, 0, 0}), "deep_bvh");
 }
 
 // ---- Rules: invalid rays, empty scenes, ties, determinism -----------------------------
@@ -519,7 +519,7 @@ TEST(ReferenceRules, EmptySceneMissesAndPlanesAloneNeedNoBvh) {
   EXPECT_EQ(ref.node_count(), 0u);
   EXPECT_EQ(ref.bytes(), 0u);
   EXPECT_GE(ref.build_seconds(), 0.0);
-  const std::vector<Ray> rays = random_rays(3, 300, {0, 0, 0});
+  const std::vector<Ray> rays = grid_and_random_rays(3, 300, {0, 0, 0});
   std::vector<ReferenceHit> hits(rays.size());
   ref.intersect(rays, hits);
   for (size_t i = 0; i < rays.size(); ++i) {
@@ -558,7 +558,7 @@ TEST(ReferenceRules, AtEqualTTheLargerPrimIdWins) {
 
 TEST(ReferenceRules, BatchEqualsSingleRaysAndIsTheSameForAnyThreadCount) {
   Scene s = random_scene(31, 9000, {0, 0, 0});  // over the parallel build threshold
-  const std::vector<Ray> rays = random_rays(131, 5000, {0, 0, 0});
+  const std::vector<Ray> rays = grid_and_random_rays(131, 5000, {0, 0, 0});
   std::vector<ReferenceHit> one(rays.size()), two(rays.size());
   size_t bytes_one = 0, nodes_one = 0;
   {
@@ -586,7 +586,7 @@ TEST(ReferenceRules, BatchEqualsSingleRaysAndIsTheSameForAnyThreadCount) {
 }
 
 TEST(ReferenceRules, OutlivesTheSceneItWasBuiltFrom) {
-  std::vector<Ray> rays = random_rays(41, 500, {0, 0, 0});
+  std::vector<Ray> rays = grid_and_random_rays(41, 500, {0, 0, 0});
   std::vector<ReferenceHit> want(rays.size());
   std::unique_ptr<const Reference> ref;
   {
