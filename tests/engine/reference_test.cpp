@@ -271,7 +271,8 @@ TEST(ReferenceClosedForm, SphereAlongEachAxisHitsAtDistanceMinusRadius) {
 }
 
 TEST(ReferenceClosedForm, SeedEllipsoidHitsAtTwoMinusSqrtFourFifths) {
-  // Seeds 002, section 1 question 4: (x-2)^2/4 + (y-2)^2 + z^2/4 = 1, r(t) = t (1, 1, 0).
+  // Lecture notes "Ray-Surface Intersection", section 1 question 4:
+  // (x-2)^2/4 + (y-2)^2 + z^2/4 = 1, r(t) = t (1, 1, 0).
   Scene s;
   s.add_quadric({Quadric<float>::ellipsoid({2.0f, 2.0f, 0.0f}, {2.0f, 1.0f, 2.0f}), 0});
   const Reference ref(s);

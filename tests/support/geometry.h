@@ -157,4 +157,12 @@ SphereReference sphere_reference(const SphereCase<T>& s) {
           (length(f) + L(s.radius)) / std::sqrt(a)};
 }
 
+/// The case's answer in long double (the algebraic method, exact inputs widened): the oracle
+/// the sphere tests compare every method against.
+template <typename T>
+Intersection<L> sphere_oracle(const SphereCase<T>& s) {
+  return intersect_sphere_algebraic(RayT<L>{Vec3<L>(s.ray.org), s.ray.tnear, Vec3<L>(s.ray.dir), s.ray.tfar},
+                                    Vec3<L>(s.c), L(s.radius));
+}
+
 }  // namespace rp::test

@@ -222,19 +222,7 @@ TEST(QuadricProperty, HitsLieOnTheSurfaceInsideClipAndMatchOracle) {
           << int(s) << " case " << i;
     }
     // Oracle: the same quadric in long double; skipped near tangency and near clip faces.
-    Quadric<L> ql;
-    ql.A = q.A;
-    ql.B = q.B;
-    ql.C = q.C;
-    ql.D = q.D;
-    ql.E = q.E;
-    ql.F = q.F;
-    ql.G = q.G;
-    ql.H = q.H;
-    ql.I = q.I;
-    ql.J = q.J;
-    ql.center = Vec3<L>(q.center);
-    ql.clip = Box3<L>(Vec3<L>(q.clip.lo), Vec3<L>(q.clip.hi));
+    const Quadric<L> ql = quadric_cast<L>(q);
     const RayT<L> rl{Vec3<L>(r.org), L(r.tnear), Vec3<L>(r.dir), L(r.tfar)};
     const Vec3<L> dl(r.dir);
     const L a = ql.A * dl.x * dl.x + ql.B * dl.y * dl.y + ql.C * dl.z * dl.z;

@@ -10,7 +10,7 @@ namespace {
 
 using namespace rp::test;
 
-// Seeds 002, section 1 question 4: (x-2)^2/4 + (y-2)^2 + z^2/4 = 1, r(t) = t (1, 1, 0).
+// Lecture notes "Ray-Surface Intersection", section 1 question 4: (x-2)^2/4 + (y-2)^2 + z^2/4 = 1, r(t) = t (1, 1, 0).
 template <typename T>
 void check_seed_ellipsoid(T rel) {
   const T root = std::sqrt(T(4) / T(5));
@@ -57,7 +57,7 @@ TEST(SeedExamples, EllipsoidHitsAtTwoMinusSqrtFourFifthsFloat) {
   check_seed_ellipsoid<float>(1e-5f);
 }
 
-// Seeds 002, section 3 questions 2-5: box (-2,-2,-2)-(2,2,2), ray (-3,4,5) + t(1,-1,-2).
+// Lecture notes "Ray-Surface Intersection", section 3 questions 2-5: box (-2,-2,-2)-(2,2,2), ray (-3,4,5) + t(1,-1,-2).
 template <typename T>
 void check_seed_box() {
   const RayT<T> r = make_ray<T>({-3, 4, 5}, {1, -1, -2});
@@ -97,7 +97,7 @@ TEST(SeedExamples, BoxSlabsEntryAndExitMatchWorkedExample) {
   check_seed_box<float>();
 }
 
-// Seeds 002, section 1 question 1-3: plane (p - p') . N = 0; t < 0 means no hit.
+// Lecture notes "Ray-Surface Intersection", section 1 question 1-3: plane (p - p') . N = 0; t < 0 means no hit.
 TEST(SeedExamples, PlaneHitBehindOriginIsNotAHit) {
   const Vec3d n{0, 0, 1};
   const double d = -2;  // z = 2
@@ -116,7 +116,7 @@ TEST(SeedExamples, PlaneHitBehindOriginIsNotAHit) {
   EXPECT_EQ(behind.t, -3.0);
 }
 
-// Seeds 002, section 1: d . N = 0 is no hit, whether the line lies in the plane or not.
+// Lecture notes "Ray-Surface Intersection", section 1: d . N = 0 is no hit, whether the line lies in the plane or not.
 TEST(SeedExamples, PlaneParallelRayMissesInPlaneAndOffPlane) {
   const Vec3d n{0, 0, 2};
   const double d = -4;  // z = 2
@@ -130,7 +130,8 @@ TEST(SeedExamples, PlaneParallelRayMissesInPlaneAndOffPlane) {
   EXPECT_FALSE(intersect_plane(make_ray<float>({0, 0, 3}, {1, 1, 0}), nf, -4.0f).hit);
 }
 
-// Seeds 002, section 2 questions 1-2: Cramer's rule on [-D, E1, E2][t, b1, b2]^T = O - P0
+// Lecture notes "Ray-Surface Intersection", section 2 questions 1-2:
+// Cramer's rule on [-D, E1, E2][t, b1, b2]^T = O - P0
 // reduces to Möller-Trumbore via the determinant identities (13)-(16).
 TEST(SeedExamples, MollerTrumboreEqualsCramerOnTheDerivation) {
   std::mt19937 rng(2);

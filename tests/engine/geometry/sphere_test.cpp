@@ -17,9 +17,7 @@ TEST(SphereProperty, AlgebraicGeometricAndNaiveAgreeOnRandomRays) {
     const SphereCase<double> s = random_sphere_case<double>(rng, i % 2);
     const SphereReference ref = sphere_reference(s);
     if (ref.tangency < 1e-6L || ref.surface < 1e-6L) continue;
-    const Intersection<L> oracle = intersect_sphere_algebraic(
-        RayT<L>{Vec3<L>(s.ray.org), s.ray.tnear, Vec3<L>(s.ray.dir), s.ray.tfar}, Vec3<L>(s.c),
-        L(s.radius));
+    const Intersection<L> oracle = sphere_oracle(s);
     ++checked;
     hits += oracle.hit;
     const double tol = 1e-9 * double(ref.scale);
@@ -215,9 +213,7 @@ TEST(SphereProperty, FloatMethodsAgreeAwayFromTangency) {
     const SphereCase<float> s = random_sphere_case<float>(rng, i % 2);
     const SphereReference ref = sphere_reference(s);
     if (ref.tangency < 1e-2L || ref.surface < 1e-2L) continue;
-    const Intersection<L> oracle = intersect_sphere_algebraic(
-        RayT<L>{Vec3<L>(s.ray.org), s.ray.tnear, Vec3<L>(s.ray.dir), s.ray.tfar}, Vec3<L>(s.c),
-        L(s.radius));
+    const Intersection<L> oracle = sphere_oracle(s);
     ++checked;
     for (const auto& m : sphere_methods<float>()) {
       const Intersection<float> h = m.fn(s.ray, s.c, s.radius);

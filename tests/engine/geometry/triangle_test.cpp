@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "tests/support/geometry.h"
 
 namespace rp {
@@ -56,6 +58,19 @@ TriangleCase<T> random_triangle_case(std::mt19937& rng) {
   return c;
 }
 
+/// Whether the ray of `c` hits by the reference `ref`, or nothing when the case is too close
+/// to call at this precision: conditioning below `min_det_rel`, the aim point within `margin`
+/// of an edge (in barycentrics), or t within `margin` (relative) of an interval end.
+template <typename T>
+std::optional<bool> decisive_reference_hit(const TriangleCase<T>& c, const TriangleReference& ref, L min_det_rel,
+                                           L margin) {
+  if (ref.det_rel < min_det_rel) return std::nullopt;
+  const L edge = std::min({std::abs(ref.b1), std::abs(ref.b2), std::abs(1 - ref.b1 - ref.b2)});
+  if (edge < margin) return std::nullopt;
+  if (close_rel<L>(ref.t, c.ray.tnear, margin) || close_rel<L>(ref.t, c.ray.tfar, margin)) return std::nullopt;
+  return ref.b1 >= 0 && ref.b2 >= 0 && ref.b1 + ref.b2 <= 1 && ref.t >= c.ray.tnear && ref.t <= c.ray.tfar;
+}
+
 TEST(TriangleProperty, FourMethodsAgreeOnRandomRaysDouble) {
   std::mt19937 rng(12345);
   int checked = 0, hits = 0;
@@ -65,12 +80,9 @@ TEST(TriangleProperty, FourMethodsAgreeOnRandomRaysDouble) {
     const TriangleReference ref = triangle_reference(c.ray, c.v0, c.v1, c.v2);
     // Excluded: ill-conditioned systems (ray nearly parallel, sliver triangles), aim points
     // within 1e-9 of an edge, and t within 1e-9 of an interval end.
-    if (ref.det_rel < 1e-6L) continue;
-    const L edge = std::min({std::abs(ref.b1), std::abs(ref.b2), std::abs(1 - ref.b1 - ref.b2)});
-    if (edge < 1e-9L) continue;
-    if (close_rel<L>(ref.t, c.ray.tnear, 1e-9L) || close_rel<L>(ref.t, c.ray.tfar, 1e-9L)) continue;
-    const bool ref_hit = ref.b1 >= 0 && ref.b2 >= 0 && ref.b1 + ref.b2 <= 1 &&
-                         ref.t >= c.ray.tnear && ref.t <= c.ray.tfar;
+    const std::optional<bool> decisive = decisive_reference_hit(c, ref, 1e-6L, 1e-9L);
+    if (!decisive) continue;
+    const bool ref_hit = *decisive;
     ++checked;
     hits += ref_hit;
     const Intersection<double> base = intersect_triangle_mt(c.ray, c.v0, c.v1, c.v2);
@@ -100,12 +112,9 @@ TEST(TriangleProperty, FourMethodsAgreeOnRandomRaysFloat) {
   for (int i = 0; i < 30000; ++i) {
     const TriangleCase<float> c = random_triangle_case<float>(rng);
     const TriangleReference ref = triangle_reference(c.ray, c.v0, c.v1, c.v2);
-    if (ref.det_rel < 1e-2L) continue;
-    const L edge = std::min({std::abs(ref.b1), std::abs(ref.b2), std::abs(1 - ref.b1 - ref.b2)});
-    if (edge < 1e-4L) continue;
-    if (close_rel<L>(ref.t, c.ray.tnear, 1e-4L) || close_rel<L>(ref.t, c.ray.tfar, 1e-4L)) continue;
-    const bool ref_hit = ref.b1 >= 0 && ref.b2 >= 0 && ref.b1 + ref.b2 <= 1 &&
-                         ref.t >= c.ray.tnear && ref.t <= c.ray.tfar;
+    const std::optional<bool> decisive = decisive_reference_hit(c, ref, 1e-2L, 1e-4L);
+    if (!decisive) continue;
+    const bool ref_hit = *decisive;
     ++checked;
     for (const auto& m : triangle_methods<float>()) {
       const Intersection<float> h = m.fn(c.ray, c.v0, c.v1, c.v2);
