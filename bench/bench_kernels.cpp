@@ -52,30 +52,37 @@ void BM_Slab8(benchmark::State& state) {
   state.counters["hit_fraction"] = double(hits) / (8.0 * double(state.iterations()));
 }
 
-/// kSets blocks of 8 random triangles (v0 in [-1, 1]^3, edges up to 0.8) in `layout`.
-std::vector<Tri8> random_blocks(TriangleLayout layout) {
-  std::vector<Tri8> blocks(kSets);
-  for (Tri8& b : blocks)
+/// kSets leaves of 8 random triangles (v0 in [-1, 1]^3, edges up to 0.8), as the build
+/// writes them (24 distinct vertices: the costliest lookups), one after another.
+std::vector<float> random_leaves() {
+  const uint32_t words = leaf_words(8, kMaxLeafVertices);
+  std::vector<float> out(size_t(kSets) * words + kLeafPad);
+  const uint32_t ids[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+  for (int k = 0; k < kSets; ++k) {
+    Vec3f corners[24];
     for (int l = 0; l < 8; ++l) {
-      const Vec3f a = v3(-1, 1), e1 = v3(-0.8f, 0.8f), e2 = v3(-0.8f, 0.8f);
-      const Vec3f p1 = layout == TriangleLayout::edges ? e1 : a - e1, p2 = layout == TriangleLayout::edges ? e2 : a + e2;
-      b.v0_x[l] = a.x; b.v0_y[l] = a.y; b.v0_z[l] = a.z;
-      b.p1_x[l] = p1.x; b.p1_y[l] = p1.y; b.p1_z[l] = p1.z;
-      b.p2_x[l] = p2.x; b.p2_y[l] = p2.y; b.p2_z[l] = p2.z;
+      const Vec3f a = v3(-1, 1);
+      corners[3 * l] = a;
+      corners[3 * l + 1] = a - v3(-0.8f, 0.8f);
+      corners[3 * l + 2] = a + v3(-0.8f, 0.8f);
     }
-  return blocks;
+    write_leaf(out.data() + size_t(k) * words, corners, ids);
+  }
+  return out;
 }
 
-/// One triangle test x8: one ray against the 8 triangles of a block. prepare(ray) is the
-/// per-ray set-up traversal does once per ray (outside the timing); kernel(prepared, block) -> TriHit8.
+/// One triangle test x8: one ray against the 8 triangles of a leaf, read from the leaf as
+/// traversal reads it. prepare(ray) is the per-ray set-up traversal does once per ray
+/// (outside the timing); kernel(prepared, view) -> TriHit8.
 template <typename Prepare, typename Kernel>
-void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare prepare, Kernel kernel) {
-  const std::vector<Tri8> blocks = random_blocks(layout);
+void triangle_kernel(benchmark::State& state, Prepare prepare, Kernel kernel) {
+  const std::vector<float> leaves = random_leaves();
+  const uint32_t words = leaf_words(8, kMaxLeafVertices);
   std::vector<decltype(prepare(Ray{}))> rays;
   for (int k = 0; k < kSets; ++k) rays.push_back(prepare(random_ray()));
   size_t hits = 0, i = 0;
   for (auto _ : state) {
-    const TriHit8 h = kernel(rays[i], LeafView(blocks[i]));
+    const TriHit8 h = kernel(rays[i], LeafView(Leaf(leaves.data() + i * words)));
     hits += size_t(std::popcount(simd::movemask(h.hit)));
     benchmark::DoNotOptimize(h.t);
     i = (i + 1) % kSets;
@@ -83,20 +90,20 @@ void triangle_kernel(benchmark::State& state, TriangleLayout layout, Prepare pre
   state.counters["hit_fraction"] = double(hits) / (8.0 * double(state.iterations()));
 }
 
-/// Moller-Trumbore x8 (edge layout).
+/// Moller-Trumbore x8, its edges from the leaf's vertices.
 void BM_MollerTrumbore8(benchmark::State& state) {
   triangle_kernel(
-      state, TriangleLayout::edges, [](const Ray& r) { return r; },
+      state, [](const Ray& r) { return r; },
       [](const Ray& r, const LeafView& tv) {
-        return moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.p1, tv.p2, float8(0.0f), float8(100.0f));
+        return moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), tv.v0, tv.e1(), tv.e2(), float8(0.0f), float8(100.0f));
       });
 }
 
-/// Watertight x8 (vertex layout), the per-ray shear and axis permutation prepared once per ray.
+/// Watertight x8, the per-ray shear and axis permutation prepared once per ray.
 void BM_Watertight8(benchmark::State& state) {
   triangle_kernel(
-      state, TriangleLayout::vertices, [](const Ray& r) { return WatertightRays(&r, 1); },
-      [](const WatertightRays& w, const LeafView& tv) { return watertight8(w, tv.v0, tv.p1, tv.p2, float8(100.0f)); });
+      state, [](const Ray& r) { return WatertightRays(&r, 1); },
+      [](const WatertightRays& w, const LeafView& tv) { return watertight8(w, tv.v0, tv.v1, tv.v2, float8(100.0f)); });
 }
 
 /// Sphere x8: one ray against 8 spheres by the scalar stable-quadratic routine the backends

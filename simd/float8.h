@@ -15,6 +15,11 @@
 
 #include "engine/math.h"
 
+/// For the small 8-wide routines of a hot loop that GCC would otherwise call out of line once
+/// their caller grows (a call passes every Vec3x8 through memory): the leaf decode and the
+/// triangle test of the single-ray traversal cost 9-18% of its speed that way.
+#define RP_SIMD_INLINE [[gnu::always_inline]] inline
+
 namespace rp::simd {
 
 using Arch = xsimd::fma3<xsimd::avx2>;
@@ -106,6 +111,31 @@ inline float8 nan_past(uint32_t n) {
 /// (VMASKMOVPS) is slower.
 inline float8 load_unaligned_nan_past(const float* p, const float8& past) {
   return _mm256_or_ps(_mm256_loadu_ps(p), past);
+}
+
+/// Eight lane indices into a table of Chunks * 8 floats (Chunks 1..3), read from eight bytes,
+/// with the lanes that pick from each chunk after the first worked out once for every
+/// table the indices are looked up in (lookup).
+template <int Chunks>
+struct index8 {
+  __m256i i;
+  __m256 from[Chunks];  ///< from[c] (c >= 1): lanes whose index is in chunk c or later
+
+  /// The eight unsigned bytes at `p` (any alignment; 8 bytes are read).
+  explicit index8(const uint8_t* p) : i(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)))) {
+    for (int c = 1; c < Chunks; ++c) from[c] = _mm256_castsi256_ps(_mm256_cmpgt_epi32(i, _mm256_set1_epi32(8 * c - 1)));
+  }
+};
+
+/// Lane l is table[i[l]] (the table's Chunks * 8 floats must be readable; floats past its
+/// real end are never picked by an index inside it): one permute per chunk and a blend for
+/// each after the first, no gather and no memory access by index.
+template <int Chunks>
+RP_SIMD_INLINE float8 lookup(const float* table, const index8<Chunks>& i) {
+  __m256 r = _mm256_permutevar8x32_ps(_mm256_loadu_ps(table), i.i);
+  for (int c = 1; c < Chunks; ++c)
+    r = _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(_mm256_loadu_ps(table + 8 * c), i.i), i.from[c]);
+  return r;
 }
 
 /// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <span>
 #include <vector>
 
 #include "engine/bbox.h"
@@ -16,16 +17,15 @@
 
 namespace rp::bvh8 {
 
-/// Child reference in a node: >= 0 an inner node index; < 0 a leaf, ~(first << 3 |
-/// (count - 1)): `count` (1..8) primitives, the tree's primitives [first, first + count) (see
-/// Bvh8::leaf); kEmpty a missing child (its box is empty: lo = +inf, hi = -inf, so no slab
-/// test ever hits it). `first` stays below 2^28 - 1, so a leaf never encodes as kEmpty.
+/// Child reference in a node: >= 0 an inner node index; < 0 a leaf, ~offset: the leaf
+/// starts at leaf_data[offset] (see Leaf); kEmpty a missing child (its box is empty: lo =
+/// +inf, hi = -inf, so no slab test ever hits it). `offset` stays at most kMaxLeafOffset, so
+/// a leaf never encodes as kEmpty.
 inline constexpr int32_t kEmpty = std::numeric_limits<int32_t>::min();
-inline constexpr uint32_t kMaxPrims = (1u << 28) - 1;
+inline constexpr uint32_t kMaxLeafOffset = (1u << 31) - 2;
 inline bool is_leaf(int32_t c) { return c < 0 && c != kEmpty; }
-inline int32_t leaf_ref(uint32_t first, uint32_t count) { return ~int32_t(first << 3 | (count - 1)); }
-inline uint32_t leaf_first(int32_t c) { return uint32_t(~c) >> 3; }
-inline uint32_t leaf_count(int32_t c) { return (uint32_t(~c) & 7u) + 1; }
+inline int32_t leaf_ref(uint32_t offset) { return ~int32_t(offset); }
+inline uint32_t leaf_offset(int32_t c) { return uint32_t(~c); }
 
 /// Eight child boxes in SoA and the child references. 224 bytes, 32-byte aligned.
 struct alignas(32) Bvh8Node {
@@ -35,27 +35,63 @@ struct alignas(32) Bvh8Node {
 };
 static_assert(sizeof(Bvh8Node) == 224);
 
-/// A leaf of n primitives (1..8) is 10 rows of n values, 40 bytes per primitive and no
-/// padding: v0_x, v0_y, v0_z, p1_x, p1_y, p1_z, p2_x, p2_y, p2_z (floats), then the scene
-/// prim_ids (uint32 bits). Tri8 spells out the layout for n = 8.
-/// What p1 and p2 hold depends on the triangle test the tree is built for (TriangleLayout):
-/// - edges (Möller–Trumbore): v0, p1 = e1 = v0 - v1, p2 = e2 = v2 - v0, computed once in
-///   float exactly as the scalar rp::intersect_triangle_mt_normal does (the normal e2 x e1 is
-///   recomputed per test, which keeps a primitive at 40 bytes);
-/// - vertices (watertight): v0, p1 = v1, p2 = v2 as the mesh stores them, because the
-///   watertight test needs the very vertex values its neighbours share.
-/// An analytic primitive (sphere, quadric, polygon) has NaN coordinates, which neither
-/// triangle test ever hits, and is tested by its scalar routine. Leaves are stored back to
-/// back in tree order, so a leaf's first primitive also gives its offset (Bvh8::leaf).
-inline constexpr uint32_t kLeafRows = 10;
-inline constexpr uint32_t kLeafPad = 8;  ///< floats after the last leaf, so 8-wide row loads stay in the array
-struct alignas(32) Tri8 {
-  float v0_x[8], v0_y[8], v0_z[8];
-  float p1_x[8], p1_y[8], p1_z[8];
-  float p2_x[8], p2_y[8], p2_z[8];
-  uint32_t prim_id[8];
+/// A leaf of n primitives (1..8) with its own vertex block: each distinct vertex of its
+/// triangles once, and each corner of a triangle a one-byte index into that block. From the
+/// leaf's start (4-byte aligned):
+///
+/// | bytes               | holds                                                          |
+/// |---------------------|----------------------------------------------------------------|
+/// | 1                   | n - 1 (bits 0..2) and V - 1 (bits 3..7): V distinct vertices, 1..24 |
+/// | 3n, then 0..3 zeros | corner indices: row j (corner j = 0, 1, 2) holds n bytes       |
+/// | 4n                  | the scene prim_ids                                             |
+/// | 12V                 | the vertices in SoA: x[V], then y[V], then z[V]                |
+///
+/// A leaf of 8 triangles of a mesh has V of about 10, 22.5 bytes per triangle where three
+/// vertices of its own and the edges would cost 40. Vertices are the mesh's floats, bit for
+/// bit (equal corners are merged by their bits), so two triangles sharing an edge see the
+/// same vertex values in every leaf, as the watertight test needs; Möller–Trumbore's edges
+/// are recomputed per test, in float, exactly as the scalar routine computes them. An 8-wide
+/// test reads a corner's coordinates as table lookups (one permute per 8 vertices, see
+/// simd::lookup), not gathers. An analytic primitive (sphere, quadric, polygon) has a leaf of
+/// its own whose one vertex is NaN, which neither triangle test ever hits, and is tested by
+/// its scalar routine.
+inline constexpr uint32_t kMaxLeafVertices = 24;
+inline constexpr uint32_t kLeafPad = 8;  ///< floats after the last leaf: 8-wide loads of its last rows stay in the array
+
+/// Words (floats) of a leaf of n primitives and v distinct vertices.
+constexpr uint32_t leaf_words(uint32_t n, uint32_t v) { return (3 * n + 4) / 4 + n + 3 * v; }
+
+/// One leaf as stored (see above), read in place.
+struct Leaf {
+  const float* words;
+  uint32_t n, v;  ///< primitives, distinct vertices
+
+  explicit Leaf(const float* w) : words(w) {
+    const uint8_t head = *reinterpret_cast<const uint8_t*>(w);
+    n = (head & 7u) + 1;
+    v = (head >> 3) + 1;
+  }
+  uint32_t vertex_count() const { return v; }
+  uint32_t size_words() const { return leaf_words(n, v); }
+  /// Row j: the block index of corner j of each primitive (n bytes).
+  const uint8_t* corners(uint32_t j) const { return reinterpret_cast<const uint8_t*>(words) + 1 + j * n; }
+  uint32_t prim(uint32_t k) const { return std::bit_cast<uint32_t>(words[(3 * n + 4) / 4 + k]); }
+  /// x[V], y[V], z[V].
+  const float* vertices() const { return words + (3 * n + 4) / 4 + n; }
+  /// Corner j (0..2) of primitive k.
+  Vec3f vertex(uint32_t k, uint32_t j) const {
+    const uint32_t i = corners(j)[k];
+    const float* x = vertices();
+    return {x[i], x[v + i], x[2 * v + i]};
+  }
 };
-static_assert(sizeof(Tri8) == 320);
+
+/// Writes at `out` (leaf_words(n, V) floats) the leaf of the n = ids.size() primitives whose
+/// corners are corners[3k .. 3k + 2] (an analytic primitive: three NaN corners); returns V.
+uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids);
+
+/// V of the leaf write_leaf would write for these corners.
+uint32_t leaf_vertex_count(std::span<const Vec3f> corners);
 
 /// Allocator for the tree's arrays: 2 MiB-aligned and advised as transparent huge pages
 /// (madvise MADV_HUGEPAGE) when large, so random traversal of a big tree misses the TLB far
@@ -85,13 +121,9 @@ enum class SplitRule : uint8_t {
   median,  ///< the lecture notes' rule: longest axis of the centroids, balanced median split
 };
 
-/// What the leaf blocks store for a triangle (see Tri8).
-enum class TriangleLayout : uint8_t { edges, vertices };
-
 struct BuildOptions {
   SplitRule rule = SplitRule::sah;
   uint32_t max_leaf = 8;  ///< most primitives per leaf (1..8)
-  TriangleLayout layout = TriangleLayout::edges;
 };
 
 /// Figures of a built tree.
@@ -108,7 +140,7 @@ struct BuildStats {
 /// The built tree. Immutable after build().
 struct Bvh8 {
   std::vector<Bvh8Node, HugePageAllocator<Bvh8Node>> nodes;  ///< nodes[0] is the root when !empty()
-  /// Every leaf's rows (see Tri8), leaf after leaf, then kLeafPad zeros.
+  /// Every leaf (see Leaf), leaf after leaf in tree order, then kLeafPad zeros.
   std::vector<float, HugePageAllocator<float>> leaf_data;
   uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a leaf are analytic
   bool has_analytic = false;             ///< any analytic primitive in the tree
@@ -116,12 +148,10 @@ struct Bvh8 {
   BuildStats stats;
 
   bool empty() const { return nodes.empty(); }
-  /// The rows of the leaf whose first primitive is `first`.
-  const float* leaf(uint32_t first) const { return leaf_data.data() + size_t(first) * kLeafRows; }
+  /// The leaf `ref`.
+  Leaf leaf(int32_t ref) const { return Leaf(leaf_data.data() + leaf_offset(ref)); }
   /// prim_id of primitive i of the leaf `ref`.
-  uint32_t prim_id(int32_t ref, uint32_t i) const {
-    return std::bit_cast<uint32_t>(leaf(leaf_first(ref))[9 * leaf_count(ref) + i]);
-  }
+  uint32_t prim_id(int32_t ref, uint32_t i) const { return leaf(ref).prim(i); }
 };
 
 /// Builds the tree over every non-degenerate triangle and every sphere, quadric and polygon

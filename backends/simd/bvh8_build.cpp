@@ -7,6 +7,7 @@
 #include <atomic>
 #include <bit>
 #include <chrono>
+#include <cstring>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -373,8 +374,7 @@ class Builder {
 /// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
-  Collapser(const Scene& scene, const RefArray& refs, Bvh8& out, TriangleLayout layout)
-      : scene_(scene), refs_(refs), out_(out), layout_(layout) {}
+  Collapser(const Scene& scene, const RefArray& refs, Bvh8& out) : scene_(scene), refs_(refs), out_(out) {}
 
   void root(const BuildNode& bn) {
     out_.nodes.emplace_back();
@@ -442,57 +442,77 @@ class Collapser {
     for (size_t i = 0; i < inner.size(); ++i) collapse(first + i, *kids[inner[i]], depth + 1);
   }
 
-  /// A leaf takes the next `count` primitives of the leaf array, in tree order, so that a
-  /// leaf is one contiguous run of rows and the test of a leaf is one 8-wide kernel call.
+  /// Numbers the leaf; its place in leaf_data is known once every leaf's size is (fill), so
+  /// until then the node holds the leaf's number where its offset will go.
   int32_t emit_leaf(const BuildNode& bn) {
-    const uint32_t count = bn.end - bn.begin, first = next_;
-    RP_CHECK(uint64_t(first) + count <= kMaxPrims, "bvh8: more than ", kMaxPrims, " primitives");
-    next_ += count;
-    leaves_.push_back({first, bn.begin, count});
+    const uint32_t index = uint32_t(leaves_.size());
+    RP_CHECK(index <= kMaxLeafOffset, "bvh8: more than ", kMaxLeafOffset, " leaves");
+    leaves_.push_back({bn.begin, bn.end - bn.begin, 0});
     ++out_.stats.leaves;
-    return leaf_ref(first, count);
+    return leaf_ref(index);
   }
 
  public:
-  /// Writes every leaf's rows where emit_leaf placed them, in parallel (each value is written
-  /// once, so the bytes do not depend on the thread count).
+  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' sizes in
+  /// parallel, their offsets by a prefix sum, their words in parallel (each written once, so
+  /// the bytes do not depend on the thread count), then the nodes' leaf references.
   void fill() {
-    out_.leaf_data.assign(size_t(next_) * kLeafRows + kLeafPad, 0.0f);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    const size_t leaves = leaves_.size();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
+      Vec3f corners[3 * 8];
       for (size_t i = r.begin(); i < r.end(); ++i) {
-        const Leaf& leaf = leaves_[i];
-        float* rows = out_.leaf_data.data() + size_t(leaf.first) * kLeafRows;
-        for (uint32_t k = 0; k < leaf.count; ++k) store(rows, leaf.count, k, refs_[leaf.ref + k].prim_id);
+        Placed& leaf = leaves_[i];
+        leaf.offset = leaf_words(leaf.count, leaf_vertex_count(leaf_corners(leaf, corners)));
       }
+    });
+    uint64_t next = 0;
+    for (Placed& leaf : leaves_) {
+      const uint32_t words = leaf.offset;
+      leaf.offset = uint32_t(next);
+      next += words;
+      RP_CHECK(next <= kMaxLeafOffset, "bvh8: the leaves need more than ", uint64_t(kMaxLeafOffset) * 4, " bytes");
+    }
+    out_.leaf_data.assign(size_t(next) + kLeafPad, 0.0f);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
+      Vec3f corners[3 * 8];
+      uint32_t ids[8];
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const Placed& leaf = leaves_[i];
+        for (uint32_t k = 0; k < leaf.count; ++k) ids[k] = refs_[leaf.ref + k].prim_id;
+        write_leaf(out_.leaf_data.data() + leaf.offset, leaf_corners(leaf, corners),
+                   std::span(ids, leaf.count));
+      }
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out_.nodes.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        for (int32_t& c : out_.nodes[i].child)
+          if (is_leaf(c)) c = leaf_ref(leaves_[leaf_offset(c)].offset);
     });
   }
 
  private:
-  /// Primitive k of a leaf of n at `rows` is `prim_id`: a triangle's v0 and, by the layout,
-  /// its edges or its other two vertices; or an analytic primitive with NaN coordinates.
-  void store(float* rows, uint32_t n, uint32_t k, uint32_t prim_id) const {
-    rows[9 * n + k] = std::bit_cast<float>(prim_id);
-    Vec3f v0(std::numeric_limits<float>::quiet_NaN()), p1 = v0, p2 = v0;
-    if (prim_id < scene_.triangle_count()) {
-      const auto ref = scene_.locate(prim_id);
-      const TriangleMesh& m = scene_.meshes()[ref.shape];
-      const Vec3f v1 = m.vertex(ref.local, 1), v2 = m.vertex(ref.local, 2);
-      v0 = m.vertex(ref.local, 0);
-      const bool edges = layout_ == TriangleLayout::edges;
-      p1 = edges ? v0 - v1 : v1;  // e1, e2 as intersect_triangle_mt_normal computes them
-      p2 = edges ? v2 - v0 : v2;
+  /// A leaf: its primitives refs_[ref, ref + count) and its offset in leaf_data.
+  struct Placed { uint32_t ref, count, offset; };
+
+  /// The corners of the leaf's primitives into `out` (3 per primitive; NaN for an analytic one).
+  std::span<const Vec3f> leaf_corners(const Placed& leaf, Vec3f* out) const {
+    for (uint32_t k = 0; k < leaf.count; ++k) {
+      const uint32_t id = refs_[leaf.ref + k].prim_id;
+      if (id < scene_.triangle_count()) {
+        const auto at = scene_.locate(id);
+        const TriangleMesh& m = scene_.meshes()[at.shape];
+        for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = m.vertex(at.local, j);
+      } else {
+        for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = Vec3f(std::numeric_limits<float>::quiet_NaN());
+      }
     }
-    const float values[9] = {v0.x, v0.y, v0.z, p1.x, p1.y, p1.z, p2.x, p2.y, p2.z};
-    for (uint32_t row = 0; row < 9; ++row) rows[row * n + k] = values[row];
+    return {out, 3 * size_t(leaf.count)};
   }
 
   const Scene& scene_;
   const RefArray& refs_;
   Bvh8& out_;
-  TriangleLayout layout_;
-  uint32_t next_ = 0;         ///< primitives placed so far
-  struct Leaf { uint32_t first, ref, count; };
-  std::vector<Leaf> leaves_;  ///< placed by emit_leaf, written by fill
+  std::vector<Placed> leaves_;  ///< numbered by emit_leaf; sizes, then offsets (words) by fill
 };
 
 /// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
@@ -504,7 +524,7 @@ double sah_cost(const Bvh8& t) {
     for (int k = 0; k < 8 && n.child[k] != kEmpty; ++k) {
       const Box3f b({n.lo_x[k], n.lo_y[k], n.lo_z[k]}, {n.hi_x[k], n.hi_y[k], n.hi_z[k]});
       if (is_leaf(n.child[k])) {
-        cost += b.area() / root * (kLeafCost + kPrimCost * double(leaf_count(n.child[k])));
+        cost += b.area() / root * (kLeafCost + kPrimCost * double(t.leaf(n.child[k]).n));
       } else {
         cost += b.area() / root * kTraversalCost;
       }
@@ -513,6 +533,52 @@ double sah_cost(const Bvh8& t) {
 }
 
 }  // namespace
+
+namespace {
+
+/// The distinct vertices of `corners` (by their bits, NaN included) in first-seen order into
+/// `verts`, and each corner's index into `index`; returns their number.
+uint32_t distinct_vertices(std::span<const Vec3f> corners, Vec3f* verts, uint8_t* index) {
+  uint32_t v = 0;
+  for (size_t c = 0; c < corners.size(); ++c) {
+    uint32_t i = 0;
+    while (i < v && std::memcmp(&verts[i], &corners[c], sizeof(Vec3f)) != 0) ++i;
+    if (i == v) verts[v++] = corners[c];
+    index[c] = uint8_t(i);
+  }
+  return v;
+}
+
+}  // namespace
+
+uint32_t leaf_vertex_count(std::span<const Vec3f> corners) {
+  Vec3f verts[kMaxLeafVertices];
+  uint8_t index[kMaxLeafVertices];
+  return distinct_vertices(corners, verts, index);
+}
+
+uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids) {
+  const uint32_t n = uint32_t(ids.size());
+  RP_CHECK(n >= 1 && n <= 8 && corners.size() == 3 * size_t(n), "bvh8: a leaf of ", n, " primitives and ",
+           corners.size(), " corners");
+  Vec3f verts[kMaxLeafVertices];
+  uint8_t index[kMaxLeafVertices];
+  const uint32_t v = distinct_vertices(corners, verts, index);
+  std::fill_n(out, leaf_words(n, v), 0.0f);
+  uint8_t* bytes = reinterpret_cast<uint8_t*>(out);
+  bytes[0] = uint8_t((n - 1) | (v - 1) << 3);
+  for (uint32_t k = 0; k < n; ++k)
+    for (uint32_t j = 0; j < 3; ++j) bytes[1 + j * n + k] = index[3 * k + j];
+  const uint32_t ids_at = (3 * n + 4) / 4;
+  for (uint32_t k = 0; k < n; ++k) out[ids_at + k] = std::bit_cast<float>(ids[k]);
+  float* x = out + ids_at + n;
+  for (uint32_t i = 0; i < v; ++i) {
+    x[i] = verts[i].x;
+    x[v + i] = verts[i].y;
+    x[2 * v + i] = verts[i].z;
+  }
+  return v;
+}
 
 Bvh8 build(const Scene& scene, const BuildOptions& options) {
   RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
@@ -555,7 +621,7 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     Builder builder(refs, options, first_analytic);
     const std::unique_ptr<BuildNode> root = builder.build(0, uint32_t(refs.size()), 0);
     out.bounds = root->box;
-    Collapser collapser(scene, refs, out, options.layout);
+    Collapser collapser(scene, refs, out);
     collapser.root(*root);
     collapser.fill();
   }

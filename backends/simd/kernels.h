@@ -67,7 +67,7 @@ struct SingleRay {
 /// (origin on a face plane, parallel to it) is NaN and drops out of the max/min chains, so
 /// it imposes no constraint, as a closed box should. Empty children (lo = +inf, hi = -inf)
 /// never hit.
-inline uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar, float8& t_enter) {
+RP_SIMD_INLINE uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar, float8& t_enter) {
   using simd::max_b_on_nan;
   using simd::min_b_on_nan;
   const float* base = n.lo_x;
@@ -275,12 +275,12 @@ struct TriHit8 {
 /// by lane exactly as that scalar routine: the same FMAs in the same order, so each lane has
 /// its bits. Edge tests compare the unnormalised U, V against |D.Ng| before any division, so
 /// the decisions at shared edges are those of Embree's default intersector. Takes the
-/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (the leaf layout, see Tri8). Serves one ray against 8
+/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (LeafView::e1, e2). Serves one ray against 8
 /// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
 /// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite. The
 /// first form takes Ng = e2 x e1 computed once per triangle (by cross_fma: the same bits).
-inline TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                            const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
+RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                                        const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
   const Vec3x8 c = v0 - org;
   const Vec3x8 r = simd::cross_fma(c, dir);
   const float8 den = simd::dot_fma(ng, dir);
@@ -297,26 +297,44 @@ inline TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3
 }
 
 /// The same, with the normal Ng = e2 x e1 computed here (cross_fma, as the scalar routine).
-inline TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                            const Vec3x8& e2, const float8& tnear, const float8& tfar) {
+RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                                        const Vec3x8& e2, const float8& tnear, const float8& tfar) {
   return moller_trumbore8(org, dir, v0, e1, e2, simd::cross_fma(e2, e1), tnear, tfar);
 }
 
-/// The primitives of a leaf of n (rows at `rows`, see Tri8) as Vec3x8: v0, p1, p2 (edges or
-/// vertices). Each row is one unaligned 8-wide load, which for n < 8 reads on into the next
-/// row or leaf (Bvh8::leaf_data ends in kLeafPad floats for the last one); those lanes are
-/// then set to NaN, like an analytic primitive's, so no triangle test hits them or sends them
-/// to a fallback. (Masked loads cost 10% of the single-ray speed on bunny.)
+/// The triangles of a leaf as Vec3x8: corners v0, v1, v2, each coordinate one lookup in the
+/// leaf's vertex block (simd::lookup), straight-line code for each number of 8-vertex chunks.
+/// Lanes past the leaf's n read whatever index bytes follow the row; v0 and the x of v1 are
+/// then set to NaN, which makes every quantity of both triangle tests NaN for those lanes, so
+/// they never hit or go to the watertight test's fallback (callers mask them out as well).
 struct LeafView {
-  Vec3x8 v0, p1, p2;
-  LeafView(const float* rows, uint32_t n) {
-    const float8 past = simd::nan_past(n);
-    auto row = [&](uint32_t i) { return simd::load_unaligned_nan_past(rows + i * n, past); };
-    v0 = {row(0), row(1), row(2)};
-    p1 = {row(3), row(4), row(5)};
-    p2 = {row(6), row(7), row(8)};
+  Vec3x8 v0, v1, v2;
+  RP_SIMD_INLINE explicit LeafView(const Leaf& leaf) {
+    const uint32_t chunks = (leaf.v + 7) / 8;
+    if (chunks == 1) read<1>(leaf);
+    else if (chunks == 2) read<2>(leaf);
+    else read<3>(leaf);
+    const float8 past = simd::nan_past(leaf.n);
+    v0 = {v0.x | past, v0.y | past, v0.z | past};
+    v1.x = v1.x | past;
   }
-  explicit LeafView(const Tri8& b) : LeafView(b.v0_x, 8) {}
+  /// Möller–Trumbore's edges, as rp::intersect_triangle_mt_normal computes them.
+  Vec3x8 e1() const { return v0 - v1; }
+  Vec3x8 e2() const { return v2 - v0; }
+
+ private:
+  template <int Chunks>
+  RP_SIMD_INLINE void read(const Leaf& leaf) {
+    const float* x = leaf.vertices();
+    v0 = corner<Chunks>(leaf, x, 0);
+    v1 = corner<Chunks>(leaf, x, 1);
+    v2 = corner<Chunks>(leaf, x, 2);
+  }
+  template <int Chunks>
+  RP_SIMD_INLINE static Vec3x8 corner(const Leaf& leaf, const float* x, uint32_t j) {
+    const simd::index8<Chunks> i(leaf.corners(j));
+    return {simd::lookup(x, i), simd::lookup(x + leaf.v, i), simd::lookup(x + 2 * leaf.v, i)};
+  }
 };
 
 /// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8
@@ -396,7 +414,7 @@ struct WatertightRays {
 /// sign tests, and the same fallback: a lane with an edge function of exactly 0 is decided by
 /// the scalar routine, which re-evaluates the edge functions in double. Two rays share one
 /// edge's value for two triangles only when the vertices are the same floats, so the test
-/// takes the vertices (Tri8 in the vertex layout), never edges. Serves one ray against 8
+/// takes the vertices (as every leaf stores them), never edges. Serves one ray against 8
 /// triangles and 8 rays against one triangle.
 inline TriHit8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
                        const float8& tfar) {

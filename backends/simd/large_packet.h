@@ -28,6 +28,7 @@
 #include <array>
 #include <bit>
 #include <limits>
+#include <optional>
 #include <span>
 
 #include "backends/simd/traversal.h"
@@ -409,20 +410,21 @@ class LargePacketTraversal {
       }
       int m = leaf_packets(w, members, gb, e, which, lanes);
       if (!m) continue;
-      const uint32_t count = leaf_count(e.ref);
-      const float* rows = t_.bvh().leaf(leaf_first(e.ref));
-      if (t_.analytic_leaf(rows, count) == kInvalidId)
-        m = split_by_rays(which, lanes, m, count, [&](int i, uint32_t here) {
+      const Leaf leaf = t_.bvh().leaf(e.ref);
+      std::optional<LeafView> lv;  // read once, for the first packet that takes the leaf by rays
+      if (t_.analytic_leaf(leaf) == kInvalidId)
+        m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
           Packet& q = w.packets[size_t(i)];
-          t_.leaf_by_rays(rows, count, here, q.p, packet_rays(rays, i), q.h);
+          if (!lv) lv.emplace(leaf);
+          t_.leaf_by_rays(leaf, *lv, here, q.p, packet_rays(rays, i), q.h);
         });
-      for (uint32_t k = 0; k < count && m > 0; ++k) {
-        const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
+      for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
+        const uint32_t id = leaf.prim(k);
         if (id >= t_.bvh().first_analytic) {
           for (int j = 0; j < m; ++j) t_.analytic_packet(id, packet_rays(rays, which[j]), lanes[j], w.packets[which[j]].h);
           continue;
         }
-        const typename Kernel::Triangle tri(rows, count, k);  // set up once for every packet
+        const typename Kernel::Triangle tri(leaf, k);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar), lanes[j], id);
@@ -467,18 +469,19 @@ class LargePacketTraversal {
         continue;
       }
       int m = leaf_packets(w, members, gb, e, which, lanes);
-      const uint32_t count = leaf_count(e.ref);
-      const float* rows = t_.bvh().leaf(leaf_first(e.ref));
-      if (t_.analytic_leaf(rows, count) == kInvalidId)
-        m = split_by_rays(which, lanes, m, count, [&](int i, uint32_t here) {
+      const Leaf leaf = t_.bvh().leaf(e.ref);
+      std::optional<LeafView> lv;  // as in closest_group
+      if (t_.analytic_leaf(leaf) == kInvalidId)
+        m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
           const Packet& q = w.packets[size_t(i)];
-          if (const uint32_t found = t_.leaf_any_by_rays(rows, count, here, q.p, packet_rays(rays, i), q.h.tfar))
+          if (!lv) lv.emplace(leaf);
+          if (const uint32_t found = t_.leaf_any_by_rays(leaf, *lv, here, q.p, packet_rays(rays, i), q.h.tfar))
             occlude(i, found);
         });
-      for (uint32_t k = 0; k < count && m > 0; ++k) {
-        const uint32_t id = Traversal<Kernel>::prim_at(rows, count, k);
+      for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
+        const uint32_t id = leaf.prim(k);
         const bool analytic = id >= t_.bvh().first_analytic;
-        const typename Kernel::Triangle tri = analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(rows, count, k);
+        const typename Kernel::Triangle tri = analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(leaf, k);
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           uint32_t found = 0;

@@ -18,17 +18,12 @@
 
 namespace rp::bvh8 {
 
-/// Primitive k of a leaf of n: rows `row`, `row` + 1, `row` + 2 (see Tri8), in every lane.
-inline Vec3x8 row3(const float* rows, uint32_t n, uint32_t row, uint32_t k) {
-  return Vec3x8(Vec3f{rows[row * n + k], rows[(row + 1) * n + k], rows[(row + 2) * n + k]});
-}
-
-/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring) on the
-/// edge layout. Single: one ray against a leaf's primitives; Triangle: one primitive of a leaf
+/// The triangle test of the default variant: Möller–Trumbore (normal-first factoring), its
+/// edges computed from the leaf's vertices. Single: one ray against a leaf's primitives (read
+/// once into a LeafView by the caller, which may test several rays against it); Triangle: one primitive of a leaf
 /// in every lane, with its normal computed once; Packet: the 8 rays of a packet against one
 /// Triangle.
 struct MtKernel {
-  static constexpr TriangleLayout kLayout = TriangleLayout::edges;
   struct Single {
     Vec3x8 org, dir;
     float8 tnear;
@@ -36,16 +31,20 @@ struct MtKernel {
     /// Lane `lane` of packet p (the ray `r`), from the packet's registers.
     Single(const RayPacket& p, int lane, const Ray&)
         : org(p.org.broadcast(lane)), dir(p.dir.broadcast(lane)), tnear(simd::broadcast_lane(p.tnear, lane)) {}
-    TriHit8 block(const float* rows, uint32_t n, const float8& tfar) const {
-      const LeafView lv(rows, n);
-      return moller_trumbore8(org, dir, lv.v0, lv.p1, lv.p2, tnear, tfar);
+    RP_SIMD_INLINE TriHit8 block(const LeafView& lv, const float8& tfar) const {
+      return moller_trumbore8(org, dir, lv.v0, lv.e1(), lv.e2(), tnear, tfar);
     }
   };
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
     Triangle() = default;
-    Triangle(const float* rows, uint32_t n, uint32_t k)
-        : v0(row3(rows, n, 0, k)), e1(row3(rows, n, 3, k)), e2(row3(rows, n, 6, k)), ng(simd::cross_fma(e2, e1)) {}
+    Triangle(const Leaf& leaf, uint32_t k) {
+      const Vec3f a = leaf.vertex(k, 0), b = leaf.vertex(k, 1), c = leaf.vertex(k, 2);
+      v0 = Vec3x8(a);
+      e1 = Vec3x8(a - b);  // as rp::intersect_triangle_mt_normal
+      e2 = Vec3x8(c - a);
+      ng = simd::cross_fma(e2, e1);
+    }
   };
   struct Packet {
     const RayPacket* p = nullptr;
@@ -57,24 +56,22 @@ struct MtKernel {
   };
 };
 
-/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the vertex
-/// layout; the traversal around it is the same conservative one.
+/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the leaf's
+/// vertices; the traversal around it is the same conservative one.
 struct WatertightKernel {
-  static constexpr TriangleLayout kLayout = TriangleLayout::vertices;
   struct Single {
     WatertightRays r;
     explicit Single(const Ray& ray) : r(&ray, 1) {}
     Single(const RayPacket&, int, const Ray& ray) : r(&ray, 1) {}
-    TriHit8 block(const float* rows, uint32_t n, const float8& tfar) const {
-      const LeafView lv(rows, n);
-      return watertight8(r, lv.v0, lv.p1, lv.p2, tfar);
+    RP_SIMD_INLINE TriHit8 block(const LeafView& lv, const float8& tfar) const {
+      return watertight8(r, lv.v0, lv.v1, lv.v2, tfar);
     }
   };
   struct Triangle {
     Vec3x8 v0, v1, v2;
     Triangle() = default;
-    Triangle(const float* rows, uint32_t n, uint32_t k)
-        : v0(row3(rows, n, 0, k)), v1(row3(rows, n, 3, k)), v2(row3(rows, n, 6, k)) {}
+    Triangle(const Leaf& leaf, uint32_t k)
+        : v0(leaf.vertex(k, 0)), v1(leaf.vertex(k, 1)), v2(leaf.vertex(k, 2)) {}
   };
   struct Packet {
     WatertightRays r;

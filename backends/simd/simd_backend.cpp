@@ -15,7 +15,7 @@ template <class Kernel>
 class SimdBackend final : public Backend {
  public:
   SimdBackend(const Scene& scene, const std::string& variant, SplitRule rule, bool large_packets)
-      : bvh_(build(scene, {.rule = rule, .max_leaf = 8, .layout = Kernel::kLayout})),
+      : bvh_(build(scene, {.rule = rule, .max_leaf = 8})),
         traversal_(bvh_, scene),
         large_(traversal_),
         large_packets_(large_packets) {

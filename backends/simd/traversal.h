@@ -114,9 +114,8 @@ class Traversal {
           continue;
         }
       } else {
-        const uint32_t n = leaf_count(ref);
-        const float* rows = bvh_.leaf(leaf_first(ref));
-        if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+        const Leaf leaf = bvh_.leaf(ref);
+        if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
           Ray rr = r;
           rr.tfar = tfar;
           const Intersection<float> ah = scene_.intersect_analytic(id, rr);
@@ -125,12 +124,12 @@ class Traversal {
             best = {ah.t, id, ah.u, ah.v};
           }
         } else {
-          const TriHit8 h = kr.block(rows, n, float8(tfar));
-          if (const uint32_t bits = simd::movemask(h.hit) & ((1u << n) - 1)) {
+          const TriHit8 h = kr.block(LeafView(leaf), float8(tfar));
+          if (const uint32_t bits = simd::movemask(h.hit) & ((1u << leaf.n) - 1)) {
             const float tmin = simd::reduce_min(
                 xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
-            const int lane = lowest_prim(rows, n, simd::movemask(h.t == float8(tmin)) & bits);
-            const uint32_t id = prim_at(rows, n, uint32_t(lane));
+            const int lane = lowest_prim(leaf, simd::movemask(h.t == float8(tmin)) & bits);
+            const uint32_t id = leaf.prim(uint32_t(lane));
             if (tmin < tfar || id < best.prim_id) {
               tfar = tmin;
               best = {tmin, id, h.u.get(size_t(lane)), h.v.get(size_t(lane))};
@@ -167,11 +166,10 @@ class Traversal {
           stack[sp++] = n.child[std::countr_zero(bits)];
         continue;
       }
-      const uint32_t n = leaf_count(ref);
-      const float* rows = bvh_.leaf(leaf_first(ref));
-      if (const uint32_t id = analytic_leaf(rows, n); id != kInvalidId) {
+      const Leaf leaf = bvh_.leaf(ref);
+      if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
         if (scene_.intersect_analytic(id, r).hit) return true;
-      } else if (simd::movemask(kr.block(rows, n, tfar8).hit) & ((1u << n) - 1)) {
+      } else if (simd::movemask(kr.block(LeafView(leaf), tfar8).hit) & ((1u << leaf.n) - 1)) {
         return true;
       }
     }
@@ -209,19 +207,18 @@ class Traversal {
   /// a lane at a time when few lanes reach the leaf (leaf_by_rays), else a triangle at a time.
   void leaf_closest(int32_t ref, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                     std::span<const Ray> rays, PacketHits& h) const noexcept {
-    const uint32_t n = leaf_count(ref);
-    const float* rows = bvh_.leaf(leaf_first(ref));
-    if (by_rays(mask, n) && analytic_leaf(rows, n) == kInvalidId) {
-      leaf_by_rays(rows, n, mask, p, rays, h);
+    const Leaf leaf = bvh_.leaf(ref);
+    if (by_rays(mask, leaf.n) && analytic_leaf(leaf) == kInvalidId) {
+      leaf_by_rays(leaf, LeafView(leaf), mask, p, rays, h);
       return;
     }
-    for (uint32_t k = 0; k < n; ++k) {
-      const uint32_t id = prim_at(rows, n, k);
+    for (uint32_t k = 0; k < leaf.n; ++k) {
+      const uint32_t id = leaf.prim(k);
       if (id >= bvh_.first_analytic) {
         analytic_packet(id, rays, mask, h);
         continue;
       }
-      update(h, ps.kp.test(typename Kernel::Triangle(rows, n, k), h.tfar), mask, id);
+      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar), mask, id);
     }
   }
 
@@ -230,33 +227,34 @@ class Traversal {
   /// time against the packet: at most n / 2 lanes.
   static bool by_rays(uint32_t mask, uint32_t n) { return 2u * uint32_t(std::popcount(mask)) <= n; }
 
-  /// The triangles of the leaf at `rows` (n of them) against each lane of `mask` in turn, by
-  /// the single-ray test: the same hits and bits as a triangle at a time.
-  void leaf_by_rays(const float* rows, uint32_t n, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
+  /// The triangles of `leaf` (read into `lv`, once for every lane and packet that takes it
+  /// this way) against each lane of `mask` in turn, by the single-ray test: the same hits and
+  /// bits as a triangle at a time.
+  void leaf_by_rays(const Leaf& leaf, const LeafView& lv, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
                     PacketHits& h) const noexcept {
-    const uint32_t slots = (1u << n) - 1;
+    const uint32_t slots = (1u << leaf.n) - 1;
     h.each_lane(mask, [&](int lane, Hit& hit) {
-      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, float8(hit.t));
+      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(lv, float8(hit.t));
       const uint32_t bits = simd::movemask(m.hit) & slots;
       if (!bits) return;
       const float tmin =
           simd::reduce_min(xsimd::select(simd::mask_from_bits(bits), m.t, float8(std::numeric_limits<float>::infinity())));
-      const int slot = lowest_prim(rows, n, simd::movemask(m.t == float8(tmin)) & bits);
-      const uint32_t id = prim_at(rows, n, uint32_t(slot));
+      const int slot = lowest_prim(leaf, simd::movemask(m.t == float8(tmin)) & bits);
+      const uint32_t id = leaf.prim(uint32_t(slot));
       if (tmin < hit.t || id < hit.prim_id) hit = {tmin, id, m.u.get(size_t(slot)), m.v.get(size_t(slot))};
     });
   }
 
 
-  /// The lanes of `mask` that a triangle of the leaf at `rows` (n of them) occludes, each lane
-  /// against the n triangles in one single-ray test, as leaf_by_rays does for closest hits.
-  uint32_t leaf_any_by_rays(const float* rows, uint32_t n, uint32_t mask, const RayPacket& p,
+  /// The lanes of `mask` that a triangle of `leaf` occludes, each lane against the leaf's
+  /// triangles in one single-ray test, as leaf_by_rays does for closest hits.
+  uint32_t leaf_any_by_rays(const Leaf& leaf, const LeafView& lv, uint32_t mask, const RayPacket& p,
                             std::span<const Ray> rays, const float8& tfar) const noexcept {
     uint32_t found = 0;
     for (uint32_t b = mask; b; b &= b - 1) {
       const int lane = std::countr_zero(b);
-      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(rows, n, simd::broadcast_lane(tfar, lane));
-      if (simd::movemask(m.hit) & ((1u << n) - 1)) found |= b & (~b + 1);
+      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(lv, simd::broadcast_lane(tfar, lane));
+      if (simd::movemask(m.hit) & ((1u << leaf.n) - 1)) found |= b & (~b + 1);
     }
     return found;
   }
@@ -293,17 +291,16 @@ class Traversal {
   /// The lanes of `mask` that some primitive of leaf `ref` occludes.
   uint32_t leaf_any(int32_t ref, uint32_t mask, const PacketSetup<Kernel>& ps, std::span<const Ray> rays,
                     const float8& tfar) const noexcept {
-    const uint32_t n = leaf_count(ref);
-    const float* rows = bvh_.leaf(leaf_first(ref));
+    const Leaf leaf = bvh_.leaf(ref);
     uint32_t done = 0;
-    for (uint32_t k = 0; k < n && mask; ++k) {
-      const uint32_t id = prim_at(rows, n, k);
+    for (uint32_t k = 0; k < leaf.n && mask; ++k) {
+      const uint32_t id = leaf.prim(k);
       uint32_t hit = 0;
       if (id >= bvh_.first_analytic) {
         for (uint32_t b = mask; b; b &= b - 1)
           if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
       } else {
-        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(rows, n, k), tfar).hit) & mask;
+        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(leaf, k), tfar).hit) & mask;
       }
       done |= hit;
       mask &= ~hit;
@@ -369,23 +366,22 @@ class Traversal {
     for (uint32_t b = bits; b; b &= b - 1) h.prim[std::countr_zero(b)] = id;
   }
 
-  /// Of the slots `at` (non-empty) of the leaf of n at `rows`, the one with the lowest prim_id.
-  static int lowest_prim(const float* rows, uint32_t n, uint32_t at) {
+  /// Of the slots `at` (non-empty) of `leaf`, the one with the lowest prim_id.
+  static int lowest_prim(const Leaf& leaf, uint32_t at) {
     int best = std::countr_zero(at);
     for (uint32_t b = at & (at - 1); b; b &= b - 1)  // rare: several triangles at exactly one t
-      if (prim_at(rows, n, uint32_t(std::countr_zero(b))) < prim_at(rows, n, uint32_t(best))) best = std::countr_zero(b);
+      if (leaf.prim(uint32_t(std::countr_zero(b))) < leaf.prim(uint32_t(best))) best = std::countr_zero(b);
     return best;
   }
 
-  /// The prim_id of the leaf of n at `rows` when it is an analytic primitive, else
-  /// kInvalidId. The build gives an analytic primitive a leaf of its own, so a leaf is all
-  /// triangles (one 8-wide test) or one analytic primitive (its scalar routine).
-  uint32_t analytic_leaf(const float* rows, uint32_t n) const noexcept {
-    if (n != 1 || !bvh_.has_analytic) return kInvalidId;
-    const uint32_t id = prim_at(rows, 1, 0);
+  /// The prim_id of `leaf` when it is an analytic primitive, else kInvalidId. The build gives
+  /// an analytic primitive a leaf of its own, so a leaf is all triangles (one 8-wide test) or
+  /// one analytic primitive (its scalar routine).
+  uint32_t analytic_leaf(const Leaf& leaf) const noexcept {
+    if (leaf.n != 1 || !bvh_.has_analytic) return kInvalidId;
+    const uint32_t id = leaf.prim(0);
     return id >= bvh_.first_analytic ? id : kInvalidId;
   }
-  static uint32_t prim_at(const float* rows, uint32_t n, uint32_t k) { return std::bit_cast<uint32_t>(rows[9 * n + k]); }
 
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
   void analytic_packet(uint32_t id, std::span<const Ray> rays, uint32_t mask, PacketHits& h) const noexcept {
@@ -410,11 +406,11 @@ class Traversal {
   void prefetch_children(const Bvh8Node& n, uint32_t bits) const noexcept {
     for (; bits; bits &= bits - 1) {
       const int32_t c = n.child[std::countr_zero(bits)];
-      if (is_leaf(c)) {  // 40 bytes per primitive, from anywhere in a line
-        const char* p = reinterpret_cast<const char*>(bvh_.leaf(leaf_first(c)));
-        const uint32_t bytes = 40 * leaf_count(c);
-        for (uint32_t off = 0; off < bytes; off += 64) simd::prefetch(p + off);
-        simd::prefetch(p + bytes - 1);
+      if (is_leaf(c)) {  // its size is in the leaf: the bytes of a typical full leaf, from anywhere in a line
+        const char* p = reinterpret_cast<const char*>(bvh_.leaf_data.data() + leaf_offset(c));
+        constexpr uint32_t kBytes = 4 * leaf_words(8, 10);
+        for (uint32_t off = 0; off < kBytes; off += 64) simd::prefetch(p + off);
+        simd::prefetch(p + kBytes - 1);
       } else {
         const char* p = reinterpret_cast<const char*>(&bvh_.nodes[size_t(c)]);
         for (uint32_t off = 0; off < sizeof(Bvh8Node); off += 64) simd::prefetch(p + off);

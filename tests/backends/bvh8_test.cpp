@@ -24,7 +24,7 @@ namespace {
 /// prim_ids of a leaf.
 std::vector<uint32_t> leaf_prims(const Bvh8& t, int32_t ref) {
   std::vector<uint32_t> ids;
-  for (uint32_t i = 0; i < leaf_count(ref); ++i) ids.push_back(t.prim_id(ref, i));
+  for (uint32_t i = 0; i < t.leaf(ref).n; ++i) ids.push_back(t.prim_id(ref, i));
   return ids;
 }
 
@@ -68,20 +68,33 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
         EXPECT_EQ(ids.size(), 1u);
       }
     }
-    // Leaves lie back to back, without padding: their ranges tile [0, prims).
-    std::vector<std::pair<uint32_t, uint32_t>> ranges;
+    // Every leaf holds its triangles' corners bit for bit (an analytic primitive's are NaN),
+    // and the leaves lie back to back: their words tile the array up to its padding.
+    std::vector<std::pair<size_t, size_t>> ranges;
     for (int32_t ref : refs) {
-      EXPECT_LE(leaf_count(ref), 8u);
-      ranges.emplace_back(leaf_first(ref), leaf_count(ref));
+      EXPECT_LE(t.leaf(ref).n, 8u);
+      const Leaf leaf = t.leaf(ref);
+      ranges.emplace_back(size_t(leaf.words - t.leaf_data.data()), leaf_words(leaf.n, leaf.vertex_count()));
+      for (uint32_t k = 0; k < leaf.n; ++k) {
+        const PrimLocation at = sc.locate(leaf.prim(k));
+        for (uint32_t j = 0; j < 3; ++j) {
+          const Vec3f got = leaf.vertex(k, j);
+          if (at.kind != PrimKind::triangle) {
+            EXPECT_TRUE(std::isnan(got.x) && std::isnan(got.y) && std::isnan(got.z));
+            continue;
+          }
+          const Vec3f want = sc.meshes()[at.shape].vertex(at.local, j);
+          EXPECT_EQ(0, std::memcmp(&got, &want, sizeof(Vec3f))) << "prim " << leaf.prim(k) << " corner " << j;
+        }
+      }
     }
     std::sort(ranges.begin(), ranges.end());
-    uint32_t next = 0;
-    for (const auto& [first, count] : ranges) {
+    size_t next = 0;
+    for (const auto& [first, words] : ranges) {
       EXPECT_EQ(first, next);
-      next = first + count;
+      next = first + words;
     }
-    EXPECT_EQ(next, t.stats.prims);
-    EXPECT_EQ(t.leaf_data.size(), size_t(t.stats.prims) * kLeafRows + kLeafPad);
+    EXPECT_EQ(t.leaf_data.size(), next + kLeafPad);
   }
 }
 
@@ -169,8 +182,8 @@ TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   const Bvh8 t = build(sc, {SplitRule::median, 4});
   uint32_t lo = 99, hi = 0;
   for (int32_t ref : leaves(t)) {
-    lo = std::min(lo, leaf_count(ref));
-    hi = std::max(hi, leaf_count(ref));
+    lo = std::min(lo, t.leaf(ref).n);
+    hi = std::max(hi, t.leaf(ref).n);
   }
   EXPECT_LE(hi, 4u);
   EXPECT_GE(lo, 2u);
@@ -243,15 +256,62 @@ void expect_same_bits(const Intersection<float>& a, const Intersection<float>& b
   EXPECT_EQ(std::bit_cast<uint32_t>(a.v), std::bit_cast<uint32_t>(b.v));
 }
 
-/// A leaf of n primitives in the tree's layout (see Tri8): v0 and p1, p2 per primitive.
-std::vector<float> leaf_rows(const Vec3f* v0, const Vec3f* p1, const Vec3f* p2, uint32_t n) {
-  std::vector<float> rows(kLeafRows * n + kLeafPad, 1.0f);  // what follows a leaf: any floats
+/// The leaf the build would write for n primitives (prim_ids 0..n-1) with corners v0, v1,
+/// v2, followed by floats of any value (what follows a leaf in the tree).
+std::vector<float> make_leaf(const Vec3f* v0, const Vec3f* v1, const Vec3f* v2, uint32_t n) {
+  std::vector<Vec3f> corners;
+  std::vector<uint32_t> ids;
   for (uint32_t l = 0; l < n; ++l) {
-    const float values[9] = {v0[l].x, v0[l].y, v0[l].z, p1[l].x, p1[l].y, p1[l].z, p2[l].x, p2[l].y, p2[l].z};
-    for (uint32_t row = 0; row < 9; ++row) rows[row * n + l] = values[row];
-    rows[9 * n + l] = std::bit_cast<float>(l);
+    corners.insert(corners.end(), {v0[l], v1[l], v2[l]});
+    ids.push_back(l);
   }
-  return rows;
+  std::vector<float> words(leaf_words(n, kMaxLeafVertices) + kLeafPad, 1.0f);
+  write_leaf(words.data(), corners, ids);
+  return words;
+}
+
+/// A leaf gives back each corner's floats bit for bit, stores each distinct vertex once
+/// (corners with the same bits merged, -0 and +0 kept apart), and its 8-wide view holds the
+/// corners in lanes 0..n-1 and NaN past them (see LeafView), for leaves of 1..8 with 1..24 vertices.
+TEST(Bvh8, LeafStoresEachDistinctVertexOnceAndGivesBackEveryCorner) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  for (int iter = 0; iter < 2000; ++iter) {
+    const uint32_t n = 1 + uint32_t(iter) % 8;
+    std::vector<Vec3f> pool;  // corners drawn from a pool of 1..24 points
+    const size_t pool_size = 1 + size_t(iter) % 24;
+    for (size_t i = 0; i < pool_size; ++i) pool.push_back({u(rng), u(rng), u(rng)});
+    if (pool_size > 1) pool[1] = {-0.0f, pool[0].y, pool[0].z}, pool[0].x = 0.0f;  // differ in a sign bit only
+    Vec3f c[3][8];
+    std::vector<Vec3f> used;
+    for (uint32_t k = 0; k < n; ++k)
+      for (int j = 0; j < 3; ++j) {
+        c[j][k] = pool[size_t(rng()) % pool_size];
+        if (std::none_of(used.begin(), used.end(), [&](const Vec3f& p) { return std::memcmp(&p, &c[j][k], 12) == 0; }))
+          used.push_back(c[j][k]);
+      }
+    const std::vector<float> words = make_leaf(c[0], c[1], c[2], n);
+    const Leaf leaf(words.data());
+    ASSERT_EQ(leaf.vertex_count(), used.size());
+    const LeafView lv(leaf);
+    const Vec3x8* view[3] = {&lv.v0, &lv.v1, &lv.v2};
+    for (uint32_t k = 0; k < 8; ++k)
+      for (uint32_t j = 0; j < 3; ++j) {
+        const Vec3f lane = view[j]->lane(int(k));
+        if (k >= n) {  // v0 NaN and v1's x: enough for both tests to see only NaN there
+          if (j == 0) {
+            EXPECT_TRUE(std::isnan(lane.x) && std::isnan(lane.y) && std::isnan(lane.z)) << "lane " << k << " of " << n;
+          } else if (j == 1) {
+            EXPECT_TRUE(std::isnan(lane.x)) << "lane " << k << " of " << n;
+          }
+          continue;
+        }
+        EXPECT_EQ(leaf.prim(k), k);
+        const Vec3f stored = leaf.vertex(k, j);
+        EXPECT_EQ(0, std::memcmp(&stored, &c[j][k], 12)) << "iter " << iter << " corner " << j << " of " << k;
+        EXPECT_EQ(0, std::memcmp(&lane, &c[j][k], 12)) << "iter " << iter << " lane " << k << " corner " << j;
+      }
+  }
 }
 
 /// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of
@@ -263,24 +323,22 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   int hits = 0;
   for (int iter = 0; iter < 8000; ++iter) {
     const uint32_t n = 1 + uint32_t(iter) % 8;
-    Vec3f v0[8], v1[8], v2[8], e1[8], e2[8];
+    Vec3f v0[8], v1[8], v2[8];
     for (int l = 0; l < 8; ++l) {
       v0[l] = v3();
       v1[l] = v0[l] + v3() * 0.5f;
       v2[l] = v0[l] + v3() * 0.5f;
       if (iter % 7 == 0 && l == 3) v2[l] = v1[l];  // degenerate lane
-      e1[l] = v0[l] - v1[l];
-      e2[l] = v2[l] - v0[l];
     }
-    const std::vector<float> rows = leaf_rows(v0, e1, e2, n);
+    const std::vector<float> words = make_leaf(v0, v1, v2, n);
     // Aimed at a random point of a random lane's plane, near or inside that triangle.
     const int k = iter % int(n);
     const float a = std::abs(u(rng)) * 0.6f, b = std::abs(u(rng)) * 0.6f;
     const Vec3f org = v3() * 2.0f;
     Ray r{org, 0.0f, (v0[k] + (v1[k] - v0[k]) * a + (v2[k] - v0[k]) * b) - org, iter % 3 ? 100.0f : 0.7f};
     if (iter % 11 == 0) r.dir.y = -0.0f;
-    const LeafView lv(rows.data(), n);
-    const TriHit8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), lv.v0, lv.p1, lv.p2, float8(r.tnear), float8(r.tfar));
+    const LeafView lv(Leaf(words.data()));
+    const TriHit8 h = moller_trumbore8(Vec3x8(r.org), Vec3x8(r.dir), lv.v0, lv.e1(), lv.e2(), float8(r.tnear), float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
       if (l >= int(n)) {
         ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
@@ -317,7 +375,7 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
       v[1][l] = (iter % 5 == 0 && l > 0) ? v[1][l - 1] : v[0][l] + v3() * 0.5f;  // shared vertices
       v[2][l] = v[0][l] + v3() * 0.5f;
     }
-    const std::vector<float> rows = leaf_rows(v[0], v[1], v[2], n);
+    const std::vector<float> words = make_leaf(v[0], v[1], v[2], n);
     const int k = iter % int(n);
     const Vec3f org = v3() * 2.0f;
     // Aimed at a vertex, an edge midpoint or an interior point of lane k.
@@ -325,8 +383,8 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
                                                                  : (v[0][k] + v[1][k] + v[2][k]) * (1.0f / 3.0f);
     Ray r{org, 0.0f, target - org, iter % 4 ? 100.0f : 0.9f};
     if (iter % 13 == 0) r.dir.x = -0.0f;
-    const LeafView lv(rows.data(), n);
-    const TriHit8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.p1, lv.p2, float8(r.tfar));
+    const LeafView lv(Leaf(words.data()));
+    const TriHit8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.v1, lv.v2, float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
       if (l >= int(n)) {
         ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
