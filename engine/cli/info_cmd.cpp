@@ -45,23 +45,25 @@ int run_info(const InfoArgs& a) {
   const double prims = std::max(1.0, double(scene.prim_count()));
   std::printf("scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
   if (a.no_backends) return 0;
-  std::printf("\n%-8s %-8s %10s %14s %12s\n", "backend", "variant", "build s", "bytes", "bytes/prim");
+  std::printf("\n%-8s %-10s %8s %14s %12s\n", "backend", "variant", "build s", "bytes", "bytes/prim");
   for (const BackendEntry& e : list_backends()) {
     if (!e.available) {
       std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
       continue;
     }
-    const auto backend = build_backend(e.name, "default", scene, a.scene);
-    const BackendInfo& i = backend->info();
-    std::printf("%-8s %-8s %10.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
-                double(i.bytes) / prims);
-    for (const auto& [key, value] : i.stats) {
-      if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
-        std::printf("  %s=%lld", key.c_str(), (long long)value);
-      else
-        std::printf("  %s=%g", key.c_str(), value);
+    for (const std::string& variant : e.variants) {  // every variant: their memory differs (Embree's compact)
+      const auto backend = build_backend(e.name, variant, scene, a.scene);
+      const BackendInfo& i = backend->info();
+      std::printf("%-8s %-10s %8.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
+                  double(i.bytes) / prims);
+      for (const auto& [key, value] : i.stats) {
+        if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
+          std::printf("  %s=%lld", key.c_str(), (long long)value);
+        else
+          std::printf("  %s=%g", key.c_str(), value);
+      }
+      std::printf("\n");
     }
-    std::printf("\n");
   }
   return 0;
 }
