@@ -71,8 +71,6 @@ struct Leaf {
     n = (head & 7u) + 1;
     v = (head >> 3) + 1;
   }
-  uint32_t vertex_count() const { return v; }
-  uint32_t size_words() const { return leaf_words(n, v); }
   /// Row j: the block index of corner j of each primitive (n bytes).
   const uint8_t* corners(uint32_t j) const { return reinterpret_cast<const uint8_t*>(words) + 1 + j * n; }
   uint32_t prim(uint32_t k) const { return std::bit_cast<uint32_t>(words[(3 * n + 4) / 4 + k]); }
@@ -89,9 +87,6 @@ struct Leaf {
 /// Writes at `out` (leaf_words(n, V) floats) the leaf of the n = ids.size() primitives whose
 /// corners are corners[3k .. 3k + 2] (an analytic primitive: three NaN corners); returns V.
 uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids);
-
-/// V of the leaf write_leaf would write for these corners.
-uint32_t leaf_vertex_count(std::span<const Vec3f> corners);
 
 /// Allocator for the tree's arrays: 2 MiB-aligned and advised as transparent huge pages
 /// (madvise MADV_HUGEPAGE) when large, so random traversal of a big tree misses the TLB far

@@ -370,6 +370,45 @@ class Builder {
   uint32_t first_analytic_;
 };
 
+/// The vertex block of a leaf: each distinct corner (by its bits, NaN included) numbered in
+/// first-seen order; `of[c]` is corner c's number, `v` how many there are.
+struct CornerIndex {
+  uint32_t v = 0;
+  uint8_t of[3 * 8];
+};
+
+CornerIndex index_corners(std::span<const Vec3f> corners) {
+  CornerIndex ci;
+  uint32_t first[3 * 8];  // first[i]: the corner that vertex i was first seen as
+  for (size_t c = 0; c < corners.size(); ++c) {
+    uint32_t i = 0;
+    while (i < ci.v && std::memcmp(&corners[first[i]], &corners[c], sizeof(Vec3f)) != 0) ++i;
+    if (i == ci.v) first[ci.v++] = uint32_t(c);
+    ci.of[c] = uint8_t(i);
+  }
+  return ci;
+}
+
+/// Writes the leaf of the primitives `ids` with these corners and their index (see Leaf):
+/// leaf_words(n, index.v) floats at `out`.
+void store_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids, const CornerIndex& index) {
+  const uint32_t n = uint32_t(ids.size()), v = index.v;
+  std::fill_n(out, leaf_words(n, v), 0.0f);
+  uint8_t* bytes = reinterpret_cast<uint8_t*>(out);
+  bytes[0] = uint8_t((n - 1) | (v - 1) << 3);
+  for (uint32_t k = 0; k < n; ++k)
+    for (uint32_t j = 0; j < 3; ++j) bytes[1 + j * n + k] = index.of[3 * k + j];
+  const uint32_t ids_at = (3 * n + 4) / 4;
+  for (uint32_t k = 0; k < n; ++k) out[ids_at + k] = std::bit_cast<float>(ids[k]);
+  float* x = out + ids_at + n;
+  for (size_t c = 0; c < corners.size(); ++c) {  // a shared vertex is written once per corner, the same bits
+    const uint32_t i = index.of[c];
+    x[i] = corners[c].x;
+    x[v + i] = corners[c].y;
+    x[2 * v + i] = corners[c].z;
+  }
+}
+
 /// Lays the binary tree out as 8-wide nodes and leaves, cut as Builder::plan chose
 /// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
@@ -447,29 +486,26 @@ class Collapser {
   int32_t emit_leaf(const BuildNode& bn) {
     const uint32_t index = uint32_t(leaves_.size());
     RP_CHECK(index <= kMaxLeafOffset, "bvh8: more than ", kMaxLeafOffset, " leaves");
-    leaves_.push_back({bn.begin, bn.end - bn.begin, 0});
+    leaves_.push_back({bn.begin, bn.end - bn.begin, 0, {}});
     ++out_.stats.leaves;
     return leaf_ref(index);
   }
 
  public:
-  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' sizes in
-  /// parallel, their offsets by a prefix sum, their words in parallel (each written once, so
-  /// the bytes do not depend on the thread count), then the nodes' leaf references.
+  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' vertex
+  /// blocks (hence sizes) in parallel, their offsets by a prefix sum, their words in parallel
+  /// (each written once, so the bytes do not depend on the thread count), then the nodes'
+  /// leaf references.
   void fill() {
     const size_t leaves = leaves_.size();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
       Vec3f corners[3 * 8];
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        Placed& leaf = leaves_[i];
-        leaf.offset = leaf_words(leaf.count, leaf_vertex_count(leaf_corners(leaf, corners)));
-      }
+      for (size_t i = r.begin(); i < r.end(); ++i) leaves_[i].index = index_corners(leaf_corners(leaves_[i], corners));
     });
     uint64_t next = 0;
     for (Placed& leaf : leaves_) {
-      const uint32_t words = leaf.offset;
       leaf.offset = uint32_t(next);
-      next += words;
+      next += leaf_words(leaf.count, leaf.index.v);
       RP_CHECK(next <= kMaxLeafOffset, "bvh8: the leaves need more than ", uint64_t(kMaxLeafOffset) * 4, " bytes");
     }
     out_.leaf_data.assign(size_t(next) + kLeafPad, 0.0f);
@@ -479,8 +515,8 @@ class Collapser {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const Placed& leaf = leaves_[i];
         for (uint32_t k = 0; k < leaf.count; ++k) ids[k] = refs_[leaf.ref + k].prim_id;
-        write_leaf(out_.leaf_data.data() + leaf.offset, leaf_corners(leaf, corners),
-                   std::span(ids, leaf.count));
+        store_leaf(out_.leaf_data.data() + leaf.offset, leaf_corners(leaf, corners), std::span(ids, leaf.count),
+                   leaf.index);
       }
     });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out_.nodes.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -491,8 +527,12 @@ class Collapser {
   }
 
  private:
-  /// A leaf: its primitives refs_[ref, ref + count) and its offset in leaf_data.
-  struct Placed { uint32_t ref, count, offset; };
+  /// A leaf: its primitives refs_[ref, ref + count), its offset in leaf_data and its corners'
+  /// vertex numbers.
+  struct Placed {
+    uint32_t ref, count, offset;
+    CornerIndex index;
+  };
 
   /// The corners of the leaf's primitives into `out` (3 per primitive; NaN for an analytic one).
   std::span<const Vec3f> leaf_corners(const Placed& leaf, Vec3f* out) const {
@@ -534,50 +574,12 @@ double sah_cost(const Bvh8& t) {
 
 }  // namespace
 
-namespace {
-
-/// The distinct vertices of `corners` (by their bits, NaN included) in first-seen order into
-/// `verts`, and each corner's index into `index`; returns their number.
-uint32_t distinct_vertices(std::span<const Vec3f> corners, Vec3f* verts, uint8_t* index) {
-  uint32_t v = 0;
-  for (size_t c = 0; c < corners.size(); ++c) {
-    uint32_t i = 0;
-    while (i < v && std::memcmp(&verts[i], &corners[c], sizeof(Vec3f)) != 0) ++i;
-    if (i == v) verts[v++] = corners[c];
-    index[c] = uint8_t(i);
-  }
-  return v;
-}
-
-}  // namespace
-
-uint32_t leaf_vertex_count(std::span<const Vec3f> corners) {
-  Vec3f verts[kMaxLeafVertices];
-  uint8_t index[kMaxLeafVertices];
-  return distinct_vertices(corners, verts, index);
-}
-
 uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids) {
-  const uint32_t n = uint32_t(ids.size());
-  RP_CHECK(n >= 1 && n <= 8 && corners.size() == 3 * size_t(n), "bvh8: a leaf of ", n, " primitives and ",
-           corners.size(), " corners");
-  Vec3f verts[kMaxLeafVertices];
-  uint8_t index[kMaxLeafVertices];
-  const uint32_t v = distinct_vertices(corners, verts, index);
-  std::fill_n(out, leaf_words(n, v), 0.0f);
-  uint8_t* bytes = reinterpret_cast<uint8_t*>(out);
-  bytes[0] = uint8_t((n - 1) | (v - 1) << 3);
-  for (uint32_t k = 0; k < n; ++k)
-    for (uint32_t j = 0; j < 3; ++j) bytes[1 + j * n + k] = index[3 * k + j];
-  const uint32_t ids_at = (3 * n + 4) / 4;
-  for (uint32_t k = 0; k < n; ++k) out[ids_at + k] = std::bit_cast<float>(ids[k]);
-  float* x = out + ids_at + n;
-  for (uint32_t i = 0; i < v; ++i) {
-    x[i] = verts[i].x;
-    x[v + i] = verts[i].y;
-    x[2 * v + i] = verts[i].z;
-  }
-  return v;
+  RP_CHECK(ids.size() >= 1 && ids.size() <= 8 && corners.size() == 3 * ids.size(), "bvh8: a leaf of ", ids.size(),
+           " primitives and ", corners.size(), " corners");
+  const CornerIndex index = index_corners(corners);
+  store_leaf(out, corners, ids, index);
+  return index.v;
 }
 
 Bvh8 build(const Scene& scene, const BuildOptions& options) {

@@ -81,6 +81,15 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& erro
   return cat(one_line(what), " (see ", help, ")");
 }
 
+void add_scene_option(CLI::App* app, std::string& scene) {
+  app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+}
+
+void add_backend_options(CLI::App* app, std::string& backend, std::string& variant) {
+  app->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
+  app->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
+}
+
 void add_threads_option(CLI::App* app, int& threads) {
   app->add_option("-t,--threads", threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
 }

@@ -39,6 +39,12 @@ std::string nearest(const std::string& word, const std::vector<std::string>& can
 /// the subcommand given (`raypack render --help`) or of raypack.
 std::string parse_error_message(const CLI::App& app, const CLI::ParseError& error, int argc, char** argv);
 
+/// --scene: 'default' or a scene file, bound to `scene`.
+void add_scene_option(CLI::App* app, std::string& scene);
+
+/// --backend and --variant: a backend by name and its variant (see `raypack backends`).
+void add_backend_options(CLI::App* app, std::string& backend, std::string& variant);
+
 /// -t,--threads: worker threads (0 = all cores), bound to `threads`.
 void add_threads_option(CLI::App* app, int& threads);
 

@@ -30,7 +30,7 @@ struct DiffSide {
 
 CLI::App* DiffArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
-  c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  add_scene_option(c, scene);
   CLI::Option* k = c->add_option("--kind", kind, "Generated rays: primary, diffuse or random")->capture_default_str();
   c->add_option("--rays", rays, "A ray file (.csv, or binary: .bin, .rays) instead of generated rays")->excludes(k);
   c->add_option("--count", count, "Generated rays (primary: the first COUNT of the smallest packet-aligned image)")

@@ -141,11 +141,10 @@ bool CameraArgs::any() const {
 
 CLI::App* RenderArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
-  c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  add_scene_option(c, scene);
   c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
   c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
-  c->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
-  c->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
+  add_backend_options(c, backend, variant);
   c->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 65536))->capture_default_str();
   add_threads_option(c, threads);
   c->add_option("--seed", seed, "Seed of the per-pixel sample streams")->capture_default_str();

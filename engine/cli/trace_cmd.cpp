@@ -28,11 +28,10 @@ std::vector<HitRecord> to_records(const Scene& scene, std::span<const Ray> rays,
 
 CLI::App* TraceArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");
-  c->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  add_scene_option(c, scene);
   c->add_option("--rays", rays, "Ray file: .csv, or binary (.bin, .rays)")->required();
   c->add_option("-o,--output", output, "Hit file: .csv, or binary (.bin, .hits)")->required();
-  c->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
-  c->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
+  add_backend_options(c, backend, variant);
   c->add_option("--coherence", coherence, "coherent (neighbouring rays as packets) or incoherent")->capture_default_str();
   add_threads_option(c, threads);
   add_quiet_flag(c, quiet);

@@ -74,7 +74,7 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
     for (int32_t ref : refs) {
       EXPECT_LE(t.leaf(ref).n, 8u);
       const Leaf leaf = t.leaf(ref);
-      ranges.emplace_back(size_t(leaf.words - t.leaf_data.data()), leaf_words(leaf.n, leaf.vertex_count()));
+      ranges.emplace_back(size_t(leaf.words - t.leaf_data.data()), leaf_words(leaf.n, leaf.v));
       for (uint32_t k = 0; k < leaf.n; ++k) {
         const PrimLocation at = sc.locate(leaf.prim(k));
         for (uint32_t j = 0; j < 3; ++j) {
@@ -292,7 +292,7 @@ TEST(Bvh8, LeafStoresEachDistinctVertexOnceAndGivesBackEveryCorner) {
       }
     const std::vector<float> words = make_leaf(c[0], c[1], c[2], n);
     const Leaf leaf(words.data());
-    ASSERT_EQ(leaf.vertex_count(), used.size());
+    ASSERT_EQ(leaf.v, used.size());
     const LeafView lv(leaf);
     const Vec3x8* view[3] = {&lv.v0, &lv.v1, &lv.v2};
     for (uint32_t k = 0; k < 8; ++k)
