@@ -44,6 +44,16 @@ inline float4 max4(float4 a, float4 b) { return _mm_max_ps(a, b); }
 inline int4 min4(int4 a, int4 b) { return _mm_min_epi32(a, b); }
 inline int4 max4(int4 a, int4 b) { return _mm_max_epi32(a, b); }
 
+/// Surface area of the non-empty box [lo, hi] from its x, y, z lanes: 2 (e.x e.y + e.y e.z +
+/// e.z e.x) for e = hi - lo, the operations of Box3f::area in its order (the same bits).
+inline float area4(float4 lo, float4 hi) {
+  const float4 e = _mm_sub_ps(hi, lo);
+  const float4 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1)));  // x y, y z, z x
+  const float xy = _mm_cvtss_f32(p), yz = _mm_cvtss_f32(_mm_shuffle_ps(p, p, 1)),
+              zx = _mm_cvtss_f32(_mm_shuffle_ps(p, p, 2));
+  return 2.0f * ((xy + yz) + zx);
+}
+
 /// Each lane truncated toward zero (CVTTPS2DQ; 0x80000000 for NaN and out-of-range lanes).
 inline int4 truncate4(float4 v) { return _mm_cvttps_epi32(v); }
 

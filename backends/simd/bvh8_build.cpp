@@ -1,4 +1,5 @@
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
@@ -36,8 +37,21 @@ struct PrimRef {
   static PrimRef make(const Box3f& box, const Vec3f& c, uint32_t id) {
     return {{box.lo.x, box.lo.y, box.lo.z}, {box.hi.x, box.hi.y, box.hi.z}, {c.x, c.y, c.z}, id};
   }
+  /// Once the binary tree is built the box and centroid are no longer read, and the layout
+  /// keeps the primitive's three corners in their 9 floats instead (Collapser::fill), so
+  /// the mesh is gathered once, not once per pass over the leaves.
+  void set_corners(const Vec3f* c) {
+    const float f[9] = {c[0].x, c[0].y, c[0].z, c[1].x, c[1].y, c[1].z, c[2].x, c[2].y, c[2].z};
+    std::memcpy(static_cast<void*>(this), f, sizeof(f));
+  }
+  Vec3f corner(uint32_t j) const {
+    float f[3];
+    std::memcpy(f, reinterpret_cast<const char*>(this) + j * sizeof(f), sizeof(f));
+    return {f[0], f[1], f[2]};
+  }
 };
-static_assert(sizeof(PrimRef) == 40 && offsetof(PrimRef, centroid) == 24, "PrimRef is read as 10 floats");
+static_assert(sizeof(PrimRef) == 40 && offsetof(PrimRef, hi) == 12 && offsetof(PrimRef, centroid) == 24,
+              "PrimRef is read as 10 floats, and its first 9 as three corners");
 static_assert(std::is_trivially_default_constructible_v<PrimRef>);
 
 /// Leaves a new element uninitialised (default-initialisation of a trivial type).
@@ -66,11 +80,12 @@ inline Box3f to_box(float4 lo, float4 hi) {
 }
 
 /// Binary build tree: a leaf has no children and owns refs[begin, end). Each node also carries
-/// its row of the cost-optimal collapse into 8-wide nodes (see Builder::plan).
+/// its row of the cost-optimal collapse into 8-wide nodes (see Builder::plan). Nodes live in
+/// a NodeArena.
 struct BuildNode {
   Box3f box;
-  uint32_t begin = 0, end = 0;
-  std::unique_ptr<BuildNode> left, right;
+  uint32_t begin, end;
+  BuildNode *left, *right;
   bool leaf() const { return !left; }
   uint32_t count() const { return end - begin; }
 
@@ -80,9 +95,26 @@ struct BuildNode {
   /// 8-wide node of node_width children, node_split of them from the left.
   float cost[8];
   uint8_t split[8];
-  uint8_t node_width = 0, node_split = 0;
-  bool as_leaf = false;
-  bool analytic = false;  ///< holds an analytic primitive (see Builder::may_leaf)
+  uint8_t node_width, node_split;
+  bool as_leaf;
+  bool analytic;  ///< holds an analytic primitive (see Builder::may_leaf)
+};
+/// Blocks of build nodes, one arena per thread (no allocation per node; the nodes die with
+/// the build). Which arena holds a node does not matter: only the pointers are the tree.
+class NodeArena {
+ public:
+  BuildNode* make() {
+    if (used_ == kBlock) {
+      blocks_.push_back(std::make_unique<BuildNode[]>(kBlock));
+      used_ = 0;
+    }
+    return &blocks_.back()[used_++];
+  }
+
+ private:
+  static constexpr size_t kBlock = 4096;
+  std::vector<std::unique_ptr<BuildNode[]>> blocks_;
+  size_t used_ = kBlock;
 };
 
 constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use fewer (bins_for)
@@ -103,36 +135,50 @@ class Builder {
   Builder(RefArray& refs, const BuildOptions& o, uint32_t first_analytic)
       : refs_(refs), opt_(o), first_analytic_(first_analytic) {}
 
-  std::unique_ptr<BuildNode> build(uint32_t begin, uint32_t end, uint32_t depth) {
-    auto node = std::make_unique<BuildNode>();
+  /// The binary tree over every ref; its nodes live as long as the builder.
+  const BuildNode& build() { return *build(0, uint32_t(refs_.size()), 0, bounds(0, uint32_t(refs_.size()))); }
+
+ private:
+  struct BoxPair {
+    Box3f box, centroids;
+    bool analytic;
+  };
+  /// A node's split: its children are refs[begin, mid) and refs[mid, end), with these
+  /// bounds; mid == begin: a leaf.
+  struct Split {
+    uint32_t mid;
+    BoxPair left, right;
+  };
+
+  /// The subtree over refs[begin, end), whose bounds are `b`.
+  BuildNode* build(uint32_t begin, uint32_t end, uint32_t depth, const BoxPair& b) {
+    BuildNode* node = arenas_.local().make();
     node->begin = begin;
     node->end = end;
-    const BoxPair b = bounds(begin, end);
+    node->left = node->right = nullptr;
     node->box = b.box;
     node->analytic = b.analytic;
-    const Box3f& centroids = b.centroids;
     const uint32_t n = end - begin;
-    uint32_t mid = begin;  // stays begin for a leaf
+    Split split{begin, {}, {}};  // stays a leaf
     if (n <= 1) {
     } else if (opt_.rule == SplitRule::sah && depth < kMaxSahDepth) {
-      mid = sah_split(begin, end, node->box, centroids, may_leaf(*node));  // begin: SAH prefers a leaf
+      split = sah_split(begin, end, b, may_leaf(*node));
     } else if (!may_leaf(*node)) {
-      mid = median_split(begin, end, node->box);
+      split = halves(begin, end, median_split(begin, end, node->box));
     }
-    if (mid != begin) {
+    if (const uint32_t mid = split.mid; mid != begin) {
       if (n > kParallelThreshold) {
-        tbb::parallel_invoke([&] { node->left = build(begin, mid, depth + 1); },
-                             [&] { node->right = build(mid, end, depth + 1); });
+        tbb::parallel_invoke([&] { node->left = build(begin, mid, depth + 1, split.left); },
+                             [&] { node->right = build(mid, end, depth + 1, split.right); });
       } else {
-        node->left = build(begin, mid, depth + 1);
-        node->right = build(mid, end, depth + 1);
+        node->left = build(begin, mid, depth + 1, split.left);
+        node->right = build(mid, end, depth + 1, split.right);
       }
     }
     plan(*node);
     return node;
   }
 
- private:
   /// Bounds of refs[begin, end) and of their centroids, four lanes at a time; in parallel for
   /// large ranges (min and max are exact, so the result does not depend on how the range is
   /// cut).
@@ -141,6 +187,15 @@ class Builder {
     float4 hi = simd::splat4(-std::numeric_limits<float>::infinity());
     float4 clo = lo, chi = hi;
     uint32_t analytic = 0;
+    void add(const PrimRef& p, uint32_t first_analytic) {
+      const float4 c = load_centroid(p);
+      lo = simd::min4(lo, load4(p, 0));
+      hi = simd::max4(hi, load4(p, 3));
+      clo = simd::min4(clo, c);
+      chi = simd::max4(chi, c);
+      analytic += p.prim_id >= first_analytic;
+    }
+    BoxPair boxes() const { return {to_box(lo, hi), to_box(clo, chi), analytic != 0}; }
     void join(const Bounds& o) {
       lo = simd::min4(lo, o.lo);
       hi = simd::max4(hi, o.hi);
@@ -149,28 +204,36 @@ class Builder {
       analytic += o.analytic;
     }
   };
-  struct BoxPair {
-    Box3f box, centroids;
-    bool analytic;
-  };
   BoxPair bounds(uint32_t begin, uint32_t end) const {
     auto scan = [&](const tbb::blocked_range<uint32_t>& r, Bounds b) {
-      for (uint32_t i = r.begin(); i < r.end(); ++i) {
-        const PrimRef& p = refs_[i];
-        const float4 c = load_centroid(p);
-        b.lo = simd::min4(b.lo, load4(p, 0));
-        b.hi = simd::max4(b.hi, load4(p, 3));
-        b.clo = simd::min4(b.clo, c);
-        b.chi = simd::max4(b.chi, c);
-        b.analytic += p.prim_id >= first_analytic_;
-      }
+      for (uint32_t i = r.begin(); i < r.end(); ++i) b.add(refs_[i], first_analytic_);
       return b;
     };
     const Bounds b = end - begin < kParallelThreshold
                          ? scan({begin, end}, Bounds{})
                          : tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bounds{}, scan,
                                                 [](Bounds a, const Bounds& o) { a.join(o); return a; });
-    return {to_box(b.lo, b.hi), to_box(b.clo, b.chi), b.analytic != 0};
+    return b.boxes();
+  }
+
+  /// The split at `mid`, each half's bounds scanned.
+  Split halves(uint32_t begin, uint32_t end, uint32_t mid) const { return {mid, bounds(begin, mid), bounds(mid, end)}; }
+
+  /// Moves the refs for which `left` holds before the others (Hoare's two-pointer partition)
+  /// and returns the split, the bounds of each side gathered on the way: no second scan.
+  template <class Pred>
+  Split partition(uint32_t begin, uint32_t end, Pred left) {
+    Bounds bl, br;
+    PrimRef *l = refs_.data() + begin, *r = refs_.data() + end;
+    for (;;) {
+      while (l < r && left(*l)) bl.add(*l++, first_analytic_);
+      while (l < r && !left(r[-1])) br.add(*--r, first_analytic_);
+      if (l == r) break;
+      std::swap(*l, r[-1]);  // *l now belongs left, r[-1] right
+      bl.add(*l++, first_analytic_);
+      br.add(*--r, first_analytic_);
+    }
+    return {uint32_t(l - refs_.data()), bl.boxes(), br.boxes()};
   }
 
   /// Bin boxes and counts for all three axes in one pass over the refs: the three bin indices
@@ -196,7 +259,6 @@ class Builder {
           count[a][b] += o.count[a][b];
         }
     }
-    Box3f box(int a, int b) const { return to_box(lo[a][b], hi[a][b]); }
   };
   /// Fills `out` (constructed for nbins): a return by value would copy its 3.5 KB per node.
   void bin(uint32_t begin, uint32_t end, const Box3f& centroids, Bins& out) const {
@@ -236,9 +298,10 @@ class Builder {
   }
 
   /// Binned SAH (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007):
-  /// 8-32 bins per axis over the centroid bounds. Returns the split index, or `begin` when a
-  /// leaf is cheaper (only when `leaf_ok`).
-  uint32_t sah_split(uint32_t begin, uint32_t end, const Box3f& box, const Box3f& centroids, bool leaf_ok) {
+  /// 8-32 bins per axis over the centroid bounds. Returns the split (mid == begin when a leaf
+  /// is cheaper, only when `leaf_ok`).
+  Split sah_split(uint32_t begin, uint32_t end, const BoxPair& b, bool leaf_ok) {
+    const Box3f &box = b.box, &centroids = b.centroids;
     const uint32_t n = end - begin;
     const Vec3f extent = centroids.extent();
     const int nbins = bins_for(n);
@@ -248,26 +311,29 @@ class Builder {
     int best_axis = -1, best_bin = 0;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(extent[axis] > 0.0f)) continue;
-      Box3f bin_box[kBins];
-      for (int b = 0; b < nbins; ++b) bin_box[b] = bins.box(axis, b);
+      const float4 *bin_lo = bins.lo[axis], *bin_hi = bins.hi[axis];
       const uint32_t* bin_count = bins.count[axis];
       float right_area[kBins];
       uint32_t right_count[kBins];
-      Box3f acc;
+      constexpr float inf = std::numeric_limits<float>::infinity();
+      float4 lo = simd::splat4(inf), hi = simd::splat4(-inf);
       uint32_t count = 0;
-      for (int b = nbins - 1; b > 0; --b) {
-        acc.extend(bin_box[b]);
+      for (int b = nbins - 1; b > 0; --b) {  // a box with no refs yet is never priced (count 0)
+        lo = simd::min4(lo, bin_lo[b]);
+        hi = simd::max4(hi, bin_hi[b]);
         count += bin_count[b];
-        right_area[b] = acc.area();
+        right_area[b] = simd::area4(lo, hi);
         right_count[b] = count;
       }
-      acc = Box3f();
+      lo = simd::splat4(inf);
+      hi = simd::splat4(-inf);
       count = 0;
       for (int b = 1; b < nbins; ++b) {
-        acc.extend(bin_box[b - 1]);
+        lo = simd::min4(lo, bin_lo[b - 1]);
+        hi = simd::max4(hi, bin_hi[b - 1]);
         count += bin_count[b - 1];
         if (count == 0 || right_count[b] == 0) continue;
-        const float cost = acc.area() * float(count) + right_area[b] * float(right_count[b]);
+        const float cost = simd::area4(lo, hi) * float(count) + right_area[b] * float(right_count[b]);
         if (cost < best_cost) {
           best_cost = cost;
           best_axis = axis;
@@ -278,15 +344,13 @@ class Builder {
     const float area = box.area();
     const float split_cost = area > 0.0f ? kTraversalCost + kIntersectionCost * best_cost / area
                                          : std::numeric_limits<float>::infinity();
-    if (leaf_ok && kIntersectionCost * float(n) <= split_cost) return begin;
-    if (best_axis < 0) return object_median(begin, end);  // every centroid coincides
+    if (leaf_ok && kIntersectionCost * float(n) <= split_cost) return {begin, {}, {}};
+    if (best_axis < 0) return halves(begin, end, object_median(begin, end));  // every centroid coincides
     const float lo = centroids.lo[best_axis], scale = float(nbins) / extent[best_axis];
-    PrimRef* first = refs_.data() + begin;
-    PrimRef* mid = std::partition(first, refs_.data() + end, [&](const PrimRef& r) {
+    const Split s = partition(begin, end, [&](const PrimRef& r) {
       return bin_of(r.centroid[best_axis], lo, scale, nbins) < best_bin;
     });
-    const uint32_t m = uint32_t(mid - refs_.data());
-    return (m == begin || m == end) ? object_median(begin, end) : m;
+    return (s.mid == begin || s.mid == end) ? halves(begin, end, object_median(begin, end)) : s;
   }
 
   /// The lecture notes' rule: split the longest axis of the node's box at the median centroid, so
@@ -368,6 +432,7 @@ class Builder {
   RefArray& refs_;
   const BuildOptions& opt_;
   uint32_t first_analytic_;
+  tbb::enumerable_thread_specific<NodeArena> arenas_;
 };
 
 /// The vertex block of a leaf: each distinct corner (by its bits, NaN included) numbered in
@@ -413,7 +478,7 @@ void store_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint
 /// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
-  Collapser(const Scene& scene, const RefArray& refs, Bvh8& out) : scene_(scene), refs_(refs), out_(out) {}
+  Collapser(const Scene& scene, RefArray& refs, Bvh8& out) : scene_(scene), refs_(refs), out_(out) {}
 
   void root(const BuildNode& bn) {
     out_.nodes.emplace_back();
@@ -492,15 +557,20 @@ class Collapser {
   }
 
  public:
-  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' vertex
-  /// blocks (hence sizes) in parallel, their offsets by a prefix sum, their words in parallel
-  /// (each written once, so the bytes do not depend on the thread count), then the nodes'
-  /// leaf references.
+  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' corners
+  /// gathered from the meshes (into their refs, see PrimRef::set_corners) and their vertex
+  /// blocks numbered (hence their sizes) in parallel, their offsets by a prefix sum, their
+  /// words in parallel (each written once, so the bytes do not depend on the thread count),
+  /// then the nodes' leaf references.
   void fill() {
     const size_t leaves = leaves_.size();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
       Vec3f corners[3 * 8];
-      for (size_t i = r.begin(); i < r.end(); ++i) leaves_[i].index = index_corners(leaf_corners(leaves_[i], corners));
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        Placed& leaf = leaves_[i];
+        gather_corners(leaf);
+        leaf.index = index_corners(corners_of(leaf, corners));
+      }
     });
     uint64_t next = 0;
     for (Placed& leaf : leaves_) {
@@ -515,7 +585,7 @@ class Collapser {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         const Placed& leaf = leaves_[i];
         for (uint32_t k = 0; k < leaf.count; ++k) ids[k] = refs_[leaf.ref + k].prim_id;
-        store_leaf(out_.leaf_data.data() + leaf.offset, leaf_corners(leaf, corners), std::span(ids, leaf.count),
+        store_leaf(out_.leaf_data.data() + leaf.offset, corners_of(leaf, corners), std::span(ids, leaf.count),
                    leaf.index);
       }
     });
@@ -534,23 +604,31 @@ class Collapser {
     CornerIndex index;
   };
 
-  /// The corners of the leaf's primitives into `out` (3 per primitive; NaN for an analytic one).
-  std::span<const Vec3f> leaf_corners(const Placed& leaf, Vec3f* out) const {
+  /// Stores the corners of the leaf's primitives in their refs (NaN for an analytic one).
+  void gather_corners(const Placed& leaf) {
     for (uint32_t k = 0; k < leaf.count; ++k) {
-      const uint32_t id = refs_[leaf.ref + k].prim_id;
-      if (id < scene_.triangle_count()) {
-        const auto at = scene_.locate(id);
+      PrimRef& ref = refs_[leaf.ref + k];
+      Vec3f c[3];
+      if (ref.prim_id < scene_.triangle_count()) {
+        const auto at = scene_.locate(ref.prim_id);
         const TriangleMesh& m = scene_.meshes()[at.shape];
-        for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = m.vertex(at.local, j);
+        for (uint32_t j = 0; j < 3; ++j) c[j] = m.vertex(at.local, j);
       } else {
-        for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = Vec3f(std::numeric_limits<float>::quiet_NaN());
+        for (uint32_t j = 0; j < 3; ++j) c[j] = Vec3f(std::numeric_limits<float>::quiet_NaN());
       }
+      ref.set_corners(c);
     }
+  }
+
+  /// The corners of the leaf's primitives (3 per primitive), once gathered, into `out`.
+  std::span<const Vec3f> corners_of(const Placed& leaf, Vec3f* out) const {
+    for (uint32_t k = 0; k < leaf.count; ++k)
+      for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = refs_[leaf.ref + k].corner(j);
     return {out, 3 * size_t(leaf.count)};
   }
 
   const Scene& scene_;
-  const RefArray& refs_;
+  RefArray& refs_;
   Bvh8& out_;
   std::vector<Placed> leaves_;  ///< numbered by emit_leaf; sizes, then offsets (words) by fill
 };
@@ -621,10 +699,10 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   out.stats.prims = uint32_t(refs.size());
   if (!refs.empty()) {
     Builder builder(refs, options, first_analytic);
-    const std::unique_ptr<BuildNode> root = builder.build(0, uint32_t(refs.size()), 0);
-    out.bounds = root->box;
+    const BuildNode& root = builder.build();
+    out.bounds = root.box;
     Collapser collapser(scene, refs, out);
-    collapser.root(*root);
+    collapser.root(root);
     collapser.fill();
   }
   out.first_analytic = first_analytic;
