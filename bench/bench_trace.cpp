@@ -61,7 +61,8 @@ struct Method {
 
 /// Every backend with its default options; simd's 8-ray packets beside its large packets;
 /// Embree's stream mode and, where its AVX-512 kernels run, 16-wide packets, beside its 8-wide
-/// default; and Embree limited to AVX2 (the simd backend's SIMD width).
+/// default; both backends' trees with spatial splits (simd's spatial variant, Embree's
+/// high-quality build); and Embree limited to AVX2 (the simd backend's SIMD width).
 std::vector<Method> methods() {
   std::vector<Method> m;
   const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent) {
@@ -73,11 +74,13 @@ std::vector<Method> methods() {
     if (e.name == "simd") {
       m.push_back({"simd-packet8", "simd", with("default", "", "packet8"), false});
       m.push_back({"simd-watertight", "simd", with("watertight", "", "")});
+      m.push_back({"simd-spatial", "simd", with("spatial", "", "")});
     } else if (e.name == "embree") {
       m.push_back({"embree-stream", "embree", with("default", "", "stream"), false});
       for (const auto& [key, value] : e.facts)
         if (key == "native_ray16" && value == "yes")
           m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), false});
+      m.push_back({"embree-high", "embree", with("high", "", "")});
     }
   }
   m.push_back({"embree-avx2", "embree", with("default", "max_isa=avx2", "")});

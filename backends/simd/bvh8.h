@@ -119,6 +119,12 @@ enum class SplitRule : uint8_t {
 struct BuildOptions {
   SplitRule rule = SplitRule::sah;
   uint32_t max_leaf = 8;  ///< most primitives per leaf (1..8)
+  /// With the SAH rule: spatial splits (SBVH, Stich, Friedrich and Dietrich, "Spatial Splits
+  /// in Bounding Volume Hierarchies", HPG 2009). A node whose best object split leaves
+  /// overlapping children may instead cut space at a plane, a triangle crossing it going to
+  /// both sides with its box clipped there, so a triangle may sit in several leaves (once in
+  /// each). Hits do not change: the closest hit is the least (t, prim_id) whatever the tree.
+  bool spatial_splits = false;
 };
 
 /// Figures of a built tree.

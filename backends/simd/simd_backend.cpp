@@ -14,8 +14,8 @@ namespace {
 template <class Kernel>
 class SimdBackend final : public Backend {
  public:
-  SimdBackend(const Scene& scene, const std::string& variant, SplitRule rule, bool large_packets)
-      : bvh_(build(scene, {.rule = rule, .max_leaf = 8})),
+  SimdBackend(const Scene& scene, const std::string& variant, const BuildOptions& build_options, bool large_packets)
+      : bvh_(build(scene, build_options)),
         traversal_(bvh_, scene),
         large_(traversal_),
         large_packets_(large_packets) {
@@ -70,17 +70,19 @@ bool large_packets(const BackendOptions& options) {
 
 }  // namespace
 
-std::vector<std::string> variants() { return {"default", "median", "watertight"}; }
+std::vector<std::string> variants() { return {"default", "median", "watertight", "spatial"}; }
 
 std::vector<std::string> coherent_methods() { return {"large", "packet8"}; }
 
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
   const std::string& v = options.variant;
   const bool large = large_packets(options);
-  if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, SplitRule::sah, large);
-  if (v == "median") return std::make_unique<SimdBackend<MtKernel>>(scene, v, SplitRule::median, large);
-  if (v == "watertight") return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, SplitRule::sah, large);
-  throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight)"));
+  if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{}, large);
+  if (v == "median") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large);
+  if (v == "watertight") return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large);
+  if (v == "spatial")
+    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large);
+  throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight, spatial)"));
 }
 
 }  // namespace rp::bvh8

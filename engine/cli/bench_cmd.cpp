@@ -61,6 +61,8 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
       m.push_back({"simd single", "simd", "default", "", Coherence::incoherent});
       m.push_back({"simd watertight large", "simd", "watertight", "large", Coherence::coherent});
       m.push_back({"simd watertight single", "simd", "watertight", "", Coherence::incoherent});
+      m.push_back({"simd spatial large", "simd", "spatial", "large", Coherence::coherent});
+      m.push_back({"simd spatial single", "simd", "spatial", "", Coherence::incoherent});
     } else if (e.name == "embree") {
       m.push_back({"embree stream", "embree", "default", "stream", Coherence::coherent});
       if (fact(e, "native_ray16") == "yes")
@@ -72,6 +74,8 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
       m.push_back({"embree rtcIntersect1", "embree", "default", "", Coherence::incoherent});
       m.push_back({"embree robust 8", "embree", "robust", "packet8", Coherence::coherent});
       m.push_back({"embree robust 1", "embree", "robust", "", Coherence::incoherent});
+      m.push_back({"embree high 8", "embree", "high", "packet8", Coherence::coherent});
+      m.push_back({"embree high 1", "embree", "high", "", Coherence::incoherent});
     }
   }
   return m;

@@ -132,16 +132,65 @@ TEST(Bvh8Build, ChildBoxesContainEverythingBelowThem) {
 }
 
 TEST(Bvh8Build, SameTreeForOneAndTwoThreads) {
-  const Scene sc = test::mixed_soup(3, 60000, false);  // large enough for the parallel recursion
-  auto run = [&](int threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    return build(sc, {});
+  const Scene soup = test::mixed_soup(3, 60000, false);  // large enough for the parallel recursion
+  const Scene slivers = test::sliver_soup(3, 20000);
+  for (const bool spatial : {false, true}) {
+    const Scene& sc = spatial ? slivers : soup;
+    auto run = [&](int threads) {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      return build(sc, {.spatial_splits = spatial});
+    };
+    const Bvh8 a = run(1), b = run(2);
+    ASSERT_EQ(a.nodes.size(), b.nodes.size()) << "spatial " << spatial;
+    ASSERT_EQ(a.leaf_data.size(), b.leaf_data.size());
+    EXPECT_EQ(0, std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(Bvh8Node)));
+    EXPECT_EQ(0, std::memcmp(a.leaf_data.data(), b.leaf_data.data(), a.leaf_data.size() * sizeof(float)));
+  }
+}
+
+/// Spatial splits put a triangle in several leaves, each with a box around only its part
+/// there: every point of every triangle lies in the box of some leaf that holds it, child
+/// boxes nest, no leaf holds a primitive twice, and splits did happen (some triangle is in
+/// more than one leaf) with fewer box-area-weighted tests than without them.
+TEST(Bvh8Build, SpatialSplitsCoverEveryTriangle) {
+  const Scene sc = test::sliver_soup(7, 3000);
+  const Bvh8 t = build(sc, {.spatial_splits = true});
+  std::vector<std::vector<Box3f>> boxes(sc.sphere_base() + 1);  // per primitive: its leaves' boxes
+  std::function<void(int32_t, const Box3f&)> walk = [&](int32_t ref, const Box3f& box) {
+    if (is_leaf(ref)) {
+      const std::vector<uint32_t> ids = leaf_prims(t, ref);
+      EXPECT_LE(ids.size(), 8u);
+      EXPECT_EQ(std::set<uint32_t>(ids.begin(), ids.end()).size(), ids.size()) << "a primitive twice in a leaf";
+      for (uint32_t id : ids) boxes.at(id).push_back(box);
+      return;
+    }
+    const Bvh8Node& n = t.nodes[size_t(ref)];
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      const Box3f child({n.lo_x[c], n.lo_y[c], n.lo_z[c]}, {n.hi_x[c], n.hi_y[c], n.hi_z[c]});
+      EXPECT_TRUE(box.contains(child.lo) && box.contains(child.hi)) << "node " << ref << " child " << c;
+      walk(n.child[c], child);
+    }
   };
-  const Bvh8 a = run(1), b = run(2);
-  ASSERT_EQ(a.nodes.size(), b.nodes.size());
-  ASSERT_EQ(a.leaf_data.size(), b.leaf_data.size());
-  EXPECT_EQ(0, std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(Bvh8Node)));
-  EXPECT_EQ(0, std::memcmp(a.leaf_data.data(), b.leaf_data.data(), a.leaf_data.size() * sizeof(float)));
+  walk(0, t.bounds);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  size_t split = 0;
+  for (uint32_t id = 0; id < sc.triangle_count(); ++id) {
+    ASSERT_FALSE(boxes[id].empty()) << "prim " << id << " in no leaf";
+    split += boxes[id].size() > 1;
+    const TriangleMesh& m = sc.meshes()[0];
+    const Vec3f a = m.vertex(id, 0), b = m.vertex(id, 1), c = m.vertex(id, 2);
+    for (int k = 0; k < 32; ++k) {
+      float s = u(rng), r = u(rng);
+      if (s + r > 1.0f) s = 1.0f - s, r = 1.0f - r;
+      const Vec3f p = k < 3 ? m.vertex(id, uint32_t(k)) : a + (b - a) * s + (c - a) * r;
+      EXPECT_TRUE(std::any_of(boxes[id].begin(), boxes[id].end(), [&](const Box3f& x) { return x.contains(p); }))
+          << "prim " << id << " point " << k << " in none of its " << boxes[id].size() << " leaves";
+    }
+  }
+  EXPECT_EQ(boxes[sc.sphere_base()].size(), 1u) << "an analytic primitive is never split";
+  EXPECT_GT(split, 100u);
+  EXPECT_LT(t.stats.sah_cost, build(sc, {}).stats.sah_cost);
 }
 
 /// The collapse minimises the SAH cost, so no node keeps a child node whose children it has
@@ -187,6 +236,33 @@ TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   }
   EXPECT_LE(hi, 4u);
   EXPECT_GE(lo, 2u);
+}
+
+/// The closest hit is the least (t, prim_id) whatever the tree, and a triangle is tested by
+/// the same routine in every leaf that holds it: spatial splits change no hit's bits and no
+/// occlusion answer, on single rays and packets.
+TEST(Bvh8Build, SpatialSplitsChangeNoHit) {
+  const Scene sc = test::sliver_soup(9, 4000);
+  const auto plain = make_backend("simd", sc);
+  const auto spatial = make_backend("simd", sc, {.variant = "spatial", .device_config = {}, .coherent_method = {}});
+  std::vector<Ray> rays = test::random_rays(21, 16000);
+  const std::vector<Ray> axis = test::axis_rays();
+  rays.insert(rays.end(), axis.begin(), axis.end());
+  size_t hits = 0;
+  for (const Coherence coh : {Coherence::incoherent, Coherence::coherent}) {
+    std::vector<Hit> a(rays.size()), b(rays.size());
+    std::vector<uint8_t> oa(rays.size()), ob(rays.size());
+    plain->intersect(rays, a, coh);
+    spatial->intersect(rays, b, coh);
+    plain->occluded(rays, oa, coh);
+    spatial->occluded(rays, ob, coh);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      EXPECT_EQ(0, std::memcmp(&a[i], &b[i], sizeof(Hit))) << "ray " << i << ": prim " << a[i].prim_id << " / " << b[i].prim_id;
+      EXPECT_EQ(oa[i], ob[i]) << "ray " << i;
+      hits += a[i].hit();
+    }
+  }
+  EXPECT_GT(hits, rays.size() / 2);
 }
 
 TEST(Bvh8Build, EmptySceneHasNoNodes) {

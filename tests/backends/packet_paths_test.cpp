@@ -195,7 +195,7 @@ TEST_P(PacketPaths, AnalyticPrimitivesGiveTheSameAnswersOnEveryPath) {
   EXPECT_EQ(near_ties, 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Simd, PacketPaths, ::testing::Values("default", "median", "watertight"),
+INSTANTIATE_TEST_SUITE_P(Simd, PacketPaths, ::testing::Values("default", "median", "watertight", "spatial"),
                          [](const auto& info) { return info.param; });
 
 }  // namespace

@@ -98,8 +98,8 @@ TEST_F(Cli, ABadBackendOrVariantNamesTheFlagGivenInEverySubcommand) {
       {"trace --rays r.csv -o h.csv --backend nope", "--backend: unknown backend 'nope' (available: embree, simd)"},
       {"diff -b nope", "-b: unknown backend 'nope' (available: embree, simd)"},
       {"diff --variant-a watertight", "--variant-a: 'watertight' is not a variant of embree"},
-      {"diff --variant-b robust", "--variant-b: 'robust' is not a variant of simd (default, median, watertight)"},
-      {"stability --method simd/fast", "--method: 'fast' is not a variant of simd (default, median, watertight)"},
+      {"diff --variant-b robust", "--variant-b: 'robust' is not a variant of simd (default, median, watertight, spatial)"},
+      {"stability --method simd/fast", "--method: 'fast' is not a variant of simd (default, median, watertight, spatial)"},
       {"stability --method simd", "--method: 'simd' is not backend/variant"},
       {"stability --family edgs", "--family: unknown family 'edgs' ("}};
   for (const auto& [args, message] : bad) {
@@ -314,7 +314,7 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
-                           "embree rtcIntersect1", "embree robust 1", "bytes/prim", "primary", "shadow", "diffuse",
+                           "embree rtcIntersect1", "embree robust 1", "simd spatial single", "embree high 1", "bytes/prim", "primary", "shadow", "diffuse",
                            "best simd", "best embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);

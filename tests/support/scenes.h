@@ -150,4 +150,25 @@ inline Scene mixed_soup(uint32_t seed, int count, bool with_degenerate) {
   return sc;
 }
 
+/// Long thin triangles across [-1, 1]^3, as Sponza's floor strips and columns are: each runs
+/// from near one random point to near another, so its box is large and mostly empty, and
+/// object splits leave the children overlapping (where spatial splits pay). A sphere in the
+/// middle, so the tree also holds an analytic primitive.
+inline Scene sliver_soup(uint32_t seed, int count) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> w(-0.02f, 0.02f);
+  TriangleMesh m;
+  m.name = "slivers";
+  for (int i = 0; i < count; ++i) {
+    const Vec3f a = random_in_box(rng, -1.0f, 1.0f), b = random_in_box(rng, -1.0f, 1.0f);
+    const uint32_t base = uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), {a, b, b + Vec3f{w(rng), w(rng), w(rng)}});
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2});
+  }
+  Scene sc;
+  sc.add_mesh(std::move(m));
+  sc.add_sphere({{0.1f, -0.2f, 0.3f}, 0.15f, 0});
+  return sc;
+}
+
 }  // namespace rp::test
