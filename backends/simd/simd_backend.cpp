@@ -78,7 +78,8 @@ std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& 
   const std::string& v = options.variant;
   const bool large = large_packets(options);
   if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{}, large);
-  if (v == "median") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large);
+  if (v == "median")
+    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large);
   if (v == "watertight") return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large);
   if (v == "spatial")
     return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large);

@@ -257,7 +257,8 @@ TEST(Bvh8Build, SpatialSplitsChangeNoHit) {
     plain->occluded(rays, oa, coh);
     spatial->occluded(rays, ob, coh);
     for (size_t i = 0; i < rays.size(); ++i) {
-      EXPECT_EQ(0, std::memcmp(&a[i], &b[i], sizeof(Hit))) << "ray " << i << ": prim " << a[i].prim_id << " / " << b[i].prim_id;
+      EXPECT_EQ(0, std::memcmp(&a[i], &b[i], sizeof(Hit)))
+          << "ray " << i << ": prim " << a[i].prim_id << " / " << b[i].prim_id;
       EXPECT_EQ(oa[i], ob[i]) << "ray " << i;
       hits += a[i].hit();
     }

@@ -314,7 +314,8 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
-                           "embree rtcIntersect1", "embree robust 1", "simd spatial single", "embree high 1", "bytes/prim", "primary", "shadow", "diffuse",
+                           "embree rtcIntersect1", "embree robust 1", "simd spatial single", "embree high 1",
+                           "bytes/prim", "primary", "shadow", "diffuse",
                            "best simd", "best embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);
