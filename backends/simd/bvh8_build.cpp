@@ -193,7 +193,7 @@ class Builder {
     const BoxPair b = bounds(refs_.data(), 0, n);
     if (!(opt_.spatial_splits && opt_.rule == SplitRule::sah)) return *build(0, n, 0, b);
     root_area_ = b.box.area();
-    BuildNode* root = build_spatial(RefArray(refs_), 0, b);
+    BuildNode* root = build_spatial(RefArray(refs_), 0, b, n);
     size_t total = 0;
     for (const RefArray& r : leaf_refs_) total += r.size();
     RP_CHECK(total < kInvalidId, "bvh8: ", total, " references after spatial splits");
@@ -384,10 +384,14 @@ class Builder {
     return !left.empty() && !right.empty();
   }
 
-  /// The subtree over the refs `v` (bounds `b`) with spatial splits. Its nodes' ranges are
-  /// set by place(); until then a node's end - begin is its number of refs, and a leaf's
-  /// begin is the index of its refs in leaf_refs_.
-  BuildNode* build_spatial(RefArray v, uint32_t depth, const BoxPair& b) {
+  /// The subtree over the refs `v` (bounds `b`) with spatial splits, which may add at most
+  /// `budget` refs below this node (the root's budget is the primitive count, so a tree holds
+  /// at most twice as many refs as primitives; a split hands what it leaves to its children in
+  /// proportion to their refs). Without a budget, triangles that no plane separates (copies
+  /// of one triangle) would be duplicated at every level. Its nodes' ranges are set by
+  /// place(); until then a node's end - begin is its number of refs, and a leaf's begin is
+  /// the index of its refs in leaf_refs_.
+  BuildNode* build_spatial(RefArray v, uint32_t depth, const BoxPair& b, size_t budget) {
     BuildNode* node = arenas_.local().make();
     const uint32_t n = uint32_t(v.size());
     node->begin = 0;
@@ -401,9 +405,10 @@ class Builder {
       PrimRef* base = v.data();
       const BinnedSplit o = object_split(base, 0, n, b.centroids);
       BinnedSplit sp;
-      if (!b.analytic && overlap(o) > kMinOverlap * root_area_) sp = spatial_split(v, b.box);
+      if (budget > 0 && !b.analytic && overlap(o) > kMinOverlap * root_area_) sp = spatial_split(v, b.box);
       if (!(may_leaf(*node) && leaf_cheaper(n, std::min(o.cut.sah, sp.cut.sah), b.box))) {
-        if (sp.cut.sah < o.cut.sah && divide(v, sp, b.box, left, right)) {
+        if (sp.cut.sah < o.cut.sah && divide(v, sp, b.box, left, right) &&
+            left.size() + right.size() - n <= budget) {
           lb = bounds(left.data(), 0, uint32_t(left.size()));
           rb = bounds(right.data(), 0, uint32_t(right.size()));
         } else {
@@ -429,12 +434,14 @@ class Builder {
       node->end = node->begin + n;
     } else {
       v = RefArray();
+      const size_t nl = left.size(), nr = right.size(), rest = budget - (nl + nr - n);
+      const size_t bl = size_t(double(rest) * double(nl) / double(nl + nr)), br = rest - bl;
       if (n > kParallelThreshold) {
-        tbb::parallel_invoke([&] { node->left = build_spatial(std::move(left), depth + 1, lb); },
-                             [&] { node->right = build_spatial(std::move(right), depth + 1, rb); });
+        tbb::parallel_invoke([&] { node->left = build_spatial(std::move(left), depth + 1, lb, bl); },
+                             [&] { node->right = build_spatial(std::move(right), depth + 1, rb, br); });
       } else {
-        node->left = build_spatial(std::move(left), depth + 1, lb);
-        node->right = build_spatial(std::move(right), depth + 1, rb);
+        node->left = build_spatial(std::move(left), depth + 1, lb, bl);
+        node->right = build_spatial(std::move(right), depth + 1, rb, br);
       }
     }
     plan(*node);

@@ -238,6 +238,28 @@ TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   EXPECT_GE(lo, 2u);
 }
 
+/// Copies of one triangle cannot be separated by any plane: each spatial split would send
+/// all of them to both sides. The split budget bounds the tree at twice as many leaf entries
+/// as primitives, and the build ends.
+TEST(Bvh8Build, SpatialSplitsStayWithinTheirBudget) {
+  TriangleMesh m;
+  m.positions = {{-1.0f, -1.0f, -1.0f}, {1.0f, 1.0f, 1.0f}, {1.0f, 1.0f, 0.98f}};
+  for (uint32_t i = 0; i < 3000; ++i) m.indices.insert(m.indices.end(), {0, 1, 2});
+  Scene sc = test::sliver_soup(5, 500);
+  sc.add_mesh(std::move(m));
+  const Bvh8 t = build(sc, {.spatial_splits = true});
+  size_t entries = 0;
+  std::set<uint32_t> prims;
+  for (int32_t ref : leaves(t))
+    for (uint32_t id : leaf_prims(t, ref)) {
+      ++entries;
+      prims.insert(id);
+    }
+  EXPECT_EQ(prims.size(), size_t(t.stats.prims));
+  EXPECT_LE(entries, 2 * size_t(t.stats.prims));
+  EXPECT_GT(entries, size_t(t.stats.prims)) << "some triangle was split";
+}
+
 /// The closest hit is the least (t, prim_id) whatever the tree, and a triangle is tested by
 /// the same routine in every leaf that holds it: spatial splits change no hit's bits and no
 /// occlusion answer, on single rays and packets.
