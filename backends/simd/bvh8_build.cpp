@@ -74,7 +74,7 @@ using RefArray = std::vector<PrimRef, NoInitAllocator<PrimRef>>;
 /// scene's meshes (an index and three scattered vertices), or, for spatial splits, which clip
 /// triangles many times, a copy made once in prim_id order (one record each). Measured on
 /// dragon: the copy costs the default build more (0.243-0.262 -> 0.263-0.281 s) than its
-/// one-pass reads save, and takes the spatial build from 1.14 to 0.81-0.93 s.
+/// one-pass reads save, and takes the spatial build from 1.14 to 0.81-1.07 s.
 class CornerSource {
  public:
   CornerSource(const Scene& scene, bool copy) : scene_(scene) {
