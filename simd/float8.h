@@ -51,6 +51,24 @@ inline float8 min_b_on_nan(const float8& a, const float8& b) { return _mm256_min
 /// Lane-wise maximum, NaN handled as min_b_on_nan: max(NaN, x) == x.
 inline float8 max_b_on_nan(const float8& a, const float8& b) { return _mm256_max_ps(a, b); }
 
+/// Lane-wise maximum and minimum of the bit patterns read as signed 32-bit integers (one-cycle
+/// VPMAXSD / VPMINSD where MAXPS / MINPS take four). For floats that are not NaN this is the
+/// float order among values >= +0 (and +inf above them); a negative float reads as a negative
+/// integer, below every value >= +0, though negatives among themselves come out reversed. So
+/// max_bits equals the float max whenever one operand is >= +0, and min_bits equals the float
+/// min when both are >= +0 and is negative whenever the float min is (Embree's single-ray
+/// node test, "maxi/mini", orders slab distances this way).
+inline float8 max_bits(const float8& a, const float8& b) {
+  return _mm256_castsi256_ps(_mm256_max_epi32(_mm256_castps_si256(a), _mm256_castps_si256(b)));
+}
+inline float8 min_bits(const float8& a, const float8& b) {
+  return _mm256_castsi256_ps(_mm256_min_epi32(_mm256_castps_si256(a), _mm256_castps_si256(b)));
+}
+/// Bit i set when lane i of a is above lane i of b, both read as signed 32-bit integers.
+inline uint32_t greater_bits(const float8& a, const float8& b) {
+  return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_castps_si256(a), _mm256_castps_si256(b)))));
+}
+
 /// Smallest lane; NaN lanes are ignored unless every lane is NaN (then NaN). MINPS returns
 /// its second operand when either is NaN, so NaN lanes are replaced by +inf before the tree.
 inline float reduce_min(const float8& v) {
@@ -137,6 +155,55 @@ RP_SIMD_INLINE float8 lookup(const float* table, const index8<Chunks>& i) {
     r = _mm256_blendv_ps(r, _mm256_permutevar8x32_ps(_mm256_loadu_ps(table + 8 * c), i.i), i.from[c]);
   return r;
 }
+
+/// The lane indices that compress_store permutes by, one row of 8 bytes per mask: row m
+/// lists the set bits of m from the lowest, then the clear ones.
+struct CompressTable {
+  alignas(64) uint8_t rows[256][8];
+  constexpr CompressTable() : rows() {
+    for (int m = 0; m < 256; ++m) {
+      int k = 0;
+      for (int l = 0; l < 8; ++l)
+        if (m >> l & 1) rows[m][k++] = uint8_t(l);
+      for (int l = 0; l < 8; ++l)
+        if (!(m >> l & 1)) rows[m][k++] = uint8_t(l);
+    }
+  }
+};
+inline constexpr CompressTable kCompressTable{};
+
+/// Writes the lanes of `src` (8 integers) picked by `mask` (bits 0..7) to dst[0],
+/// dst[1], ... in lane order and returns how many: AVX-512's VPCOMPRESSD, done on AVX2 by
+/// one permute from a table and one store. All 8 slots from dst are written: those past the
+/// count get the lanes that were not picked, so the caller must own them and overwrite them
+/// later if they matter.
+inline uint32_t compress_store(const uint32_t* src, uint32_t mask, uint32_t* dst) {
+  const __m256i idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kCompressTable.rows[mask])));
+  const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(src));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst), _mm256_permutevar8x32_epi32(v, idx));
+  return uint32_t(std::popcount(mask));
+}
+
+/// Bit c (c = 0..7) of each of the 8 bytes at `bytes`, as an 8-bit mask (bit l from byte l):
+/// which of eight rays' hit masks include child c.
+struct ByteBits8 {
+  __m256i lanes;
+  explicit ByteBits8(const uint8_t* bytes)
+      : lanes(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(bytes)))) {}
+  uint32_t bit(int c) const {
+    const __m256i b = _mm256_set1_epi32(1 << c);
+    return uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(lanes, b), b))));
+  }
+};
+
+/// Eight 32-bit counters: lane c counts the masks added with bit c set (how many rays of a
+/// stream hit each child of a node).
+struct Count8 {
+  __m256i n = _mm256_setzero_si256();
+  void add(uint32_t bits) { n = _mm256_sub_epi32(n, _mm256_castps_si256(mask_from_bits(bits))); }
+  /// The 8 counts at the 32-byte aligned `out`.
+  void store(uint32_t* out) const { _mm256_store_si256(reinterpret_cast<__m256i*>(out), n); }
+};
 
 /// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
 inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
