@@ -22,12 +22,12 @@ std::vector<BackendEntry> list_backends() {
   const embree::DeviceFacts e = embree::device_facts();
   const auto yes = [](bool b) { return std::string(b ? "yes" : "no"); };
   return {{"embree", "Intel Embree 3 (production backend; user geometry for analytic primitives)",
-           embree::variants(), embree::coherent_methods(),
+           embree::variants(), embree::coherent_methods(), embree::incoherent_methods(),
            {{"version", e.version}, {"isa", e.isa}, {"native_ray8", yes(e.native_ray8)},
             {"native_ray16", yes(e.native_ray16)}, {"ray_stream", yes(e.stream)}},
            true, ""},
-          {"simd", "hand-written 8-wide BVH: large packets, 8-ray packets and single rays, slab test, Moller-Trumbore (AVX2+FMA)",
-           bvh8::variants(), bvh8::coherent_methods(), {{"isa", "avx2+fma"}},
+          {"simd", "hand-written 8-wide BVH: large packets, 8-ray packets, ray streams and single rays, slab test, Moller-Trumbore (AVX2+FMA)",
+           bvh8::variants(), bvh8::coherent_methods(), bvh8::incoherent_methods(), {{"isa", "avx2+fma"}},
            simd_ok, simd_ok ? "" : "this CPU lacks AVX2 or FMA, which the simd kernels are built for"}};
 }
 

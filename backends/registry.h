@@ -19,6 +19,7 @@ struct BackendEntry {
   std::string description;
   std::vector<std::string> variants;  ///< accepted BackendOptions::variant values
   std::vector<std::string> coherent_methods;  ///< accepted BackendOptions::coherent_method values, default first
+  std::vector<std::string> incoherent_methods;  ///< accepted BackendOptions::incoherent_method values, default first
   std::vector<std::pair<std::string, std::string>> facts;  ///< version, ISA, ... (for benchmark records)
   bool available = true;
   std::string unavailable_reason;  ///< why not, when !available

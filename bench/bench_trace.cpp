@@ -66,7 +66,7 @@ struct Method {
 std::vector<Method> methods() {
   std::vector<Method> m;
   const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent) {
-    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent};
+    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent, .incoherent_method = {}};
   };
   for (const BackendEntry& e : list_backends()) {
     if (!e.available) continue;

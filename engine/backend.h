@@ -33,6 +33,7 @@ struct BackendOptions {
   std::string variant = "default";
   std::string device_config;    ///< backend-specific configuration string (embree: rtcNewDevice config)
   std::string coherent_method;  ///< how coherent spans are traced; empty: the backend's default
+  std::string incoherent_method;  ///< how incoherent batches are traced; empty: the backend's default
 };
 
 class Backend {
@@ -41,7 +42,8 @@ class Backend {
 
   /// Closest hit of each ray: hits[i] for rays[i] (hits.size() == rays.size()); a miss is
   /// Hit{} (prim_id == kInvalidId). A hit counts only for tnear <= t <= tfar.
-  /// `coherence` picks packet (groups of 8 consecutive rays) or single-ray traversal.
+  /// `coherence` picks the coherent method (packets of consecutive rays) or the incoherent one
+  /// (single rays, or a ray stream that the backend may reorder internally).
   virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept = 0;
 
   /// Any hit: occluded[i] = 1 when rays[i] hits anything within [tnear, tfar], else 0.

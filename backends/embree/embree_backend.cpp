@@ -200,6 +200,8 @@ class EmbreeBackend final : public Backend {
  public:
   EmbreeBackend(const Scene& scene, const BackendOptions& options)
       : scene_(scene), user_{&scene}, method_(parse_method(options.coherent_method)) {
+    if (!options.incoherent_method.empty() && options.incoherent_method != "single")
+      throw Error(cat("embree: unknown incoherent method '", options.incoherent_method, "' (single)"));
     const auto start = std::chrono::steady_clock::now();
     info_.name = "embree";
     info_.variant = options.variant;
@@ -502,6 +504,8 @@ class EmbreeBackend final : public Backend {
 std::vector<std::string> variants() { return {"default", "robust", "compact", "high"}; }
 
 std::vector<std::string> coherent_methods() { return {"packet8", "packet16", "stream"}; }
+
+std::vector<std::string> incoherent_methods() { return {"single"}; }
 
 DeviceFacts device_facts() {
   const RTCDevice dev = device_for("").handle;

@@ -4,6 +4,7 @@
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/large_packet.h"
+#include "backends/simd/stream.h"
 #include "backends/simd/traversal.h"
 #include "engine/error.h"
 
@@ -14,11 +15,14 @@ namespace {
 template <class Kernel>
 class SimdBackend final : public Backend {
  public:
-  SimdBackend(const Scene& scene, const std::string& variant, const BuildOptions& build_options, bool large_packets)
+  SimdBackend(const Scene& scene, const std::string& variant, const BuildOptions& build_options, bool large_packets,
+              bool streams)
       : bvh_(build(scene, build_options)),
         traversal_(bvh_, scene),
         large_(traversal_),
-        large_packets_(large_packets) {
+        stream_(traversal_),
+        large_packets_(large_packets),
+        streams_(streams) {
     info_.name = "simd";
     info_.variant = variant;
     info_.build_seconds = bvh_.stats.seconds;
@@ -30,7 +34,11 @@ class SimdBackend final : public Backend {
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     if (coherence == Coherence::incoherent) {
-      for (size_t i = 0; i < rays.size(); ++i) hits[i] = traversal_.intersect_single(rays[i]);
+      if (streams_) {
+        stream_.intersect(rays, hits);
+      } else {
+        for (size_t i = 0; i < rays.size(); ++i) hits[i] = traversal_.intersect_single(rays[i]);
+      }
     } else if (large_packets_) {
       large_.intersect(rays, hits);
     } else {
@@ -41,7 +49,11 @@ class SimdBackend final : public Backend {
 
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     if (coherence == Coherence::incoherent) {
-      for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && traversal_.occluded_single(rays[i]);
+      if (streams_) {
+        stream_.occluded(rays, out);
+      } else {
+        for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && traversal_.occluded_single(rays[i]);
+      }
     } else if (large_packets_) {
       large_.occluded(rays, out);
     } else {
@@ -56,7 +68,9 @@ class SimdBackend final : public Backend {
   Bvh8 bvh_;
   Traversal<Kernel> traversal_;
   LargePacketTraversal<Kernel> large_;
+  StreamTraversal<Kernel> stream_;
   bool large_packets_;
+  bool streams_;  ///< incoherent batches as ray streams (else ray by ray)
   BackendInfo info_;
 };
 
@@ -68,21 +82,32 @@ bool large_packets(const BackendOptions& options) {
   throw Error(cat("simd: unknown coherent method '", m, "' (large, packet8)"));
 }
 
+/// The incoherent method of `options`: ray streams (the default) or single rays.
+bool streams(const BackendOptions& options) {
+  const std::string& m = options.incoherent_method;
+  if (m.empty() || m == "stream") return true;
+  if (m == "single") return false;
+  throw Error(cat("simd: unknown incoherent method '", m, "' (stream, single)"));
+}
+
 }  // namespace
 
 std::vector<std::string> variants() { return {"default", "median", "watertight", "spatial"}; }
 
 std::vector<std::string> coherent_methods() { return {"large", "packet8"}; }
 
+std::vector<std::string> incoherent_methods() { return {"stream", "single"}; }
+
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
   const std::string& v = options.variant;
-  const bool large = large_packets(options);
-  if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{}, large);
+  const bool large = large_packets(options), stream = streams(options);
+  if (v == "default") return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{}, large, stream);
   if (v == "median")
-    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large);
-  if (v == "watertight") return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large);
+    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large, stream);
+  if (v == "watertight")
+    return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large, stream);
   if (v == "spatial")
-    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large);
+    return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large, stream);
   throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight, spatial)"));
 }
 

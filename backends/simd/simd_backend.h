@@ -25,6 +25,10 @@ std::vector<std::string> variants();
 /// "packet8" (independent 8-ray packets).
 std::vector<std::string> coherent_methods();
 
+/// Ways to trace an incoherent batch (BackendOptions::incoherent_method): "stream" (the
+/// default: the batch goes down the tree as a ray stream, stream.h) and "single" (ray by ray).
+std::vector<std::string> incoherent_methods();
+
 /// Builds the backend; the caller (the registry) has checked that the CPU has AVX2 and FMA.
 /// Throws rp::Error for an unknown variant or coherent method.
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options);

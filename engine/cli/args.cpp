@@ -134,7 +134,7 @@ std::unique_ptr<Backend> build_backend(const std::string& name, const std::strin
       cat("building the ", name, "/", variant, " structure of ", scene_name, " (", scene.prim_count(), " primitives)");
   try {
     return with_memory_context(
-        what, [&] { return make_backend(name, scene, {.variant = variant, .device_config = {}, .coherent_method = {}}); });
+        what, [&] { return make_backend(name, scene, {.variant = variant, .device_config = {}, .coherent_method = {}, .incoherent_method = {}}); });
   } catch (const Error& e) {
     if (std::string_view(e.what()).starts_with("out of memory")) throw;
     throw Error(cat(what, ": ", e.what()));

@@ -37,11 +37,17 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-/// One way of tracing: a backend variant, a coherence hint (packets or single rays) and, for
-/// coherent rays, the backend's coherent method.
+/// One way of tracing: a backend variant, a coherence hint and the backend's method for that
+/// hint (a coherent method: packets of some kind; an incoherent one: single rays or streams;
+/// empty: the backend's default).
 struct Method {
-  std::string label, backend, variant, coherent_method;
+  std::string label, backend, variant, method;
   Coherence coherence;
+  BackendOptions options() const {
+    const bool coherent = coherence == Coherence::coherent;
+    return {.variant = variant, .device_config = {}, .coherent_method = coherent ? method : "",
+            .incoherent_method = coherent ? "" : method};
+  }
 };
 
 std::string fact(const BackendEntry& e, const std::string& key) {
@@ -58,11 +64,12 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
     if (e.name == "simd") {
       m.push_back({"simd large", "simd", "default", "large", Coherence::coherent});
       m.push_back({"simd packet8", "simd", "default", "packet8", Coherence::coherent});
-      m.push_back({"simd single", "simd", "default", "", Coherence::incoherent});
+      m.push_back({"simd stream", "simd", "default", "stream", Coherence::incoherent});
+      m.push_back({"simd single", "simd", "default", "single", Coherence::incoherent});
       m.push_back({"simd watertight large", "simd", "watertight", "large", Coherence::coherent});
-      m.push_back({"simd watertight single", "simd", "watertight", "", Coherence::incoherent});
+      m.push_back({"simd watertight stream", "simd", "watertight", "stream", Coherence::incoherent});
       m.push_back({"simd spatial large", "simd", "spatial", "large", Coherence::coherent});
-      m.push_back({"simd spatial single", "simd", "spatial", "", Coherence::incoherent});
+      m.push_back({"simd spatial stream", "simd", "spatial", "stream", Coherence::incoherent});
     } else if (e.name == "embree") {
       m.push_back({"embree stream", "embree", "default", "stream", Coherence::coherent});
       if (fact(e, "native_ray16") == "yes")
@@ -71,11 +78,11 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
         skipped.push_back({"embree rtcIntersect16", cat("Embree runs its ", fact(e, "isa"),
                                                         " kernels here: 16-wide packets would be emulated")});
       m.push_back({"embree rtcIntersect8", "embree", "default", "packet8", Coherence::coherent});
-      m.push_back({"embree rtcIntersect1", "embree", "default", "", Coherence::incoherent});
+      m.push_back({"embree rtcIntersect1", "embree", "default", "single", Coherence::incoherent});
       m.push_back({"embree robust 8", "embree", "robust", "packet8", Coherence::coherent});
-      m.push_back({"embree robust 1", "embree", "robust", "", Coherence::incoherent});
+      m.push_back({"embree robust 1", "embree", "robust", "single", Coherence::incoherent});
       m.push_back({"embree high 8", "embree", "high", "packet8", Coherence::coherent});
-      m.push_back({"embree high 1", "embree", "high", "", Coherence::incoherent});
+      m.push_back({"embree high 1", "embree", "high", "single", Coherence::incoherent});
     }
   }
   return m;
@@ -318,7 +325,7 @@ int run_bench(const BenchArgs& a) {
     for (const Method& m : chosen) {
       const std::string backend_key = m.backend + "/" + m.variant;
       const std::unique_ptr<Backend> b =
-          make_backend(m.backend, scene, {.variant = m.variant, .device_config = {}, .coherent_method = m.coherent_method});
+          make_backend(m.backend, scene, m.options());
       if (std::ranges::count(recorded, backend_key) == 0) {
         js["backends"].push_back({{"backend", backend_key}, {"build_seconds", b->info().build_seconds},
                                   {"bytes", b->info().bytes},
@@ -352,7 +359,8 @@ int run_bench(const BenchArgs& a) {
         js["results"].push_back({{"method", m.label},
                                  {"backend", backend_key},
                                  {"coherence", m.coherence == Coherence::coherent ? "coherent" : "incoherent"},
-                                 {"coherent_method", m.coherent_method},
+                                 {"coherent_method", m.coherence == Coherence::coherent ? m.method : ""},
+                                 {"incoherent_method", m.coherence == Coherence::coherent ? "" : m.method},
                                  {"kind", k.name},
                                  {"rays", rays.size()},
                                  {"mrays_per_s", t.median_mrays},

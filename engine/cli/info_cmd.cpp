@@ -76,12 +76,14 @@ int run_backends() {
   for (const BackendEntry& e : list_backends()) {
     std::string variants;
     for (const std::string& v : e.variants) variants += (variants.empty() ? "" : ", ") + v;
-    std::string methods, facts;
+    std::string methods, incoherent, facts;
     for (const std::string& m : e.coherent_methods) methods += (methods.empty() ? "" : ", ") + m;
+    for (const std::string& m : e.incoherent_methods) incoherent += (incoherent.empty() ? "" : ", ") + m;
     for (const auto& [k, v] : e.facts) facts += (facts.empty() ? "" : ", ") + k + "=" + v;
-    std::printf("%-8s %s\n         variants: %s\n         coherent methods: %s\n         %s\n", e.name.c_str(),
-                e.available ? e.description.c_str() : ("unavailable: " + e.unavailable_reason).c_str(),
-                variants.c_str(), methods.c_str(), facts.c_str());
+    std::printf("%-8s %s\n         variants: %s\n         coherent methods: %s\n         incoherent methods: %s\n"
+                "         %s\n",
+                e.name.c_str(), e.available ? e.description.c_str() : ("unavailable: " + e.unavailable_reason).c_str(),
+                variants.c_str(), methods.c_str(), incoherent.c_str(), facts.c_str());
   }
   return 0;
 }

@@ -129,7 +129,7 @@ int run_stability(const StabilityArgs& a) {
   }
   o.make_backend = [](const std::string& method, const Scene& scene) {
     const size_t slash = method.find('/');
-    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}});
+    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
   };
   if (!a.quiet)
     o.progress = [](const std::string& family) { std::fprintf(stderr, "raypack: stability: %s\n", family.c_str()); };

@@ -266,7 +266,7 @@ TEST(Bvh8Build, SpatialSplitsStayWithinTheirBudget) {
 TEST(Bvh8Build, SpatialSplitsChangeNoHit) {
   const Scene sc = test::sliver_soup(9, 4000);
   const auto plain = make_backend("simd", sc);
-  const auto spatial = make_backend("simd", sc, {.variant = "spatial", .device_config = {}, .coherent_method = {}});
+  const auto spatial = make_backend("simd", sc, {.variant = "spatial", .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
   std::vector<Ray> rays = test::random_rays(21, 16000);
   const std::vector<Ray> axis = test::axis_rays();
   rays.insert(rays.end(), axis.begin(), axis.end());

@@ -34,14 +34,15 @@ using test::tessellated_sphere;
 using test::triangle_soup;
 
 /// Every variant of every available backend, as "backend/variant", and every other coherent
-/// method of its default variant, as "backend/default@method": the conformance suite holds
-/// each of them to the same oracle.
+/// or incoherent method of its default variant, as "backend/default@method": the conformance
+/// suite holds each of them to the same oracle.
 std::vector<std::string> backend_variants() {
   std::vector<std::string> out;
   for (const BackendEntry& b : list_backends())
     if (b.available) {
       for (const std::string& v : b.variants) out.push_back(b.name + "/" + v);
       for (size_t m = 1; m < b.coherent_methods.size(); ++m) out.push_back(b.name + "/default@" + b.coherent_methods[m]);
+      for (size_t m = 1; m < b.incoherent_methods.size(); ++m) out.push_back(b.name + "/default@" + b.incoherent_methods[m]);
     }
   return out;
 }
@@ -49,8 +50,13 @@ std::vector<std::string> backend_variants() {
 std::unique_ptr<Backend> make_param_backend(const std::string& param, const Scene& scene) {
   const size_t slash = param.find('/'), at = param.find('@');
   const std::string variant = param.substr(slash + 1, at == std::string::npos ? std::string::npos : at - slash - 1);
+  const std::string name = param.substr(0, slash);
   const std::string method = at == std::string::npos ? std::string() : param.substr(at + 1);
-  return make_backend(param.substr(0, slash), scene, {.variant = variant, .device_config = {}, .coherent_method = method});
+  bool coherent = false;  // the method names one of the backend's coherent methods, else an incoherent one
+  for (const BackendEntry& b : list_backends())
+    if (b.name == name) coherent = std::ranges::count(b.coherent_methods, method) > 0;
+  return make_backend(name, scene, {.variant = variant, .device_config = {}, .coherent_method = coherent ? method : "",
+                                    .incoherent_method = coherent ? "" : method});
 }
 
 struct Counts {
@@ -375,12 +381,14 @@ TEST(Registry, SimdIsOfferedExactlyWhenTheCpuHasAvx2AndFma) {
   EXPECT_EQ(make_backend("simd", scene)->info().name, "simd");
 }
 
-TEST(Registry, UnknownVariantOrCoherentMethodIsAnError) {
+TEST(Registry, UnknownVariantOrMethodIsAnError) {
   const Scene scene;
-  EXPECT_THROW(make_backend("embree", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}}), Error);
-  EXPECT_THROW(make_backend("simd", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}}), Error);
-  EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = "large"}), Error);
-  EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = "stream"}), Error);
+  EXPECT_THROW(make_backend("embree", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}, .incoherent_method = {}}), Error);
+  EXPECT_THROW(make_backend("simd", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}, .incoherent_method = {}}), Error);
+  EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = "large", .incoherent_method = {}}), Error);
+  EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = "stream", .incoherent_method = {}}), Error);
+  EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = {}, .incoherent_method = "stream"}), Error);
+  EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = {}, .incoherent_method = "packet8"}), Error);
 }
 
 }  // namespace

@@ -56,7 +56,7 @@ stability::Options options(std::vector<std::string> backends, std::vector<std::s
   o.families = std::move(families);
   o.make_backend = [](const std::string& method, const Scene& scene) {
     const size_t slash = method.find('/');
-    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}});
+    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
   };
   return o;
 }

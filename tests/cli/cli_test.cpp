@@ -314,14 +314,14 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
-                           "embree rtcIntersect1", "embree robust 1", "simd spatial single", "embree high 1",
+                           "embree rtcIntersect1", "embree robust 1", "simd stream", "simd spatial stream", "embree high 1",
                            "bytes/prim", "primary", "shadow", "diffuse",
                            "best simd", "best embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);
   for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
                           "\"build_seconds\"", "\"commit\"", "\"compiler\"", "\"flags\"", "\"caches\"", "\"isa\"",
-                          "\"coherent_method\"", "\"skipped_methods\""})
+                          "\"coherent_method\"", "\"incoherent_method\"", "\"skipped_methods\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
   EXPECT_NE(text.find("\"version\": \"3."), std::string::npos) << "Embree's version recorded";
   for (const fs::path& p : {chart, dir_ / "c-scaling.png"})

@@ -34,7 +34,7 @@ void trace_everywhere(std::span<const rp::Ray> rays) {
     std::vector<std::unique_ptr<rp::Backend>> all;
     for (const rp::BackendEntry& e : rp::list_backends())
       if (e.available)
-        for (const std::string& v : e.variants) all.push_back(rp::make_backend(e.name, scene, {.variant = v, .device_config = {}, .coherent_method = {}}));
+        for (const std::string& v : e.variants) all.push_back(rp::make_backend(e.name, scene, {.variant = v, .device_config = {}, .coherent_method = {}, .incoherent_method = {}}));
     return all;
   }();
   static const rp::Reference reference(scene);

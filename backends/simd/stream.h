@@ -1,0 +1,264 @@
+#pragma once
+/// Ray-stream traversal for incoherent batches (a renderer's bounces, `trace`, `diff`, the
+/// bench's diffuse rays; Backend::intersect and occluded with Coherence::incoherent), after
+/// Barringer and Akenine-Möller, "Dynamic Ray Stream Traversal", ACM TOG 33(4), 2014: the
+/// batch goes down the tree as a stream of ray ids. At an inner node every ray of the stream
+/// takes the single-ray slab test against the node's 8 child boxes (pass 1, no branch on the
+/// outcome), then the stream is split into one stream per child (pass 2, the ids compressed 8
+/// at a time); the children are visited near-first along the stream's mean direction, each
+/// with its own stream. At a leaf the vertex block is decoded once for the whole stream and
+/// every ray takes the single-ray triangle test. A stream of fewer than kMinStream rays, and
+/// a leaf holding an analytic primitive, go on ray by ray (Traversal::closest / any, from
+/// that node).
+///
+/// Why it pays over tracing the rays one by one: a ray alone walks the tree as a chain of
+/// dependent loads and branches no predictor can guess (how many children were hit, node or
+/// leaf), which leaves most of the core idle; the stream's loops run the same test for many
+/// rays, a node's boxes and a leaf's decoded triangles are reused from L1 by every ray of the
+/// stream, and the children's nodes are fetched while the nearest one is worked on. What it
+/// gives up is each ray's own near-first order: a ray may enter a subtree before the one
+/// holding its hit. A stream is tested with its rays' current tfar when it is popped, so a ray
+/// whose hit was found meanwhile drops out at the next node. Any-hit queries need no order,
+/// and a ray leaves every stream once it is occluded.
+///
+/// Answers are those of the single-ray traversal, bit for bit: the same slab test (one-FMA
+/// form; rays that need the exact form, SlabRay::exact, are traced alone), the same
+/// triangle test, and hits resolved by the rule of Traversal (the least (t, prim_id)), which
+/// does not depend on the order leaves are met. AVX2+FMA translation units only.
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "backends/simd/traversal.h"
+
+namespace rp::bvh8 {
+
+/// A stream with fewer rays than this goes on ray by ray from its node. (1024² diffuse rays,
+/// one thread, streams of 4,096 rays: 2, 4 and 8 within 1% of each other on dragon.)
+inline constexpr uint32_t kMinStream = 4;
+
+template <class Kernel>
+class StreamTraversal {
+ public:
+  explicit StreamTraversal(const Traversal<Kernel>& t) : t_(t), bvh_(t.bvh()) {}
+
+  /// Closest hits of a batch of rays, the planes included.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    Scratch& s = scratch();
+    const size_t n = rays.size();
+    prepare(n, s);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      hits[i] = Hit{};
+      if (!valid_ray(rays[i])) continue;
+      if (enter(rays[i], i, s, count)) {
+        hits[i].t = rays[i].tfar;  // the ray's tfar until a primitive is found
+      } else {
+        hits[i] = t_.intersect_single(rays[i]);
+      }
+    }
+    traverse<false>(count, s, [&](const Frame& f) { leaf_closest(f, s, rays, hits); },
+                    [&](uint32_t i, int32_t ref) {
+                      t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i]);
+                      s.rays[i].tfar = hits[i].t;
+                    });
+    for (size_t i = 0; i < n; ++i) {
+      if (!s.streamed[i]) continue;
+      if (!hits[i].hit()) hits[i] = Hit{};
+      t_.scene().intersect_planes(rays[i], hits[i]);
+    }
+  }
+
+  /// Any hits of a batch of rays, the planes included.
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    Scratch& s = scratch();
+    const size_t n = rays.size();
+    prepare(n, s);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      out[i] = 0;
+      if (!valid_ray(rays[i])) continue;
+      if (t_.scene().occluded_by_planes(rays[i])) {
+        out[i] = 1;
+      } else if (!enter(rays[i], i, s, count)) {
+        out[i] = t_.occluded_single(rays[i]);
+      }
+    }
+    const auto done = [&](uint32_t i) {
+      out[i] = 1;
+      s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
+    };
+    traverse<true>(count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
+                   [&](uint32_t i, int32_t ref) {
+                     if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
+                   });
+  }
+
+ private:
+  /// What the node test reads of a stream ray.
+  struct StreamRay {
+    SlabRay slab;
+    float tnear;  ///< >= +0
+    float tfar;   ///< the closest hit so far, or the ray's tfar (-inf once occluded)
+  };
+  /// A subtree and the stream of rays that still have to visit it: ids[begin, begin + count);
+  /// the streams of its children go from `top` (everything above it is free once this frame
+  /// is popped).
+  struct Frame {
+    int32_t ref;
+    uint32_t begin, count, top;
+  };
+  /// A thread's buffers, reused from batch to batch.
+  struct Scratch {
+    std::vector<StreamRay> rays;
+    std::vector<uint8_t> streamed;  ///< the ray goes through the stream (else it was traced alone)
+    std::vector<uint32_t> ids;      ///< every pending stream, back to back
+    std::vector<uint8_t> bits;      ///< each ray's hit mask at the node being split
+    std::vector<Frame> frames;
+  };
+  static Scratch& scratch() {
+    static thread_local Scratch s;
+    return s;
+  }
+
+  static void prepare(size_t n, Scratch& s) {
+    if (s.rays.size() < n) s.rays.resize(n);
+    if (s.ids.size() < n) s.ids.resize(n);
+    s.streamed.assign(n, 0);
+    s.frames.clear();
+  }
+
+  /// Adds valid ray i to the stream (ids[count++]) when it takes the one-FMA slab form;
+  /// false for a ray to be traced alone (SlabRay::exact, or an empty tree).
+  bool enter(const Ray& r, size_t i, Scratch& s, uint32_t& count) const noexcept {
+    if (bvh_.empty()) return false;
+    StreamRay& q = s.rays[i];
+    q.slab = SlabRay(r);
+    if (q.slab.exact) return false;
+    q.tnear = r.tnear + 0.0f;
+    q.tfar = r.tfar;
+    s.streamed[i] = 1;
+    s.ids[count++] = uint32_t(i);
+    return true;
+  }
+
+  /// The traversal loop shared by both queries: `leaf(frame)` takes a leaf's stream, `alone(i,
+  /// ref)` takes ray i through subtree ref by itself.
+  template <bool kAny, class LeafFn, class AloneFn>
+  void traverse(uint32_t count, Scratch& s, LeafFn&& leaf, AloneFn&& alone) const noexcept {
+    if (count) s.frames.push_back({0, 0, count, count});
+    while (!s.frames.empty()) {
+      const Frame f = s.frames.back();
+      s.frames.pop_back();
+      if (f.count < kMinStream || (is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
+        for (uint32_t k = 0; k < f.count; ++k) alone(s.ids[f.begin + k], f.ref);
+      } else if (is_leaf(f.ref)) {
+        leaf(f);
+      } else {
+        split<kAny>(f, s);
+      }
+    }
+  }
+
+  /// Tests the stream of `f` against the child boxes of its node and pushes a frame for each
+  /// child some ray hits: for closest hits the child its rays enter first on average on top,
+  /// for any hits in slot order. Starts loading those children.
+  template <bool kAny>
+  void split(const Frame& f, Scratch& s) const noexcept {
+    const Bvh8Node& n = bvh_.nodes[size_t(f.ref)];
+    if (s.bits.size() < size_t(f.count) + 8) s.bits.resize(size_t(f.count) + 8);
+    uint8_t* bits = s.bits.data();
+    // Pass 1: each ray's hit mask, and each child's stream size.
+    simd::Count8 sizes;
+    float8 entries(0.0f);  // lane c: the sum of the entry distances of the rays that hit child c
+    for (uint32_t k = 0; k < f.count; ++k) {
+      const uint32_t i = s.ids[f.begin + k];
+      float8 t_enter;
+      const uint32_t b = test(n, s.rays[i], t_enter);
+      if constexpr (!kAny) entries = entries + xsimd::select(simd::mask_from_bits(b), t_enter, float8(0.0f));
+      bits[k] = uint8_t(b);
+      sizes.add(b);
+    }
+    std::fill_n(bits + f.count, 8, uint8_t(0));
+    alignas(32) uint32_t size[8];
+    sizes.store(size);
+    // Pass 2: child after child, its stream, by compressing 8 ids at a time. A child's stream
+    // starts where the previous one ends; the up to 7 slots a compress writes past its end
+    // are overwritten by the next children's streams, or lie in the 8 slots of slack.
+    uint32_t at[8], end = f.top;
+    for (int c = 0; c < 8; ++c) {
+      at[c] = end;
+      end += size[c];
+    }
+    if (s.ids.size() < size_t(end) + 8) s.ids.resize(size_t(end) + 8);
+    const uint32_t* in = s.ids.data() + f.begin;  // ids of the stream, then at least 8 readable slots
+    uint32_t hit = 0;
+    for (int c = 0; c < 8; ++c) {
+      if (!size[c]) continue;
+      hit |= 1u << c;
+      uint32_t* out = s.ids.data() + at[c];
+      for (uint32_t k = 0; k < f.count; k += 8) out += simd::compress_store(in + k, simd::ByteBits8(bits + k).bit(c), out);
+    }
+    t_.prefetch_children(n, hit);
+    int order[8], k = 0;
+    for (uint32_t b = hit; b; b &= b - 1) order[k++] = std::countr_zero(b);
+    if constexpr (!kAny) {  // by the mean entry distance of their rays: the nearest pushed last
+      alignas(32) float key[8];
+      entries.store_aligned(key);
+      for (int c = 0; c < 8; ++c) key[c] = size[c] ? key[c] / float(size[c]) : 0.0f;
+      std::sort(order, order + k, [&](int a, int b) { return key[a] > key[b] || (key[a] == key[b] && a < b); });
+    }
+    for (int j = 0; j < k; ++j) s.frames.push_back({n.child[order[j]], at[order[j]], size[order[j]], end});
+  }
+
+  /// intersect_node's one-FMA form for stream ray q, with the same bits: the children hit and
+  /// their entry distances.
+  RP_SIMD_INLINE static uint32_t test(const Bvh8Node& n, const StreamRay& q, float8& t_enter) {
+    const SlabRay& r = q.slab;
+    const float* base = n.lo_x;
+    const float8 inv_x(r.inv[0]), inv_y(r.inv[1]), inv_z(r.inv[2]);
+    const float8 oi_x(r.oi[0]), oi_y(r.oi[1]), oi_z(r.oi[2]);
+    const float8 tn_x = xsimd::fms(float8::load_aligned(base + r.near[0]), inv_x, oi_x);
+    const float8 tn_y = xsimd::fms(float8::load_aligned(base + r.near[1]), inv_y, oi_y);
+    const float8 tn_z = xsimd::fms(float8::load_aligned(base + r.near[2]), inv_z, oi_z);
+    const float8 tf_x = xsimd::fms(float8::load_aligned(base + (24 - r.near[0])), inv_x, oi_x);
+    const float8 tf_y = xsimd::fms(float8::load_aligned(base + (40 - r.near[1])), inv_y, oi_y);
+    const float8 tf_z = xsimd::fms(float8::load_aligned(base + (56 - r.near[2])), inv_z, oi_z);
+    return slab_hits(tn_x, tn_y, tn_z, tf_x, tf_y, tf_z, q.tnear, q.tfar, float8(r.pad), r.pad, t_enter);
+  }
+
+  /// The triangles of the leaf of `f` (decoded once) against each ray of its stream.
+  void leaf_closest(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    const Leaf leaf = bvh_.leaf(f.ref);
+    const LeafView lv(leaf);
+    for (uint32_t k = 0; k < f.count; ++k) {
+      const uint32_t i = s.ids[f.begin + k];
+      float tfar = hits[i].t;
+      if (Traversal<Kernel>::leaf_single(leaf, lv, typename Kernel::Single(rays[i]), tfar, hits[i])) s.rays[i].tfar = tfar;
+    }
+  }
+
+  /// The same for any hits: `done(i)` for each ray a triangle occludes.
+  template <class Done>
+  void leaf_any(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<const uint8_t> out,
+                Done&& done) const noexcept {
+    const Leaf leaf = bvh_.leaf(f.ref);
+    const LeafView lv(leaf);
+    const uint32_t slots = (1u << leaf.n) - 1;
+    for (uint32_t k = 0; k < f.count; ++k) {
+      const uint32_t i = s.ids[f.begin + k];
+      if (out[i]) continue;
+      if (simd::movemask(typename Kernel::Single(rays[i]).block(lv, float8(rays[i].tfar)).hit) & slots) done(i);
+    }
+  }
+
+  const Traversal<Kernel>& t_;
+  const Bvh8& bvh_;
+};
+
+}  // namespace rp::bvh8
