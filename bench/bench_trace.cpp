@@ -51,35 +51,43 @@ RaySets make_rays(const Scene& scene, const Backend& backend) {
   return {primary.rays, shadow_rays(scene, primary, hits).rays, diffuse_rays(scene, primary, hits, 2024).rays};
 }
 
-/// The backends measured: registry name, options, the label in benchmark names, and whether
-/// its build is measured (not for a second coherent method over the same structure).
+/// Which rays a method is timed on: a second coherent or incoherent method over a structure
+/// already measured is timed only on the rays that method traces, and its build is not timed.
+enum class Rays { all, coherent, incoherent };
+
+/// The backends measured: registry name, options, the label in benchmark names, and the rays
+/// it is timed on (its build is timed with Rays::all).
 struct Method {
   std::string label, name;
   BackendOptions options;
-  bool build = true;
+  Rays rays = Rays::all;
 };
 
-/// Every backend with its default options; simd's 8-ray packets beside its large packets;
+/// Every backend with its default options; simd's 8-ray packets beside its large packets, and
+/// its single rays beside its ray streams;
 /// Embree's stream mode and, where its AVX-512 kernels run, 16-wide packets, beside its 8-wide
 /// default; both backends' trees with spatial splits (simd's spatial variant, Embree's
 /// high-quality build); and Embree limited to AVX2 (the simd backend's SIMD width).
 std::vector<Method> methods() {
   std::vector<Method> m;
-  const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent) {
-    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent, .incoherent_method = {}};
+  const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent,
+                       const std::string& incoherent = "") {
+    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent,
+                          .incoherent_method = incoherent};
   };
   for (const BackendEntry& e : list_backends()) {
     if (!e.available) continue;
     m.push_back({e.name, e.name, {}});
     if (e.name == "simd") {
-      m.push_back({"simd-packet8", "simd", with("default", "", "packet8"), false});
+      m.push_back({"simd-packet8", "simd", with("default", "", "packet8"), Rays::coherent});
+      m.push_back({"simd-single", "simd", with("default", "", "", "single"), Rays::incoherent});
       m.push_back({"simd-watertight", "simd", with("watertight", "", "")});
       m.push_back({"simd-spatial", "simd", with("spatial", "", "")});
     } else if (e.name == "embree") {
-      m.push_back({"embree-stream", "embree", with("default", "", "stream"), false});
+      m.push_back({"embree-stream", "embree", with("default", "", "stream"), Rays::coherent});
       for (const auto& [key, value] : e.facts)
         if (key == "native_ray16" && value == "yes")
-          m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), false});
+          m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), Rays::coherent});
       m.push_back({"embree-high", "embree", with("high", "", "")});
     }
   }
@@ -238,12 +246,12 @@ int main(int argc, char** argv) {
     (void)path;
     for (const Method& m : methods()) {
       for (const char* kind : {"primary", "shadow", "diffuse"})
-        if (m.build || std::string_view(kind) != "diffuse")  // a coherent method does not touch diffuse rays
+        if (m.rays == Rays::all || (m.rays == Rays::incoherent) == (std::string_view(kind) == "diffuse"))
           benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label, scene,
                                      std::string(kind))
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
-      if (m.build)
+      if (m.rays == Rays::all)
         benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
