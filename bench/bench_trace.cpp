@@ -66,8 +66,9 @@ struct Method {
 /// Every backend with its default options; simd's 8-ray packets beside its large packets, and
 /// its single rays beside its ray streams;
 /// Embree's stream mode and, where its AVX-512 kernels run, 16-wide packets, beside its 8-wide
-/// default; both backends' trees with spatial splits (simd's spatial variant, Embree's
-/// high-quality build); and Embree limited to AVX2 (the simd backend's SIMD width).
+/// default; Embree's compact mode (its smallest structure); both backends' trees with
+/// spatial splits (simd's spatial variant, Embree's high-quality build); and Embree limited
+/// to AVX2 (the simd backend's SIMD width).
 std::vector<Method> methods() {
   std::vector<Method> m;
   const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent,
@@ -88,6 +89,7 @@ std::vector<Method> methods() {
       for (const auto& [key, value] : e.facts)
         if (key == "native_ray16" && value == "yes")
           m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), Rays::coherent});
+      m.push_back({"embree-compact", "embree", with("compact", "", "")});
       m.push_back({"embree-high", "embree", with("high", "", "")});
     }
   }

@@ -81,6 +81,8 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
       m.push_back({"embree rtcIntersect1", "embree", "default", "single", Coherence::incoherent});
       m.push_back({"embree robust 8", "embree", "robust", "packet8", Coherence::coherent});
       m.push_back({"embree robust 1", "embree", "robust", "single", Coherence::incoherent});
+      m.push_back({"embree compact 8", "embree", "compact", "packet8", Coherence::coherent});
+      m.push_back({"embree compact 1", "embree", "compact", "single", Coherence::incoherent});
       m.push_back({"embree high 8", "embree", "high", "packet8", Coherence::coherent});
       m.push_back({"embree high 1", "embree", "high", "single", Coherence::incoherent});
     }
