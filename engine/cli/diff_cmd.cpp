@@ -146,7 +146,7 @@ int run_diff(const DiffArgs& a) {
   std::FILE* const out = a.quiet ? nullptr : stdout;
   say(out, "raypack diff: scene %s, rays %s%s, %s\n%s", a.scene.c_str(), rays_label.c_str(),
               a.reference ? ", reference: double-precision watertight" : "",
-              coherence == Coherence::coherent ? "coherent (packets)" : "incoherent (single rays)",
+              coherence == Coherence::coherent ? "coherent (packets)" : "incoherent (single rays or streams)",
               format_table(d, sa.label, sb.label).c_str());
   say(out, "(%.2f s)\n", seconds);
   if (!a.json.empty()) {
