@@ -291,6 +291,95 @@ TEST(MinBOnNan, NanOrEqualLanesGiveB) {
   EXPECT_EQ(mx[7], 5.0f);
 }
 
+/// The documented meaning of max_bits / min_bits / greater_bits: the bit patterns compared as
+/// signed 32-bit integers, lane by lane.
+float max_as_int(float a, float b) { return std::bit_cast<int32_t>(a) > std::bit_cast<int32_t>(b) ? a : b; }
+float min_as_int(float a, float b) { return std::bit_cast<int32_t>(a) < std::bit_cast<int32_t>(b) ? a : b; }
+
+TEST(MaxBits, MatchesIntegerMaxOfTheBitsExactly) { expect_lanewise_bits("max_bits", max_bits, max_as_int); }
+TEST(MinBits, MatchesIntegerMinOfTheBitsExactly) { expect_lanewise_bits("min_bits", min_bits, min_as_int); }
+
+TEST(MaxBits, EqualsTheFloatOrderWhereTheSlabTestUsesIt) {
+  // The slab test's promise (simd::max_bits): for non-NaN floats, max_bits is the float max
+  // whenever one operand is >= +0, and min_bits the float min when both are >= +0 and
+  // negative whenever the float min is.
+  std::mt19937 rng(kSeed + 7);
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int round = 0; round < 20000; ++round) {
+    Lanes a, b;
+    for (int i = 0; i < 8; ++i) {
+      do a[i] = random_float(rng); while (std::isnan(a[i]));
+      do b[i] = random_float(rng); while (std::isnan(b[i]));
+      if (rng() % 4 == 0) a[i] = rng() % 2 ? inf : -inf;
+    }
+    const Lanes mx = unpack(max_bits(pack(a), pack(b))), mn = unpack(min_bits(pack(a), pack(b)));
+    const uint32_t gt = greater_bits(pack(a), pack(b));
+    for (int i = 0; i < 8; ++i) {
+      const bool a_pos = !std::signbit(a[i]), b_pos = !std::signbit(b[i]);
+      if (a_pos || b_pos) {
+        ASSERT_EQ(mx[i], std::max(a[i], b[i])) << show(a[i]) << " " << show(b[i]);
+      }
+      if (a_pos && b_pos) {
+        ASSERT_EQ(mn[i], std::min(a[i], b[i])) << show(a[i]) << " " << show(b[i]);
+        ASSERT_EQ(bool(gt >> i & 1u), a[i] > b[i] || (a[i] == b[i] && bits_of(a[i]) > bits_of(b[i])));
+      }
+      if (std::min(a[i], b[i]) < 0.0f) {
+        ASSERT_TRUE(std::signbit(mn[i])) << show(a[i]) << " " << show(b[i]);
+      }
+      ASSERT_EQ(bool(gt >> i & 1u), std::bit_cast<int32_t>(a[i]) > std::bit_cast<int32_t>(b[i]));
+    }
+  }
+}
+
+TEST(CompressStore, WritesThePickedLanesInOrderForAll256Masks) {
+  std::mt19937 rng(kSeed + 8);
+  uint32_t src[8];
+  for (uint32_t& v : src) v = rng();
+  for (uint32_t mask = 0; mask < 256; ++mask) {
+    uint32_t dst[8];
+    std::fill_n(dst, 8, 0xdeadbeefu);
+    const uint32_t n = compress_store(src, mask, dst);
+    std::vector<uint32_t> want;
+    for (int l = 0; l < 8; ++l)
+      if (mask >> l & 1u) want.push_back(src[l]);
+    ASSERT_EQ(n, want.size()) << "mask " << mask;
+    for (size_t k = 0; k < want.size(); ++k) ASSERT_EQ(dst[k], want[k]) << "mask " << mask << " slot " << k;
+    // The slots past the count hold the lanes that were not picked (each value of src once).
+    std::vector<uint32_t> all(dst, dst + 8), lanes(src, src + 8);
+    std::sort(all.begin(), all.end());
+    std::sort(lanes.begin(), lanes.end());
+    ASSERT_EQ(all, lanes) << "mask " << mask;
+  }
+}
+
+TEST(ByteBits8, GivesBitCOfEachOfEightBytes) {
+  std::mt19937 rng(kSeed + 9);
+  for (int round = 0; round < 1000; ++round) {
+    uint8_t bytes[8];
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    const ByteBits8 bb(bytes);
+    for (int c = 0; c < 8; ++c) {
+      uint32_t want = 0;
+      for (int l = 0; l < 8; ++l) want |= uint32_t(bytes[l] >> c & 1u) << l;
+      ASSERT_EQ(bb.bit(c), want) << "bit " << c;
+    }
+  }
+}
+
+TEST(Count8, CountsEachBitOverTheMasksAdded) {
+  std::mt19937 rng(kSeed + 10);
+  Count8 counts;
+  uint32_t want[8] = {};
+  for (int k = 0; k < 5000; ++k) {
+    const uint32_t m = rng() & 0xffu;
+    counts.add(m);
+    for (int c = 0; c < 8; ++c) want[c] += m >> c & 1u;
+  }
+  alignas(32) uint32_t got[8];
+  counts.store(got);
+  for (int c = 0; c < 8; ++c) EXPECT_EQ(got[c], want[c]) << "lane " << c;
+}
+
 /// The scalar oracle: min (max) over the non-NaN lanes; NaN when every lane is NaN.
 float scalar_reduce(const Lanes& l, bool want_min) {
   float r = kNan;
