@@ -163,6 +163,8 @@ CLI::App* RenderArgs::add_to(CLI::App& app) {
   c->add_option("--adaptive-depth", adaptive_depth, "Adaptive: most subdivisions per pixel")
       ->check(CLI::Range(0, 8))
       ->capture_default_str();
+  c->add_flag("--measure-traces", measure_traces,
+              "Also trace the render's own rays again without the rest of the render, and print both rates");
   return c;
 }
 
@@ -196,6 +198,17 @@ int run_render(const RenderArgs& a) {
     return render(scene, *backend, camera, settings, a.quiet ? ProgressFn{} : ProgressFn(std::ref(bar)));
   });
   bar.finish();
+  // The render again, untimed, recording its calls to the backend (the same rays: a render
+  // depends on its inputs only), then those calls alone, twice: the second is timed.
+  TraceLog log;
+  double trace_s = 0;
+  if (a.measure_traces) {
+    with_memory_context(cat("recording the rays of ", res.width, "x", res.height), [&] {
+      return render(scene, *backend, camera, settings, {}, &log);
+    });
+    replay_traces(log, *backend);
+    trace_s = replay_traces(log, *backend);
+  }
   t = clock::now();
   write_image(a.output, r.image);
   if (!a.aov.empty()) write_aovs(a.aov, render_aovs(scene, *backend, camera));
@@ -213,6 +226,12 @@ int run_render(const RenderArgs& a) {
                  (unsigned long long)s.reflection, (unsigned long long)s.refraction);
     std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB), render %.3f s, write %.3f s\n", load_s,
                  info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
+    if (a.measure_traces)
+      std::fprintf(stderr,
+                   "raypack: the render's %llu rays traced alone: %.3f s, %.2f Mrays/s; the render ran at %.2f of "
+                   "that rate (%.0f%% of its time in the traces)\n",
+                   (unsigned long long)log.rays(), trace_s, double(log.rays()) / trace_s * 1e-6, trace_s / s.seconds,
+                   100.0 * trace_s / s.seconds);
     if (settings.sampler == Sampler::adaptive)
       std::fprintf(stderr,
                    "raypack: adaptive sampling traced %llu primary rays where a uniform grid at depth %d needs %llu "

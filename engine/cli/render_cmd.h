@@ -41,6 +41,7 @@ struct RenderArgs {
   uint64_t seed = 0;
   int max_depth = 3;
   bool quiet = false;
+  bool measure_traces = false;
 
   /// Adds the `render` subcommand to `app` with these flags.
   CLI::App* add_to(CLI::App& app);

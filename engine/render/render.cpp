@@ -41,6 +41,20 @@ struct Counters {
   uint64_t shadow = 0, reflection = 0, refraction = 0;
 };
 
+/// The backend as the renderer calls it, recording each call when the render is logged.
+struct Tracer {
+  const Backend& backend;
+  std::vector<TraceLog::Call>* log = nullptr;  ///< this tile's calls, or none
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence c) const {
+    if (log) log->push_back({false, c, std::vector<Ray>(rays.begin(), rays.end())});
+    backend.intersect(rays, hits, c);
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence c) const {
+    if (log) log->push_back({true, c, std::vector<Ray>(rays.begin(), rays.end())});
+    backend.occluded(rays, out, c);
+  }
+};
+
 /// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
 struct ShadeWork {
   std::vector<Ray> rays, next_rays;
@@ -62,7 +76,7 @@ struct ShadeWork {
 /// path's radiance to out[slot]: Blinn-Phong with shadow rays through occluded(), then
 /// mirror reflection and refraction (Whitted 1980) with the exact dielectric Fresnel term,
 /// up to max_depth bounces, the bounces traced as incoherent batches.
-void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork& w, std::span<Vec3f> out,
+void shade(const Scene& scene, const Tracer& backend, int max_depth, ShadeWork& w, std::span<Vec3f> out,
            Counters& n) {
   constexpr float inf = std::numeric_limits<float>::infinity();
   const auto& materials = scene.materials();
@@ -157,7 +171,7 @@ void shade(const Scene& scene, const Backend& backend, int max_depth, ShadeWork&
 }
 
 /// Renders the tile at (x0, y0) with one of the per-sample samplers into `tile` (kTile^2 colours).
-uint64_t sample_tile(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+uint64_t sample_tile(const Scene& scene, const Tracer& backend, const Camera& camera, const RenderSettings& st,
                      int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
   uint64_t primary = 0;
   for (int s = 0; s < st.spp; ++s) {
@@ -194,7 +208,7 @@ uint64_t sample_tile(const Scene& scene, const Backend& backend, const Camera& c
 /// 1/2^depth pixel; a pixel is the area-weighted mean of its cells' corner averages. Corner
 /// positions are integers on the finest grid, shared between neighbouring cells through a
 /// cache, so each point is traced once per tile.
-uint64_t adaptive_tile(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+uint64_t adaptive_tile(const Scene& scene, const Tracer& backend, const Camera& camera, const RenderSettings& st,
                        int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
   const int scale = 1 << st.adaptive_depth;
   const int tw = std::min(kTile, st.width - x0), th = std::min(kTile, st.height - y0);
@@ -293,7 +307,7 @@ float fresnel_dielectric(float cos_i, float n1, float n2) {
 }
 
 RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
-                    const ProgressFn& progress) {
+                    const ProgressFn& progress, TraceLog* log) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
   RP_CHECK(st.spp >= 1, "render: spp ", st.spp, " must be >= 1");
@@ -315,14 +329,16 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
   std::atomic<int> tiles_done{0};
   const int tiles_x = (st.width + kTile - 1) / kTile, tiles_y = (st.height + kTile - 1) / kTile;
 
+  if (log) log->tiles.assign(size_t(tiles_x) * size_t(tiles_y), {});
   auto render_tile = [&](int tx, int ty) {
+    const Tracer tracer{backend, log ? &log->tiles[size_t(ty) * size_t(tiles_x) + size_t(tx)] : nullptr};
     ShadeWork w;
     std::vector<Vec3f> tile(kTile * kTile, Vec3f{});
     Counters n;
     const int x0 = tx * kTile, y0 = ty * kTile;
     const uint64_t primary = st.sampler == Sampler::adaptive
-                                 ? adaptive_tile(scene, backend, camera, st, x0, y0, w, tile, n)
-                                 : sample_tile(scene, backend, camera, st, x0, y0, w, tile, n);
+                                 ? adaptive_tile(scene, tracer, camera, st, x0, y0, w, tile, n)
+                                 : sample_tile(scene, tracer, camera, st, x0, y0, w, tile, n);
     for (int ly = 0; ly < kTile && y0 + ly < st.height; ++ly)
       for (int lx = 0; lx < kTile && x0 + lx < st.width; ++lx) {
         const Vec3f c = tile[size_t(ly * kTile + lx)];
@@ -354,6 +370,31 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
                           : uint64_t(st.width) * uint64_t(st.height) * uint64_t(st.spp);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+uint64_t TraceLog::rays() const {
+  uint64_t n = 0;
+  for (const auto& tile : tiles)
+    for (const Call& c : tile) n += c.rays.size();
+  return n;
+}
+
+double replay_traces(const TraceLog& log, const Backend& backend) {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(size_t(0), log.tiles.size(), [&](size_t t) {
+    std::vector<Hit> hits;
+    std::vector<uint8_t> occluded;
+    for (const TraceLog::Call& c : log.tiles[t]) {
+      if (c.any) {
+        occluded.resize(c.rays.size());
+        backend.occluded(c.rays, occluded, c.coherence);
+      } else {
+        hits.resize(c.rays.size());
+        backend.intersect(c.rays, hits, c.coherence);
+      }
+    }
+  });
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camera) {

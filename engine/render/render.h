@@ -52,15 +52,33 @@ struct RenderResult {
   RenderStats stats;
 };
 
+/// Every call a render made to its backend, tile by tile in order, for timing the same traces
+/// without the rest of the render (replay_traces): the rays of each call, whether it asked for
+/// closest or any hits, and its coherence hint.
+struct TraceLog {
+  struct Call {
+    bool any;  ///< occluded() rather than intersect()
+    Coherence coherence;
+    std::vector<Ray> rays;
+  };
+  std::vector<std::vector<Call>> tiles;  ///< by tile (row-major over the tile grid)
+  uint64_t rays() const;
+};
+
 /// Renders `scene` as seen by `camera` (camera.width()/height() must equal settings'),
-/// tracing with `backend`. The result depends only on the inputs, never on thread count.
+/// tracing with `backend`; when `log` is given, records every call made to the backend. The result depends only on the inputs, never on thread count.
 /// Throws rp::Error for settings out of range (spp < 1, a non-square spp for the uniform
 /// sampler, adaptive depth outside 0..8, a negative threshold).
 /// Called from worker threads with the fraction of tiles done, in (0, 1]; must be thread-safe.
 using ProgressFn = std::function<void(double fraction)>;
 
 RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera,
-                    const RenderSettings& settings, const ProgressFn& progress = {});
+                    const RenderSettings& settings, const ProgressFn& progress = {}, TraceLog* log = nullptr);
+
+/// Makes the calls of `log` again through `backend`, as the render made them (tiles in
+/// parallel, each tile's calls in order), and returns the seconds they took: the render's
+/// trace time alone.
+double replay_traces(const TraceLog& log, const Backend& backend);
 
 /// Arbitrary output variables of the primary hit through each pixel centre, row-major from
 /// the top row. A pixel whose ray misses has depth +inf, zero normals and barycentrics, and
