@@ -13,10 +13,14 @@ namespace rp {
 /// each coordinate, or by a fixed distance near the origin where ulps are tiny: Wächter and
 /// Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems (2019),
 /// ch. 6. Scale-independent: the offset grows with |p| exactly as float spacing does.
+namespace offset_detail {
+inline constexpr float kOrigin = 1.0f / 32.0f;       ///< below this |coordinate|, a fixed distance
+inline constexpr float kFloatScale = 1.0f / 65536.0f;  ///< that distance per unit of normal
+inline constexpr float kIntScale = 256.0f;           ///< ulps per unit of normal elsewhere
+}  // namespace offset_detail
+
 inline Vec3f offset_ray_origin(const Vec3f& p, const Vec3f& n) {
-  constexpr float kOrigin = 1.0f / 32.0f;
-  constexpr float kFloatScale = 1.0f / 65536.0f;
-  constexpr float kIntScale = 256.0f;
+  using namespace offset_detail;
   Vec3f out;
   for (int a = 0; a < 3; ++a) {
     const int32_t of = int32_t(kIntScale * n[a]);

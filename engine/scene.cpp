@@ -6,6 +6,7 @@
 #include "engine/error.h"
 #include "engine/geometry/plane.h"
 #include "engine/geometry/sphere.h"
+#include "engine/surface_lanes.h"
 
 namespace rp {
 
@@ -215,15 +216,14 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
     case PrimKind::triangle: {
       const TriangleMesh& m = meshes_[ref.shape];
       const uint32_t* idx = &m.indices[3 * ref.local];
-      const Vec3f v0 = m.positions[idx[0]], v1 = m.positions[idx[1]], v2 = m.positions[idx[2]];
-      const float w = 1.0f - hit.u - hit.v;
-      sp.position = v0 * w + v1 * hit.u + v2 * hit.v;
-      sp.geometric_normal = normalize(cross(v1 - v0, v2 - v0));
-      sp.shading_normal = sp.geometric_normal;
-      if (!m.normals.empty()) {
-        Vec3f n = m.normals[idx[0]] * w + m.normals[idx[1]] * hit.u + m.normals[idx[2]] * hit.v;
-        if (dot(n, n) > 0.0f) sp.shading_normal = normalize(n);
-      }
+      const Vec3f c[3] = {m.positions[idx[0]], m.positions[idx[1]], m.positions[idx[2]]};
+      const bool has_normals = !m.normals.empty();
+      const Vec3f n[3] = {has_normals ? m.normals[idx[0]] : Vec3f{}, has_normals ? m.normals[idx[1]] : Vec3f{},
+                          has_normals ? m.normals[idx[2]] : Vec3f{}};
+      const PointLanes<float> p = triangle_point<float>(c, n, has_normals, hit.u, hit.v);
+      sp.position = p.position;
+      sp.geometric_normal = p.geometric_normal;
+      sp.shading_normal = p.shading_normal;
       sp.material = m.face_materials.empty() ? m.material : m.face_materials[ref.local];
       break;
     }
@@ -264,10 +264,11 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
   // A shape much smaller than the rounding of a far-away hit point (a unit sphere or quadric
   // seen from 2^30 away) can put the computed point at its centre, where the gradient is 0:
   // the normal then faces the ray rather than being zero.
-  if (!(dot(sp.geometric_normal, sp.geometric_normal) > 0.5f)) {
-    sp.geometric_normal = sp.shading_normal = -normalize(ray.dir);
-    if (!is_finite(sp.position)) sp.position = ray.at(hit.t);
-  }
+  PointLanes<float> p{sp.position, sp.geometric_normal, sp.shading_normal};
+  fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
+  sp.position = p.position;
+  sp.geometric_normal = p.geometric_normal;
+  sp.shading_normal = p.shading_normal;
   return sp;
 }
 

@@ -25,6 +25,7 @@ namespace rp::simd {
 using Arch = xsimd::fma3<xsimd::avx2>;
 using float8 = xsimd::batch<float, Arch>;
 using mask8 = xsimd::batch_bool<float, Arch>;
+using int8 = xsimd::batch<int32_t, Arch>;  ///< eight 32-bit integers (indices, bit patterns)
 
 static_assert(float8::size == 8, "raypack's packets are 8 rays wide");
 
@@ -242,6 +243,51 @@ inline void transpose8x8(float8 m[8]) {
 /// an 8x8 matrix (to be transposed by transpose8x8).
 inline void load_rows8(const float* records, float8 m[8]) {
   for (int i = 0; i < 8; ++i) m[i] = float8::load_unaligned(records + 8 * i);
+}
+
+/// The bits of each lane as an integer, and back.
+inline int8 as_int(const float8& v) { return _mm256_castps_si256(v); }
+inline float8 as_float(const int8& v) { return _mm256_castsi256_ps(v); }
+/// Lanes where the bits of v equal `bits` (as a float mask).
+inline mask8 bits_equal(const float8& v, uint32_t bits) {
+  return mask8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(as_int(v), _mm256_set1_epi32(int(bits)))));
+}
+/// Lanes whose bits, read as unsigned integers, are below `bound`.
+inline mask8 bits_below(const float8& v, uint32_t bound) {
+  const __m256i flip = _mm256_set1_epi32(int(0x80000000u));  // unsigned order through signed compare
+  return mask8(_mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_xor_si256(_mm256_set1_epi32(int(bound)), flip),
+                                                      _mm256_xor_si256(as_int(v), flip))));
+}
+/// Lane l is base[index[l]] (VPGATHERDD / VGATHERDPS; every index must be readable).
+inline float8 gather(const float* base, const int8& index) { return _mm256_i32gather_ps(base, index, 4); }
+inline int8 gather(const int32_t* base, const int8& index) { return _mm256_i32gather_epi32(base, index, 4); }
+
+/// Eight consecutive 16-byte records (4 floats each, unaligned) as 4 rows: lane i of out[k] is
+/// float k of record i. Bits move unchanged.
+inline void load_records4(const float* records, float8 out[4]) {
+  __m256 r[4];  // r[j] holds records j and j + 4
+  for (int j = 0; j < 4; ++j)
+    r[j] = _mm256_set_m128(_mm_loadu_ps(records + 4 * (j + 4)), _mm_loadu_ps(records + 4 * j));
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  out[0] = _mm256_shuffle_ps(t0, t2, 0x44);
+  out[1] = _mm256_shuffle_ps(t0, t2, 0xee);
+  out[2] = _mm256_shuffle_ps(t1, t3, 0x44);
+  out[3] = _mm256_shuffle_ps(t1, t3, 0xee);
+}
+
+/// The inverse of load_records4: 4 rows as 8 records of 4 floats at 32-byte aligned `records`.
+inline void store_records4(const float8 in[4], float* records) {
+  const __m256 t0 = _mm256_unpacklo_ps(in[0], in[1]), t1 = _mm256_unpackhi_ps(in[0], in[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(in[2], in[3]), t3 = _mm256_unpackhi_ps(in[2], in[3]);
+  const __m256 r0 = _mm256_shuffle_ps(t0, t2, 0x44), r1 = _mm256_shuffle_ps(t0, t2, 0xee);
+  const __m256 r2 = _mm256_shuffle_ps(t1, t3, 0x44), r3 = _mm256_shuffle_ps(t1, t3, 0xee);
+  // r[j] holds records j (low half) and j + 4 (high half)
+  const __m256 r[4] = {r0, r1, r2, r3};
+  for (int j = 0; j < 4; ++j) {
+    _mm_store_ps(records + 4 * j, _mm256_castps256_ps128(r[j]));
+    _mm_store_ps(records + 4 * (j + 4), _mm256_extractf128_ps(r[j], 1));
+  }
 }
 
 /// Three 8-wide components: eight 3-vectors in SoA.

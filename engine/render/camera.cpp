@@ -48,7 +48,7 @@ Ray Camera::generate(float px, float py, Vec2f lens) const {
   const float sx = px / float(width_) * 2.0f - 1.0f, sy = 1.0f - py / float(height_) * 2.0f;  // [-1, 1], y up
   switch (model_) {
     case CameraModel::pinhole:
-      return {eye_, 0.0f, normalize(w_ + u_ * (sx * xm_) + v_ * (sy * ym_)), inf};
+      return {eye_, 0.0f, pinhole_direction<float>(px, py), inf};
     case CameraModel::panoramic: {
       const float phi = sx * float(kPi);
       return {eye_, 0.0f, normalize(w_ * std::cos(phi) + u_ * std::sin(phi) + v_ * (sy * ym_)), inf};
@@ -83,6 +83,15 @@ Ray Camera::generate(float px, float py, Vec2f lens) const {
     }
   }
   return {eye_, 0.0f, w_, inf};
+}
+
+void Camera::generate8(const float px[8], const float py[8], const Vec2f* lens, Ray out[8]) const {
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (model_ == CameraModel::pinhole && avx2) {
+    generate8_pinhole(px, py, out);
+    return;
+  }
+  for (int i = 0; i < 8; ++i) out[i] = generate(px[i], py[i], lens ? lens[i] : Vec2f{0.5f, 0.5f});
 }
 
 std::optional<Vec2f> Camera::project(const Vec3f& direction) const {

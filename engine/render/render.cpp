@@ -10,6 +10,8 @@
 
 #include "engine/error.h"
 #include "engine/offset.h"
+#include "engine/render/shade_group.h"
+#include "engine/render/shading.h"
 
 namespace rp {
 
@@ -26,15 +28,32 @@ uint64_t mix(uint64_t z) {
 
 float to_unit(uint64_t h) { return float(h >> 40) * 0x1.0p-24f; }  // 24 random bits in [0, 1)
 
-Vec3f sky(const Vec3f& dir) {
-  const float t = 0.5f * (normalize(dir).y + 1.0f);
-  return Vec3f{0.85f, 0.88f, 0.92f} * (1.0f - t) + Vec3f{0.35f, 0.55f, 0.85f} * t;
-}
+/// The per-sample streams of one render: pixel_sample and lens_sample with what does not
+/// depend on the pixel and the sample (the seed's hash, the stratification grid) worked out
+/// once; the same values.
+struct SampleStreams {
+  uint64_t pixel_seed, lens_seed;
+  int spp, grid;  ///< grid: the side of the largest square of strata, sqrt(spp) rounded down
+  Sampler sampler;
 
-/// A ray being followed: the output slot it adds to and the weight it carries.
-struct PathState {
-  uint32_t slot;  ///< index into the caller's colour array, kInvalidId for no contribution
-  Vec3f weight;
+  SampleStreams(uint64_t seed, int spp_, Sampler s)
+      : pixel_seed(mix(seed ^ 0x9e3779b97f4a7c15ull)), lens_seed(mix(seed ^ 0x5851f42d4c957f2dull)), spp(spp_),
+        grid(int(std::sqrt(double(spp_)))), sampler(s) {}
+
+  Vec2f pixel(uint64_t pixel, int sample) const {
+    const uint64_t h = mix(mix(pixel_seed ^ pixel) ^ uint64_t(sample));
+    const float jx = to_unit(h), jy = to_unit(mix(h));
+    if (sampler == Sampler::random) return {jx, jy};
+    if (spp == 1) return {0.5f, 0.5f};
+    const int m = grid;
+    if (sampler == Sampler::uniform) return {(float(sample % m) + 0.5f) / float(m), (float(sample / m) + 0.5f) / float(m)};
+    if (sample >= m * m) return {jx, jy};
+    return {(float(sample % m) + jx) / float(m), (float(sample / m) + jy) / float(m)};
+  }
+  Vec2f lens(uint64_t pixel, int sample) const {
+    const uint64_t h = mix(mix(lens_seed ^ pixel) ^ uint64_t(sample));
+    return {to_unit(h), to_unit(mix(h))};
+  }
 };
 
 struct Counters {
@@ -61,100 +80,66 @@ struct ShadeWork {
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
-  struct Pending {
-    uint32_t slot;
-    Vec3f contribution;
-  };
   /// Per light: the shadow rays of this batch, and the lit contributions waiting for them.
   /// Rays towards one light from one tile share an endpoint (or, for a directional light, a
   /// direction) and go to the backend as one coherent span.
   std::vector<std::vector<Ray>> shadow_rays;
   std::vector<std::vector<Pending>> pending;
+  std::vector<BounceHit> bounces;
 };
 
-/// Shades the primary rays in w.rays / w.paths (whose groups of 8 are packets), adding each
-/// path's radiance to out[slot]: Blinn-Phong with shadow rays through occluded(), then
-/// mirror reflection and refraction (Whitted 1980) with the exact dielectric Fresnel term,
-/// up to max_depth bounces, the bounces traced as incoherent batches.
-void shade(const Scene& scene, const Tracer& backend, int max_depth, ShadeWork& w, std::span<Vec3f> out,
-           Counters& n) {
+/// The mirror and glass bounces of hit `b` (whose path is `ps`): mirror reflection and
+/// refraction (Whitted 1980) with the exact dielectric Fresnel term, each a ray of the next
+/// batch when its weight is not zero.
+void bounce(const Scene& scene, const BounceHit& b, const PathState& ps, ShadeWork& w, Counters& n) {
   constexpr float inf = std::numeric_limits<float>::infinity();
-  const auto& materials = scene.materials();
+  const Material& m = scene.materials()[b.material];
+  const Vec3f d = b.d, ng = b.ng;
+  const float transparency = 1.0f - m.opacity;
+  // Fresnel on the geometric normal: entering when the ray met the front face.
+  const float cos_i = -dot(d, ng);
+  const float n1 = b.back ? m.ior : 1.0f, n2 = b.back ? 1.0f : m.ior;
+  const float fresnel = transparency > 0.0f ? fresnel_dielectric(cos_i, n1, n2) : 0.0f;
+  const Vec3f reflect_weight = m.specular * m.mirror + Vec3f(transparency * fresnel);
+  if (max_component(reflect_weight) > 0.0f) {
+    w.next_rays.push_back({b.origin, 0.0f, d + ng * (2.0f * cos_i), inf});
+    w.next_paths.push_back({ps.slot, mul(ps.weight, reflect_weight)});
+    ++n.reflection;
+  }
+  const float transmit = transparency * (1.0f - fresnel);
+  if (transmit > 0.0f) {
+    // Refraction rays leave to the far side of the surface.
+    const float eta = n1 / n2;
+    const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
+    w.next_rays.push_back({offset_ray_origin(b.position, -ng), 0.0f, d * eta + ng * (eta * cos_i - cos_t), inf});
+    w.next_paths.push_back({ps.slot, ps.weight * transmit});
+    ++n.refraction;
+  }
+}
+
+/// Shades the primary rays in w.rays / w.paths (whose groups of 8 are packets), adding each
+/// path's radiance to out[slot]: Blinn-Phong with shadow rays through occluded(), then the
+/// bounces, up to max_depth, traced as incoherent batches. The per-hit work is the batch
+/// shader's (shade_group.h: 8 hits at a time where the CPU allows).
+void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, int max_depth, ShadeWork& w,
+           std::span<Vec3f> out, Counters& n) {
+  const size_t n_lights = scene.shadow_tfar.size();
+  w.shadow_rays.resize(n_lights);
+  w.pending.resize(n_lights);
   for (int depth = 0; !w.rays.empty(); ++depth) {
     const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
     w.hits.resize(w.rays.size());
     backend.intersect(w.rays, w.hits, coherence);
-    const size_t n_lights = scene.point_lights().size() + scene.directional_lights().size();
-    w.shadow_rays.resize(n_lights);
-    w.pending.resize(n_lights);
     for (size_t l = 0; l < n_lights; ++l) {
       w.shadow_rays[l].clear();
       w.pending[l].clear();
     }
+    w.bounces.clear();
+    ShadeOut sink{out, w.shadow_rays, w.pending, w.bounces};
+    shade_batch(scene, w.rays, w.hits, w.paths, depth < max_depth, sink);
     w.next_rays.clear();
     w.next_paths.clear();
-    for (size_t i = 0; i < w.rays.size(); ++i) {
-      const PathState& ps = w.paths[i];
-      if (ps.slot == kInvalidId) continue;
-      const Ray& ray = w.rays[i];
-      const Hit& hit = w.hits[i];
-      if (!hit.hit()) {
-        out[ps.slot] += mul(ps.weight, sky(ray.dir));
-        continue;
-      }
-      const SurfacePoint sp = scene.surface(ray, hit);
-      const Material& m = materials[sp.material];
-      // Face-forward both normals towards the viewer.
-      const bool back = dot(sp.geometric_normal, ray.dir) > 0.0f;
-      const Vec3f ng = back ? -sp.geometric_normal : sp.geometric_normal;
-      Vec3f ns = back ? -sp.shading_normal : sp.shading_normal;
-      if (dot(ns, ng) < 0.0f) ns = ng;
-      const Vec3f d = normalize(ray.dir);
-      const Vec3f view = -d;
-      // Secondary rays leave the surface by rp::offset_ray_origin (Wachter and Binder 2019):
-      // to the viewer's side for shadow and reflection rays, to the far side for refraction.
-      const Vec3f origin = offset_ray_origin(sp.position, ng);
-      const float transparency = 1.0f - m.opacity;
-      const float diffuse_weight = (1.0f - m.mirror) * m.opacity;
-      out[ps.slot] += mul(ps.weight, m.emission + m.diffuse * (0.06f * diffuse_weight));
-      auto light = [&](size_t index, const Vec3f& to_light, float tfar, const Vec3f& irradiance) {
-        const Vec3f l = normalize(to_light);
-        const float ndl = dot(ns, l);
-        if (ndl <= 0.0f || dot(ng, l) <= 0.0f) return;
-        const Vec3f h = normalize(l + view);
-        const float spec = std::pow(std::max(0.0f, dot(ns, h)), m.shininess);
-        const Vec3f c = mul(m.diffuse * (ndl * diffuse_weight) + m.specular * spec, irradiance);
-        w.shadow_rays[index].push_back({origin, 0.0f, to_light, tfar});
-        w.pending[index].push_back({ps.slot, mul(ps.weight, c)});
-      };
-      size_t index = 0;
-      for (const PointLight& pl : scene.point_lights()) {
-        const Vec3f to = pl.position - origin;
-        const float r2 = dot(to, to);
-        if (r2 > 0.0f) light(index, to, 1.0f - 1e-4f, pl.intensity / r2);
-        ++index;
-      }
-      for (const DirectionalLight& dl : scene.directional_lights()) light(index++, -dl.direction, inf, dl.irradiance);
-      if (depth >= max_depth) continue;
-      // Fresnel on the geometric normal: entering when the ray met the front face.
-      const float cos_i = -dot(d, ng);
-      const float n1 = back ? m.ior : 1.0f, n2 = back ? 1.0f : m.ior;
-      const float fresnel = transparency > 0.0f ? fresnel_dielectric(cos_i, n1, n2) : 0.0f;
-      const Vec3f reflect_weight = m.specular * m.mirror + Vec3f(transparency * fresnel);
-      if (max_component(reflect_weight) > 0.0f) {
-        w.next_rays.push_back({origin, 0.0f, d + ng * (2.0f * cos_i), inf});
-        w.next_paths.push_back({ps.slot, mul(ps.weight, reflect_weight)});
-        ++n.reflection;
-      }
-      const float transmit = transparency * (1.0f - fresnel);
-      if (transmit > 0.0f) {
-        const float eta = n1 / n2;
-        const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
-        w.next_rays.push_back({offset_ray_origin(sp.position, -ng), 0.0f, d * eta + ng * (eta * cos_i - cos_t), inf});
-        w.next_paths.push_back({ps.slot, ps.weight * transmit});
-        ++n.refraction;
-      }
-    }
+    for (const BounceHit& b : w.bounces) bounce(scene.scene, b, w.paths[b.ray], w, n);
     // Contributions are added light by light, in batch order: a fixed order for the tile,
     // whatever the thread count.
     for (size_t l = 0; l < n_lights; ++l) {
@@ -171,31 +156,44 @@ void shade(const Scene& scene, const Tracer& backend, int max_depth, ShadeWork& 
 }
 
 /// Renders the tile at (x0, y0) with one of the per-sample samplers into `tile` (kTile^2 colours).
-uint64_t sample_tile(const Scene& scene, const Tracer& backend, const Camera& camera, const RenderSettings& st,
-                     int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, const Camera& camera,
+                     const RenderSettings& st, int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
   uint64_t primary = 0;
+  const SampleStreams streams(st.seed, st.spp, st.sampler);
+  const bool thin_lens = camera.model() == CameraModel::thin_lens;
   for (int s = 0; s < st.spp; ++s) {
     // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
-    w.rays.clear();
-    w.paths.clear();
+    w.rays.resize(kTile * kTile);
+    w.paths.resize(kTile * kTile);
+    size_t at = 0;
     for (int by = 0; by < kTile; by += 2)
-      for (int bx = 0; bx < kTile; bx += 4)
+      for (int bx = 0; bx < kTile; bx += 4, at += 8) {
+        float px[8], py[8];
+        Vec2f lens[8];
         for (int lane = 0; lane < 8; ++lane) {
-          const int lx = bx + lane % 4, ly = by + lane / 4, x = x0 + lx, y = y0 + ly;
-          if (x >= st.width || y >= st.height) {
-            w.rays.push_back({{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f});  // invalid: traced as a miss
-            w.paths.push_back({kInvalidId, {}});
+          const int x = std::min(x0 + bx + lane % 4, st.width - 1), y = std::min(y0 + by + lane / 4, st.height - 1);
+          const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
+          const Vec2f j = streams.pixel(pixel, s);
+          px[lane] = float(x) + j.x;
+          py[lane] = float(y) + j.y;
+          if (thin_lens) lens[lane] = streams.lens(pixel, s);
+        }
+        camera.generate8(px, py, thin_lens ? lens : nullptr, &w.rays[at]);
+        for (int lane = 0; lane < 8; ++lane) {
+          const int lx = bx + lane % 4, ly = by + lane / 4;
+          Ray& r = w.rays[at + size_t(lane)];
+          if (x0 + lx >= st.width || y0 + ly >= st.height) {
+            r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
+            w.paths[at + size_t(lane)] = {kInvalidId, {}};
             continue;
           }
-          const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
-          const Vec2f j = pixel_sample(st.seed, pixel, s, st.spp, st.sampler);
-          const Ray r = camera.generate(float(x) + j.x, float(y) + j.y, lens_sample(st.seed, pixel, s));
-          w.rays.push_back(r);
           // No ray (outside a fisheye's image circle): the pixel stays black.
-          w.paths.push_back({valid_ray(r) ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}});
-          primary += valid_ray(r);
+          const bool valid = valid_ray(r);
+          w.paths[at + size_t(lane)] = {valid ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}};
+          primary += valid;
         }
-    shade(scene, backend, st.max_depth, w, tile, n);
+      }
+    shade(scene, backend, shade_batch, st.max_depth, w, tile, n);
   }
   const float inv = 1.0f / float(st.spp);
   for (Vec3f& c : tile) c *= inv;
@@ -208,8 +206,8 @@ uint64_t sample_tile(const Scene& scene, const Tracer& backend, const Camera& ca
 /// 1/2^depth pixel; a pixel is the area-weighted mean of its cells' corner averages. Corner
 /// positions are integers on the finest grid, shared between neighbouring cells through a
 /// cache, so each point is traced once per tile.
-uint64_t adaptive_tile(const Scene& scene, const Tracer& backend, const Camera& camera, const RenderSettings& st,
-                       int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, const Camera& camera,
+                       const RenderSettings& st, int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
   const int scale = 1 << st.adaptive_depth;
   const int tw = std::min(kTile, st.width - x0), th = std::min(kTile, st.height - y0);
   auto key = [](int64_t x, int64_t y) { return uint64_t(x) << 32 | uint64_t(uint32_t(y)); };
@@ -232,7 +230,7 @@ uint64_t adaptive_tile(const Scene& scene, const Tracer& backend, const Camera& 
       primary += valid_ray(r);
     }
     shaded.assign(wanted.size(), Vec3f{});
-    shade(scene, backend, st.max_depth, w, shaded, n);
+    shade(scene, backend, shade_batch, st.max_depth, w, shaded, n);
     for (size_t i = 0; i < wanted.size(); ++i) colour[key(wanted[i].first, wanted[i].second)] = shaded[i];
     wanted.clear();
   };
@@ -280,20 +278,10 @@ uint64_t adaptive_tile(const Scene& scene, const Tracer& backend, const Camera& 
 }  // namespace
 
 Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp, Sampler sampler) {
-  const uint64_t h = mix(mix(mix(seed ^ 0x9e3779b97f4a7c15ull) ^ pixel) ^ uint64_t(sample));
-  const float jx = to_unit(h), jy = to_unit(mix(h));
-  if (sampler == Sampler::random) return {jx, jy};
-  if (spp == 1) return {0.5f, 0.5f};
-  const int m = int(std::sqrt(double(spp)));
-  if (sampler == Sampler::uniform) return {(float(sample % m) + 0.5f) / float(m), (float(sample / m) + 0.5f) / float(m)};
-  if (sample >= m * m) return {jx, jy};
-  return {(float(sample % m) + jx) / float(m), (float(sample / m) + jy) / float(m)};
+  return SampleStreams(seed, spp, sampler).pixel(pixel, sample);
 }
 
-Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) {
-  const uint64_t h = mix(mix(mix(seed ^ 0x5851f42d4c957f2dull) ^ pixel) ^ uint64_t(sample));
-  return {to_unit(h), to_unit(mix(h))};
-}
+Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) { return SampleStreams(seed, 1, Sampler::random).lens(pixel, sample); }
 
 float fresnel_dielectric(float cos_i, float n1, float n2) {
   cos_i = std::clamp(cos_i, 0.0f, 1.0f);
@@ -330,6 +318,8 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
   const int tiles_x = (st.width + kTile - 1) / kTile, tiles_y = (st.height + kTile - 1) / kTile;
 
   if (log) log->tiles.assign(size_t(tiles_x) * size_t(tiles_y), {});
+  const ShadeBatchFn shade_batch = shade_batch_function();
+  const ShadeScene shade_scene(scene);
   auto render_tile = [&](int tx, int ty) {
     const Tracer tracer{backend, log ? &log->tiles[size_t(ty) * size_t(tiles_x) + size_t(tx)] : nullptr};
     ShadeWork w;
@@ -337,8 +327,8 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
     Counters n;
     const int x0 = tx * kTile, y0 = ty * kTile;
     const uint64_t primary = st.sampler == Sampler::adaptive
-                                 ? adaptive_tile(scene, tracer, camera, st, x0, y0, w, tile, n)
-                                 : sample_tile(scene, tracer, camera, st, x0, y0, w, tile, n);
+                                 ? adaptive_tile(shade_scene, tracer, shade_batch, camera, st, x0, y0, w, tile, n)
+                                 : sample_tile(shade_scene, tracer, shade_batch, camera, st, x0, y0, w, tile, n);
     for (int ly = 0; ly < kTile && y0 + ly < st.height; ++ly)
       for (int lx = 0; lx < kTile && x0 + lx < st.width; ++lx) {
         const Vec3f c = tile[size_t(ly * kTile + lx)];
@@ -450,3 +440,4 @@ Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camer
 }
 
 }  // namespace rp
+

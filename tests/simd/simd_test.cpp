@@ -25,8 +25,10 @@
 #include <vector>
 
 #include "engine/math.h"
+#include "engine/pow.h"
 #include "simd/float4.h"
 #include "simd/float8.h"
+#include "simd/pow8.h"
 
 #if !defined(__AVX2__) || !defined(__FMA__)
 #error "simd_test.cpp must be compiled for AVX2+FMA (-mavx2 -mfma; link rp::avx2)"
@@ -378,6 +380,63 @@ TEST(Count8, CountsEachBitOverTheMasksAdded) {
   alignas(32) uint32_t got[8];
   counts.store(got);
   for (int c = 0; c < 8; ++c) EXPECT_EQ(got[c], want[c]) << "lane " << c;
+}
+
+/// Bases and exponents as Blinn-Phong uses them (cosines in [0, 1] and a little above, the
+/// exponents of MTL files) and around them: zeros, denormals, 1, large exponents, and a few
+/// lanes outside the domain (negative, NaN, inf) that go to std::pow.
+std::pair<float, float> random_pow_args(std::mt19937& rng) {
+  float x, y;
+  switch (rng() % 8) {
+    case 0: x = from_bits(rng() % 0x00800000u); break;         // denormals and 0
+    case 1: x = 1.0f + float(rng() % 64) * 0x1p-23f; break;       // 1 and just above
+    case 2: x = from_bits(rng() & 0x7fffffffu); break;            // any non-negative bits (NaN, inf too)
+    default: x = std::uniform_real_distribution<float>(0.0f, 1.0f)(rng);
+  }
+  switch (rng() % 6) {
+    case 0: y = float(rng() % 9); break;                           // 0..8
+    case 1: y = std::uniform_real_distribution<float>(0.0f, 1.0f)(rng); break;
+    case 2: y = float(rng() % 2000); break;
+    case 3: y = rng() % 50 == 0 ? -1.0f : std::uniform_real_distribution<float>(0.0f, 1e4f)(rng); break;
+    default: y = std::uniform_real_distribution<float>(1.0f, 200.0f)(rng);
+  }
+  return {x, y};
+}
+
+TEST(Pow8, EveryLaneHasTheScalarRoutinesBits) {
+  std::mt19937 rng(kSeed + 11);
+  for (int round = 0; round < 200000; ++round) {
+    Lanes x, y;
+    for (int i = 0; i < 8; ++i) std::tie(x[i], y[i]) = random_pow_args(rng);
+    const Lanes got = unpack(pow8(pack(x), pack(y)));
+    for (int i = 0; i < 8; ++i) {
+      const float want = pow_nonneg(x[i], y[i]);
+      ASSERT_TRUE(bits_of(got[i]) == bits_of(want) || (std::isnan(got[i]) && std::isnan(want)))
+          << "pow(" << show(x[i]) << ", " << show(y[i]) << "): lane " << i << " " << show(got[i]) << ", scalar "
+          << show(want);
+    }
+  }
+}
+
+TEST(PowNonneg, WithinOneUlpOfLibmsPowf) {
+  // The bound engine/pow.h states: both are within an ulp of the exact power, and they agree
+  // bit for bit on most arguments.
+  std::mt19937 rng(kSeed + 12);
+  int differ = 0, n = 0;
+  for (int k = 0; k < 2000000; ++k) {
+    const auto [x, y] = random_pow_args(rng);
+    const float got = pow_nonneg(x, y), want = std::pow(x, y);
+    ++n;
+    if (std::isnan(want)) {
+      ASSERT_TRUE(std::isnan(got)) << show(x) << " " << show(y);
+      continue;
+    }
+    const int64_t ulps = std::abs(int64_t(bits_of(got)) - int64_t(bits_of(want)));
+    ASSERT_LE(ulps, 1) << "pow(" << show(x) << ", " << show(y) << ") = " << show(got) << ", powf " << show(want);
+    differ += ulps != 0;
+  }
+  std::printf("pow_nonneg: %d of %d results one ulp from powf, the rest equal\n", differ, n);
+  EXPECT_LT(differ, n / 100);
 }
 
 /// The scalar oracle: min (max) over the non-NaN lanes; NaN when every lane is NaN.

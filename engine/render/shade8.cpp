@@ -1,0 +1,235 @@
+// shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 whose hits
+// are all triangles is read as vectors (rays, hits and paths transposed from their records;
+// corners, vertex normals and materials gathered when its triangles share a mesh, read lane
+// by lane when they do not), its surface points (triangle_point) and all of shading.h run on
+// float8 lanes, and its shadow rays and waiting contributions are transposed back into
+// records and appended in lane order. A group with an analytic hit, and the last few rays of
+// a batch, go a ray at a time (shade_ray): the same bits either way. Built for AVX2+FMA; the
+// renderer calls it only on such a CPU (shade_batch_function).
+
+#include <algorithm>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <span>
+
+#include "engine/render/shade_group.h"
+#include "engine/render/shading.h"
+#include "engine/surface_lanes.h"
+#include "simd/float8.h"
+#include "simd/lanes8.h"
+
+namespace rp {
+
+namespace {
+
+using simd::float8;
+using simd::int8;
+using simd::mask8;
+using V8 = Vec3<float8>;
+
+/// The corners, vertex normals and materials of 8 triangle hits (lanes `hit`).
+struct TriangleInputs {
+  V8 c[3], n[3];
+  mask8 has_normals;
+  int8 material;
+};
+
+/// Gathers them as vectors when every hit lies in one mesh, else reads them lane by lane.
+TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t hit) {
+  TriangleInputs in;
+  alignas(32) uint32_t ids[8];
+  simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
+  const uint32_t first = ids[std::countr_zero(hit)];
+  const uint32_t mesh = scene.locate(first).shape;
+  const uint32_t begin = scene.mesh_base(mesh), end = begin + scene.meshes()[mesh].triangle_count();
+  bool one_mesh = true;
+  for (uint32_t b = hit; b; b &= b - 1) one_mesh = one_mesh && ids[std::countr_zero(b)] >= begin && ids[std::countr_zero(b)] < end;
+  if (one_mesh) {
+    const TriangleMesh& m = scene.meshes()[mesh];
+    const mask8 on = simd::mask_from_bits(hit);
+    const int8 local = simd::as_int(xsimd::select(on, simd::as_float(simd::as_int(prim) - int8(int32_t(begin))), float8(0.0f)));
+    const int32_t* indices = reinterpret_cast<const int32_t*>(m.indices.data());
+    const float* positions = &m.positions[0].x;
+    for (int k = 0; k < 3; ++k) {
+      const int8 vertex3 = simd::gather(indices, local * int8(3) + int8(k)) * int8(3);
+      in.c[k] = {simd::gather(positions, vertex3), simd::gather(positions + 1, vertex3), simd::gather(positions + 2, vertex3)};
+      if (!m.normals.empty()) {
+        const float* normals = &m.normals[0].x;
+        in.n[k] = {simd::gather(normals, vertex3), simd::gather(normals + 1, vertex3), simd::gather(normals + 2, vertex3)};
+      } else {
+        in.n[k] = {float8(0.0f), float8(0.0f), float8(0.0f)};
+      }
+    }
+    in.has_normals = simd::mask_from_bits(m.normals.empty() ? 0u : 0xffu);
+    in.material = m.face_materials.empty()
+                      ? int8(int32_t(m.material))
+                      : simd::gather(reinterpret_cast<const int32_t*>(m.face_materials.data()), local);
+    return in;
+  }
+  simd::Spill<18> s;  // c[0..2], n[0..2] as x, y, z rows
+  alignas(32) int32_t material[8] = {};
+  uint32_t normals = 0;
+  for (int lane = 0; lane < 8; ++lane) {
+    for (auto& row : s.lanes) row[lane] = 0.0f;
+    if (!(hit >> lane & 1u)) continue;
+    const PrimLocation at = scene.locate(ids[lane]);
+    const TriangleMesh& m = scene.meshes()[at.shape];
+    const uint32_t* idx = &m.indices[3 * size_t(at.local)];
+    for (int k = 0; k < 3; ++k) {
+      const Vec3f c = m.positions[idx[k]];
+      s.lanes[3 * k][lane] = c.x;
+      s.lanes[3 * k + 1][lane] = c.y;
+      s.lanes[3 * k + 2][lane] = c.z;
+      if (m.normals.empty()) continue;
+      const Vec3f n = m.normals[idx[k]];
+      s.lanes[9 + 3 * k][lane] = n.x;
+      s.lanes[9 + 3 * k + 1][lane] = n.y;
+      s.lanes[9 + 3 * k + 2][lane] = n.z;
+    }
+    normals |= uint32_t(!m.normals.empty()) << lane;
+    material[lane] = int32_t(m.face_materials.empty() ? m.material : m.face_materials[at.local]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    in.c[k] = {s.load(3 * k), s.load(3 * k + 1), s.load(3 * k + 2)};
+    in.n[k] = {s.load(9 + 3 * k), s.load(9 + 3 * k + 1), s.load(9 + 3 * k + 2)};
+  }
+  in.has_normals = simd::mask_from_bits(normals);
+  in.material = int8::load_aligned(material);
+  return in;
+}
+
+/// The terms of materials `id` (one per lane), broadcast when every hit lane has the same one.
+MaterialLanes<float8> material_inputs(const ShadeScene& s, const int8& id, uint32_t hit) {
+  alignas(32) int32_t ids[8];
+  id.store_aligned(ids);
+  const int32_t first = ids[std::countr_zero(hit)];
+  bool same = true;
+  for (uint32_t b = hit; b; b &= b - 1) same = same && ids[std::countr_zero(b)] == first;
+  using R = ShadeScene::Row;
+  const int8 safe =
+      same ? int8(first)
+           : simd::as_int(xsimd::select(simd::mask_from_bits(hit), simd::as_float(id), simd::as_float(int8(first))));
+  auto row = [&](R r) { return same ? float8(s.rows[r][size_t(first)]) : simd::gather(s.rows[r].data(), safe); };
+  return {{row(R::kd_x), row(R::kd_y), row(R::kd_z)},
+          {row(R::ks_x), row(R::ks_y), row(R::ks_z)},
+          {row(R::ke_x), row(R::ke_y), row(R::ke_z)},
+          row(R::shininess),
+          row(R::mirror),
+          row(R::opacity)};
+}
+
+/// Appends the lanes `lit` of shadow rays (origin, tnear 0, to_light, tfar) and their waiting
+/// contributions, in lane order.
+void append_light(const V8& origin, const V8& to_light, float tfar, const float8& slot, const V8& contribution,
+                  uint32_t lit, std::vector<Ray>& rays, std::vector<Pending>& pending) {
+  if (!lit) return;
+  static_assert(sizeof(Ray) == 32 && sizeof(Pending) == 16);
+  float8 r[8] = {origin.x, origin.y, origin.z, float8(0.0f), to_light.x, to_light.y, to_light.z, float8(tfar)};
+  simd::transpose8x8(r);
+  const float8 p[4] = {slot, contribution.x, contribution.y, contribution.z};
+  alignas(32) float records[32];
+  simd::store_records4(p, records);
+  const size_t at = rays.size(), n = size_t(std::popcount(lit));
+  rays.resize(at + n);
+  pending.resize(at + n);
+  size_t k = at;
+  for (uint32_t b = lit; b; b &= b - 1, ++k) {
+    const int lane = std::countr_zero(b);
+    r[lane].store_unaligned(&rays[k].org.x);
+    std::memcpy(static_cast<void*>(&pending[k]), records + 4 * lane, sizeof(Pending));
+  }
+}
+
+/// Lane `lane` of v.
+Vec3f lane_of(const V8& v, int lane) { return {v.x.get(size_t(lane)), v.y.get(size_t(lane)), v.z.get(size_t(lane))}; }
+
+/// Rays [base, base + 8) of the batch, all of whose hits are triangles.
+void shade8(const ShadeScene& s, std::span<const Ray> rays, const float8 hit_rows[4], const float8 path_rows[4],
+            size_t base, uint32_t live, uint32_t hit, bool bounce, ShadeOut& out) {
+  const Scene& scene = s.scene;
+  float8 ray_rows[8];
+  simd::load_rows8(&rays[base].org.x, ray_rows);
+  simd::transpose8x8(ray_rows);
+  const V8 org{ray_rows[0], ray_rows[1], ray_rows[2]}, dir{ray_rows[4], ray_rows[5], ray_rows[6]};
+  const V8 weight{path_rows[1], path_rows[2], path_rows[3]};
+  alignas(32) uint32_t slot[8];
+  simd::as_int(path_rows[0]).store_aligned(reinterpret_cast<int32_t*>(slot));
+
+  V8 emitted{};
+  ShadedHit<float8> h;
+  PointLanes<float8> p;
+  MaterialLanes<float8> m;
+  int8 material(0);
+  if (hit) {
+    const TriangleInputs t = triangle_inputs(scene, hit_rows[1], hit);
+    p = triangle_point<float8>(t.c, t.n, t.has_normals, hit_rows[2], hit_rows[3]);
+    fix_degenerate_normal<float8>(p, org, dir, hit_rows[0]);
+    material = t.material;
+    m = material_inputs(s, material, hit);
+    h = shade_hit<float8>(dir, p, m, weight);
+    emitted = h.emitted;
+  }
+  // Colours lane by lane: the sky for a miss, the unlit terms for a hit.
+  for (uint32_t b = live; b; b &= b - 1) {
+    const int lane = std::countr_zero(b);
+    Vec3f& c = out.colour[slot[lane]];
+    if (hit >> lane & 1u) {
+      c += lane_of(emitted, lane);
+    } else {
+      c += mul(lane_of(weight, lane), sky(rays[base + size_t(lane)].dir));
+    }
+  }
+  if (!hit) return;
+  size_t l = 0;
+  for (const PointLight& pl : scene.point_lights()) {
+    V8 to_light;
+    const LightTerm<float8> t = point_light_term<float8>(h, m, weight, pl, to_light);
+    append_light(h.origin, to_light, s.shadow_tfar[l], path_rows[0], t.contribution, simd::movemask(t.lit) & hit,
+                 out.shadow_rays[l], out.pending[l]);
+    ++l;
+  }
+  for (const DirectionalLight& dl : scene.directional_lights()) {
+    const LightTerm<float8> t = directional_light_term<float8>(h, m, weight, dl);
+    const V8 to_light{float8(-dl.direction.x), float8(-dl.direction.y), float8(-dl.direction.z)};
+    append_light(h.origin, to_light, s.shadow_tfar[l], path_rows[0], t.contribution, simd::movemask(t.lit) & hit,
+                 out.shadow_rays[l], out.pending[l]);
+    ++l;
+  }
+  if (!bounce) return;
+  alignas(32) int32_t ids[8];
+  material.store_aligned(ids);
+  const uint32_t back = simd::movemask(h.back);
+  for (uint32_t b = hit; b; b &= b - 1) {
+    const int lane = std::countr_zero(b);
+    if (!may_bounce(scene.materials()[size_t(ids[lane])])) continue;
+    out.bounces.push_back({uint32_t(base) + uint32_t(lane), lane_of(p.position, lane), lane_of(h.ng, lane),
+                           lane_of(h.d, lane), lane_of(h.origin, lane), bool(back >> lane & 1u), uint32_t(ids[lane])});
+  }
+}
+
+}  // namespace
+
+void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits,
+                  std::span<const PathState> paths, bool bounce, ShadeOut& out) {
+  static_assert(sizeof(Hit) == 16 && sizeof(PathState) == 16);
+  const size_t n = rays.size();
+  size_t base = 0;
+  for (; base + 8 <= n; base += 8) {
+    float8 hit_rows[4], path_rows[4];  // t, prim, u, v; slot, weight
+    simd::load_records4(&hits[base].t, hit_rows);
+    simd::load_records4(reinterpret_cast<const float*>(&paths[base]), path_rows);
+    const uint32_t live = ~simd::movemask(simd::bits_equal(path_rows[0], kInvalidId)) & 0xffu;
+    const uint32_t hit = ~simd::movemask(simd::bits_equal(hit_rows[1], kInvalidId)) & live;
+    const uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count()));
+    if ((hit & ~triangle) == 0) {
+      shade8(s, rays, hit_rows, path_rows, base, live, hit, bounce, out);
+      continue;
+    }
+    for (size_t i = base; i < base + 8; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
+  }
+  for (size_t i = base; i < n; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
+}
+
+}  // namespace rp
