@@ -1,11 +1,12 @@
-// shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 whose hits
-// are all triangles is read as vectors (rays, hits and paths transposed from their records;
-// corners, vertex normals and materials gathered when its triangles share a mesh, read lane
-// by lane when they do not), its surface points (triangle_point) and all of shading.h run on
-// float8 lanes, and its shadow rays and waiting contributions are transposed back into
-// records and appended in lane order. A group with an analytic hit, and the last few rays of
-// a batch, go a ray at a time (shade_ray): the same bits either way. Built for AVX2+FMA; the
-// renderer calls it only on such a CPU (shade_batch_function).
+// shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 is read as
+// vectors (rays, hits and paths transposed from their records; its triangles' corners,
+// vertex normals and materials gathered when they share a mesh, read lane by lane when they
+// do not); its triangles' surface points (triangle_point) run on float8 lanes, its analytic
+// hits' come from Scene::surface lane by lane, then all of shading.h runs on float8 lanes, and
+// its shadow rays and waiting contributions are transposed back into records and appended in
+// lane order. The last few rays of a batch go a ray at a time (shade_ray): the same bits
+// either way. Built for AVX2+FMA; the renderer calls it only on such a CPU
+// (shade_batch_function).
 
 #include <algorithm>
 #include <bit>
@@ -145,9 +146,36 @@ void append_light(const V8& origin, const V8& to_light, float tfar, const float8
 /// Lane `lane` of v.
 Vec3f lane_of(const V8& v, int lane) { return {v.x.get(size_t(lane)), v.y.get(size_t(lane)), v.z.get(size_t(lane))}; }
 
-/// Rays [base, base + 8) of the batch, all of whose hits are triangles.
-void shade8(const ShadeScene& s, std::span<const Ray> rays, const float8 hit_rows[4], const float8 path_rows[4],
-            size_t base, uint32_t live, uint32_t hit, bool bounce, ShadeOut& out) {
+/// The surface points and materials of the analytic hits `lanes` (Scene::surface, lane by
+/// lane), and the triangle hits' material ids where `triangle` (others: 0).
+struct AnalyticInputs {
+  PointLanes<float8> p;
+  int8 material;
+};
+AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits, size_t base,
+                               uint32_t lanes) {
+  simd::Spill<9> s;
+  alignas(32) int32_t material[8] = {};
+  for (int lane = 0; lane < 8; ++lane) {
+    const SurfacePoint sp = (lanes >> lane & 1u) ? scene.surface(rays[base + size_t(lane)], hits[base + size_t(lane)])
+                                                 : SurfacePoint{{}, {0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 1.0f}, 0};
+    const Vec3f v[3] = {sp.position, sp.geometric_normal, sp.shading_normal};
+    for (int k = 0; k < 3; ++k) {
+      s.lanes[3 * k][lane] = v[k].x;
+      s.lanes[3 * k + 1][lane] = v[k].y;
+      s.lanes[3 * k + 2][lane] = v[k].z;
+    }
+    material[lane] = int32_t(sp.material);
+  }
+  return {{{s.load(0), s.load(1), s.load(2)}, {s.load(3), s.load(4), s.load(5)}, {s.load(6), s.load(7), s.load(8)}},
+          int8::load_aligned(material)};
+}
+
+/// Rays [base, base + 8) of the batch: the triangle hits' surface points on 8 lanes, the other
+/// hits' from Scene::surface, then the shading of every hit on 8 lanes.
+void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits, const float8 hit_rows[4],
+            const float8 path_rows[4], size_t base, uint32_t live, uint32_t hit, uint32_t triangle, bool bounce,
+            ShadeOut& out) {
   const Scene& scene = s.scene;
   float8 ray_rows[8];
   simd::load_rows8(&rays[base].org.x, ray_rows);
@@ -163,10 +191,20 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, const float8 hit_row
   MaterialLanes<float8> m;
   int8 material(0);
   if (hit) {
-    const TriangleInputs t = triangle_inputs(scene, hit_rows[1], hit);
-    p = triangle_point<float8>(t.c, t.n, t.has_normals, hit_rows[2], hit_rows[3]);
-    fix_degenerate_normal<float8>(p, org, dir, hit_rows[0]);
-    material = t.material;
+    const uint32_t analytic = hit & ~triangle;
+    if (triangle) {
+      const TriangleInputs t = triangle_inputs(scene, hit_rows[1], triangle);
+      p = triangle_point<float8>(t.c, t.n, t.has_normals, hit_rows[2], hit_rows[3]);
+      material = t.material;
+    }
+    if (analytic) {
+      const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, analytic);
+      const mask8 take = simd::mask_from_bits(analytic);
+      p = {select<float8>(take, a.p.position, p.position), select<float8>(take, a.p.geometric_normal, p.geometric_normal),
+           select<float8>(take, a.p.shading_normal, p.shading_normal)};
+      material = simd::as_int(xsimd::select(take, simd::as_float(a.material), simd::as_float(material)));
+    }
+    fix_degenerate_normal<float8>(p, org, dir, hit_rows[0]);  // as Scene::surface (a no-op on its own points)
     m = material_inputs(s, material, hit);
     h = shade_hit<float8>(dir, p, m, weight);
     emitted = h.emitted;
@@ -222,12 +260,8 @@ void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<cons
     simd::load_records4(reinterpret_cast<const float*>(&paths[base]), path_rows);
     const uint32_t live = ~simd::movemask(simd::bits_equal(path_rows[0], kInvalidId)) & 0xffu;
     const uint32_t hit = ~simd::movemask(simd::bits_equal(hit_rows[1], kInvalidId)) & live;
-    const uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count()));
-    if ((hit & ~triangle) == 0) {
-      shade8(s, rays, hit_rows, path_rows, base, live, hit, bounce, out);
-      continue;
-    }
-    for (size_t i = base; i < base + 8; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
+    const uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count())) & hit;
+    shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, bounce, out);
   }
   for (size_t i = base; i < n; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
 }
