@@ -160,7 +160,7 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
                      const RenderSettings& st, int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
   uint64_t primary = 0;
   const SampleStreams streams(st.seed, st.spp, st.sampler);
-  const bool thin_lens = camera.model() == CameraModel::thin_lens;
+  const bool thin_lens = camera.model() == CameraModel::thin_lens, pinhole = camera.model() == CameraModel::pinhole;
   for (int s = 0; s < st.spp; ++s) {
     // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
     w.rays.resize(kTile * kTile);
@@ -187,8 +187,9 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
             w.paths[at + size_t(lane)] = {kInvalidId, {}};
             continue;
           }
-          // No ray (outside a fisheye's image circle): the pixel stays black.
-          const bool valid = valid_ray(r);
+          // No ray (outside a fisheye's image circle): the pixel stays black. A pinhole ray is
+          // valid by construction (the camera checked its eye; its direction is unit length).
+          const bool valid = pinhole || valid_ray(r);
           w.paths[at + size_t(lane)] = {valid ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}};
           primary += valid;
         }
