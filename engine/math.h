@@ -27,8 +27,14 @@ struct Vec3 {
   constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
   constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
   constexpr Vec3& operator*=(T s) { x *= s; y *= s; z *= s; return *this; }
-  friend constexpr bool operator==(const Vec3&, const Vec3&) = default;
 };
+
+/// Component-wise equality (a template, not a defaulted member: Vec3 of an 8-lane type,
+/// engine/lanes.h, has no bool equality and must not be made to declare one).
+template <typename T>
+constexpr bool operator==(const Vec3<T>& a, const Vec3<T>& b) {
+  return a.x == b.x && a.y == b.y && a.z == b.z;
+}
 
 using Vec3f = Vec3<float>;
 using Vec3d = Vec3<double>;
