@@ -383,10 +383,27 @@ struct WatertightRays {
   mask8 is_x[3], is_y[3];  ///< per lane: axis kx, ky, kz (index 0, 1, 2) is x / is y (else z)
   float8 sx, sy, sz;
   float8 tnear;
-  bool uniform = false;    ///< one ray in every lane: the axes are k[] (no per-lane selects)
   int k[3] = {0, 1, 2};
 
   WatertightRays() = default;
+  /// One ray in every lane: its constants as the scalar routine computes them, broadcast.
+  RP_SIMD_INLINE explicit WatertightRays(const Ray& r) {
+    const int kz = max_abs_axis(r.dir);
+    int kx = kz + 1 == 3 ? 0 : kz + 1;
+    int ky = kx + 1 == 3 ? 0 : kx + 1;
+    if (r.dir[kz] < 0.0f) std::swap(kx, ky);
+    k[0] = kx, k[1] = ky, k[2] = kz;
+    org = Vec3x8(r.org);
+    dir = Vec3x8(r.dir);
+    sx = float8(r.dir[kx] / r.dir[kz]);
+    sy = float8(r.dir[ky] / r.dir[kz]);
+    sz = float8(1.0f / r.dir[kz]);
+    tnear = float8(r.tnear);
+    for (int j = 0; j < 3; ++j) {
+      is_x[j] = simd::mask_from_bits(k[j] == 0 ? 0xffu : 0u);
+      is_y[j] = simd::mask_from_bits(k[j] == 1 ? 0xffu : 0u);
+    }
+  }
   /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
   /// caller masks them).
   WatertightRays(const Ray* rays, size_t n) {
@@ -413,7 +430,6 @@ struct WatertightRays {
       tn[i] = r.tnear;
     }
     if (lanes == 1) {
-      uniform = true;
       org = Vec3x8(rays[0].org);
       dir = Vec3x8(rays[0].dir);
       sx = float8(fx[0]);
@@ -438,9 +454,9 @@ struct WatertightRays {
     tnear = s.load(9);
   }
 
-  /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz).
-  float8 axis(const Vec3x8& p, int j) const {
-    if (uniform) return k[j] == 0 ? p.x : k[j] == 1 ? p.y : p.z;
+  /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz): two blends, no branch on
+  /// the axes (a stream's leaf meets rays of every axis order in turn).
+  RP_SIMD_INLINE float8 axis(const Vec3x8& p, int j) const {
     return xsimd::select(is_x[j], p.x, xsimd::select(is_y[j], p.y, p.z));
   }
 };
@@ -453,8 +469,8 @@ struct WatertightRays {
 /// edge's value for two triangles only when the vertices are the same floats, so the test
 /// takes the vertices (as every leaf stores them), never edges. Serves one ray against 8
 /// triangles and 8 rays against one triangle.
-inline TriHit8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
-                       const float8& tfar) {
+RP_SIMD_INLINE TriHit8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
+                                   const float8& tfar) {
   const Vec3x8 a = v0 - r.org, b = v1 - r.org, c = v2 - r.org;
   const float8 a_z = r.axis(a, 2), b_z = r.axis(b, 2), c_z = r.axis(c, 2);
   const float8 ax = r.axis(a, 0) - r.sx * a_z, ay = r.axis(a, 1) - r.sy * a_z;

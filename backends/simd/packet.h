@@ -61,8 +61,8 @@ struct MtKernel {
 struct WatertightKernel {
   struct Single {
     WatertightRays r;
-    explicit Single(const Ray& ray) : r(&ray, 1) {}
-    Single(const RayPacket&, int, const Ray& ray) : r(&ray, 1) {}
+    RP_SIMD_INLINE explicit Single(const Ray& ray) : r(ray) {}
+    Single(const RayPacket&, int, const Ray& ray) : r(ray) {}
     RP_SIMD_INLINE TriHit8 block(const LeafView& lv, const float8& tfar) const {
       return watertight8(r, lv.v0, lv.v1, lv.v2, tfar);
     }
