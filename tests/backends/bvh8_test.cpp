@@ -16,6 +16,7 @@
 #include "backends/simd/kernels.h"
 #include "engine/geometry/slab.h"
 #include "engine/geometry/triangle.h"
+#include "tests/backends/kernel_support.h"
 #include "tests/support/scenes.h"
 
 namespace rp::bvh8 {
@@ -339,36 +340,6 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
   }
 }
 
-/// Lane l of an 8-wide triangle test's result, as a scalar Intersection.
-Intersection<float> lane_of(const TriHit8& h, int l) {
-  alignas(32) float t[8], u[8], v[8];
-  h.t.store_aligned(t);
-  h.u.store_aligned(u);
-  h.v.store_aligned(v);
-  return {bool(simd::movemask(h.hit) >> l & 1u), t[l], u[l], v[l]};
-}
-
-/// The same t, u and v, bit for bit.
-void expect_same_bits(const Intersection<float>& a, const Intersection<float>& b) {
-  EXPECT_EQ(std::bit_cast<uint32_t>(a.t), std::bit_cast<uint32_t>(b.t));
-  EXPECT_EQ(std::bit_cast<uint32_t>(a.u), std::bit_cast<uint32_t>(b.u));
-  EXPECT_EQ(std::bit_cast<uint32_t>(a.v), std::bit_cast<uint32_t>(b.v));
-}
-
-/// The leaf the build would write for n primitives (prim_ids 0..n-1) with corners v0, v1,
-/// v2, followed by floats of any value (what follows a leaf in the tree).
-std::vector<float> make_leaf(const Vec3f* v0, const Vec3f* v1, const Vec3f* v2, uint32_t n) {
-  std::vector<Vec3f> corners;
-  std::vector<uint32_t> ids;
-  for (uint32_t l = 0; l < n; ++l) {
-    corners.insert(corners.end(), {v0[l], v1[l], v2[l]});
-    ids.push_back(l);
-  }
-  std::vector<float> words(leaf_words(n, kMaxLeafVertices) + kLeafPad, 1.0f);
-  write_leaf(words.data(), corners, ids);
-  return words;
-}
-
 /// A leaf gives back each corner's floats bit for bit, stores each distinct vertex once
 /// (corners with the same bits merged, -0 and +0 kept apart), and its 8-wide view holds the
 /// corners in lanes 0..n-1 and NaN past them (see LeafView), for leaves of 1..8 with 1..24 vertices.
@@ -410,7 +381,26 @@ TEST(Bvh8, LeafStoresEachDistinctVertexOnceAndGivesBackEveryCorner) {
         EXPECT_EQ(0, std::memcmp(&stored, &c[j][k], 12)) << "iter " << iter << " corner " << j << " of " << k;
         EXPECT_EQ(0, std::memcmp(&lane, &c[j][k], 12)) << "iter " << iter << " lane " << k << " corner " << j;
       }
+    // The edge bound: the least float at or above every |coordinate| of e1 = v0 - v1 and
+    // e2 = v2 - v0 (exact in double), and at least 2^-32.
+    double longest = 0x1p-32;
+    for (uint32_t k = 0; k < n; ++k)
+      for (int a = 0; a < 3; ++a)
+        longest = std::max({longest, std::abs(double(c[0][k][a]) - double(c[1][k][a])),
+                            std::abs(double(c[2][k][a]) - double(c[0][k][a]))});
+    const float bound = leaf.edge_bound();
+    EXPECT_GE(double(bound), longest) << "iter " << iter;
+    EXPECT_LT(double(std::nextafter(bound, 0.0f)), longest) << "iter " << iter;
   }
+}
+
+/// An analytic primitive's leaf (NaN corners) has an infinite edge bound, and a leaf of a
+/// point-sized triangle the floor 2^-32.
+TEST(Bvh8, EdgeBoundOfAnalyticAndTinyLeaves) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Vec3f n3{nan, nan, nan}, p{1.0f, 2.0f, 3.0f};
+  EXPECT_EQ(Leaf(make_leaf(&n3, &n3, &n3, 1).data()).edge_bound(), std::numeric_limits<float>::infinity());
+  EXPECT_EQ(Leaf(make_leaf(&p, &p, &p, 1).data()).edge_bound(), 0x1p-32f);
 }
 
 /// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of
