@@ -307,6 +307,48 @@ struct TriHit8 {
   float8 t, u, v;
 };
 
+/// The terms moller_trumbore8 decides on, which the certified test (certified.h) also bounds.
+struct MtTerms {
+  Vec3x8 c;        ///< v0 - org
+  Vec3x8 r;        ///< c x dir
+  float8 den;      ///< Ng . dir
+  float8 sign;     ///< the sign bit of den, xored into U, V, T
+  float8 abs_den;  ///< |den|
+  float8 u, v;     ///< the unnormalised barycentrics, sign-corrected
+  float8 tn;       ///< Ng . c, sign-corrected: t times |den|
+};
+
+RP_SIMD_INLINE MtTerms mt_terms(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                                const Vec3x8& e2, const Vec3x8& ng) {
+  MtTerms m;
+  m.c = v0 - org;
+  m.r = simd::cross_fma(m.c, dir);
+  m.den = simd::dot_fma(ng, dir);
+  m.sign = m.den & float8(-0.0f);
+  m.abs_den = m.den ^ m.sign;
+  m.u = simd::dot_fma(m.r, e2) ^ m.sign;
+  m.v = simd::dot_fma(m.r, e1) ^ m.sign;
+  m.tn = simd::dot_fma(ng, m.c) ^ m.sign;
+  return m;
+}
+
+/// The lanes whose ray passes inside the triangle (or on its border) by moller_trumbore8's
+/// edge tests.
+RP_SIMD_INLINE mask8 mt_edges(const MtTerms& m) {
+  const float8 zero(0.0f);
+  return (m.den != zero) & (m.u >= zero) & (m.v >= zero) & (m.u + m.v <= m.abs_den);
+}
+
+/// moller_trumbore8's answer from its terms.
+RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const float8& tnear, const float8& tfar) {
+  const float8 inf(std::numeric_limits<float>::infinity());
+  const mask8 edges = mt_edges(m);
+  const float8 inv = float8(1.0f) / m.abs_den;
+  const float8 t = m.tn * inv;
+  const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
+  return {hit, t, m.u * inv, m.v * inv};
+}
+
 /// Möller–Trumbore ×8 in the normal-first factoring of rp::intersect_triangle_mt_normal (Möller
 /// and Trumbore 1997; Kensler and Shirley 2006; Embree's default triangle intersector), lane
 /// by lane exactly as that scalar routine: the same FMAs in the same order, so each lane has
@@ -318,19 +360,7 @@ struct TriHit8 {
 /// first form takes Ng = e2 x e1 computed once per triangle (by cross_fma: the same bits).
 RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
                                         const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
-  const Vec3x8 c = v0 - org;
-  const Vec3x8 r = simd::cross_fma(c, dir);
-  const float8 den = simd::dot_fma(ng, dir);
-  const float8 sign = den & float8(-0.0f);  // the sign bit of den, xored into U, V, T
-  const float8 abs_den = den ^ sign;
-  const float8 u = simd::dot_fma(r, e2) ^ sign;
-  const float8 v = simd::dot_fma(r, e1) ^ sign;
-  const float8 zero(0.0f), inf(std::numeric_limits<float>::infinity());
-  const mask8 edges = (den != zero) & (u >= zero) & (v >= zero) & (u + v <= abs_den);
-  const float8 inv = float8(1.0f) / abs_den;
-  const float8 t = (simd::dot_fma(ng, c) ^ sign) * inv;
-  const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
-  return {hit, t, u * inv, v * inv};
+  return mt_answer(mt_terms(org, dir, v0, e1, e2, ng), tnear, tfar);
 }
 
 /// The same, with the normal Ng = e2 x e1 computed here (cross_fma, as the scalar routine).
@@ -346,12 +376,13 @@ RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, co
 /// they never hit or go to the watertight test's fallback (callers mask them out as well).
 struct LeafView {
   Vec3x8 v0, v1, v2;
-  RP_SIMD_INLINE explicit LeafView(const Leaf& leaf) {
-    const uint32_t chunks = (leaf.v + 7) / 8;
-    if (chunks == 1) read<1>(leaf);
-    else if (chunks == 2) read<2>(leaf);
-    else read<3>(leaf);
-    const float8 past = simd::nan_past(leaf.n);
+  Leaf leaf;  ///< the leaf read
+  RP_SIMD_INLINE explicit LeafView(const Leaf& l) : leaf(l) {
+    const uint32_t chunks = (l.v + 7) / 8;
+    if (chunks == 1) read<1>(l);
+    else if (chunks == 2) read<2>(l);
+    else read<3>(l);
+    const float8 past = simd::nan_past(l.n);
     v0 = {v0.x | past, v0.y | past, v0.z | past};
     v1.x = v1.x | past;
   }
@@ -361,16 +392,16 @@ struct LeafView {
 
  private:
   template <int Chunks>
-  RP_SIMD_INLINE void read(const Leaf& leaf) {
-    const float* x = leaf.vertices();
-    v0 = corner<Chunks>(leaf, x, 0);
-    v1 = corner<Chunks>(leaf, x, 1);
-    v2 = corner<Chunks>(leaf, x, 2);
+  RP_SIMD_INLINE void read(const Leaf& l) {
+    const float* x = l.vertices();
+    v0 = corner<Chunks>(l, x, 0);
+    v1 = corner<Chunks>(l, x, 1);
+    v2 = corner<Chunks>(l, x, 2);
   }
   template <int Chunks>
-  RP_SIMD_INLINE static Vec3x8 corner(const Leaf& leaf, const float* x, uint32_t j) {
-    const simd::index8<Chunks> i(leaf.corners(j));
-    return {simd::lookup(x, i), simd::lookup(x + leaf.v, i), simd::lookup(x + 2 * leaf.v, i)};
+  RP_SIMD_INLINE static Vec3x8 corner(const Leaf& l, const float* x, uint32_t j) {
+    const simd::index8<Chunks> i(l.corners(j));
+    return {simd::lookup(x, i), simd::lookup(x + l.v, i), simd::lookup(x + 2 * l.v, i)};
   }
 };
 

@@ -1,6 +1,6 @@
 #pragma once
 /// What the traversals (traversal.h, large_packet.h) set up per ray and per 8-ray packet: the
-/// triangle tests as the traversal calls them (MtKernel for the default variant, WatertightKernel
+/// triangle tests as the traversal calls them (MtKernel for the default variant, CertifiedKernel
 /// for the watertight one: one ray against a leaf, or a packet against one triangle), 8 rays
 /// loaded into SoA with their valid lanes, the closest hits so far (PacketHits), a packet's
 /// one-time set-up (PacketSetup) and the near-first order of a node's children. AVX2+FMA
@@ -12,6 +12,7 @@
 #include <span>
 
 #include "backends/simd/bvh8.h"
+#include "backends/simd/certified.h"
 #include "backends/simd/kernels.h"
 #include "engine/ray.h"
 #include "simd/float8.h"
@@ -56,28 +57,57 @@ struct MtKernel {
   };
 };
 
-/// The triangle test of the watertight variant (Woop, Benthin and Wald 2013) on the leaf's
-/// vertices; the traversal around it is the same conservative one.
-struct WatertightKernel {
+/// The triangle test of the watertight variant as it runs: Möller–Trumbore with a bound on
+/// the error of each decision, and Woop, Benthin and Wald's test for the lanes the bound leaves
+/// uncertain (certified.h: why every lane's hit or miss is that test's).
+struct CertifiedKernel {
   struct Single {
-    WatertightRays r;
-    RP_SIMD_INLINE explicit Single(const Ray& ray) : r(ray) {}
-    Single(const RayPacket&, int, const Ray& ray) : r(ray) {}
+    CertifiedRays r;
+    Ray ray;
+    RP_SIMD_INLINE explicit Single(const Ray& ray_) : r(ray_), ray(ray_) {}
+    Single(const RayPacket& p, int lane, const Ray& ray_)
+        : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(ray_) {}
     RP_SIMD_INLINE TriHit8 block(const LeafView& lv, const float8& tfar) const {
-      return watertight8(r, lv.v0, lv.v1, lv.v2, tfar);
+      TriHit8 h;
+      const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
+      if (const uint32_t unsure =
+              certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1), float8(lv.leaf.edge_bound()), h))
+          [[unlikely]] {
+        Settled s;
+        settle_single(lv.leaf, ray, tfar.get(0), s);
+        s.merge_into(h, unsure);
+      }
+      return h;
     }
   };
   struct Triangle {
-    Vec3x8 v0, v1, v2;
+    Vec3x8 v0, e1, e2, ng;
+    float8 x;       ///< the leaf's edge bound
+    Vec3f a, b, c;  ///< the corners, for Woop's test
     Triangle() = default;
     Triangle(const Leaf& leaf, uint32_t k)
-        : v0(leaf.vertex(k, 0)), v1(leaf.vertex(k, 1)), v2(leaf.vertex(k, 2)) {}
+        : x(leaf.edge_bound()), a(leaf.vertex(k, 0)), b(leaf.vertex(k, 1)), c(leaf.vertex(k, 2)) {
+      v0 = Vec3x8(a);
+      e1 = Vec3x8(a - b);  // as MtKernel::Triangle
+      e2 = Vec3x8(c - a);
+      ng = simd::cross_fma(e2, e1);
+    }
   };
   struct Packet {
-    WatertightRays r;
+    const RayPacket* p = nullptr;
+    CertifiedRays r;
+    mutable LazyWatertightRays woop;  ///< Woop's set-up of the rays, made when first needed
     Packet() = default;
-    Packet(const RayPacket&, std::span<const Ray> rays) : r(rays.data(), rays.size()) {}
-    TriHit8 test(const Triangle& t, const float8& tfar) const { return watertight8(r, t.v0, t.v1, t.v2, tfar); }
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet), r(packet.org, packet.dir, packet.tnear) {}
+    TriHit8 test(const Triangle& t, const float8& tfar) const {
+      TriHit8 h;
+      if (const uint32_t unsure = certified_mt8(r, tfar, t.v0, t.e1, t.e2, t.ng, t.x, h)) [[unlikely]] {
+        Settled s;
+        settle_packet(*p, woop, tfar, t.a, t.b, t.c, s);
+        s.merge_into(h, unsure);
+      }
+      return h;
+    }
   };
 };
 

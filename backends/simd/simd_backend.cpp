@@ -105,7 +105,7 @@ std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& 
   if (v == "median")
     return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large, stream);
   if (v == "watertight")
-    return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large, stream);
+    return std::make_unique<SimdBackend<CertifiedKernel>>(scene, v, BuildOptions{}, large, stream);
   if (v == "spatial")
     return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large, stream);
   throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight, spatial)"));
