@@ -43,7 +43,6 @@ static_assert(sizeof(Bvh8Node) == 224);
 /// |---------------------|----------------------------------------------------------------|
 /// | 1                   | n - 1 (bits 0..2) and V - 1 (bits 3..7): V distinct vertices, 1..24 |
 /// | 3n, then 0..3 zeros | corner indices: row j (corner j = 0, 1, 2) holds n bytes       |
-/// | 4                   | the edge bound: no edge v0 - v1, v2 - v0 of a triangle is longer in any coordinate (see below) |
 /// | 4n                  | the scene prim_ids                                             |
 /// | 12V                 | the vertices in SoA: x[V], then y[V], then z[V]                |
 ///
@@ -55,14 +54,12 @@ static_assert(sizeof(Bvh8Node) == 224);
 /// test reads a corner's coordinates as table lookups (one permute per 8 vertices, see
 /// simd::lookup), not gathers. An analytic primitive (sphere, quadric, polygon) has a leaf of
 /// its own whose one vertex is NaN, which neither triangle test ever hits, and is tested by
-/// its scalar routine. The edge bound (the largest |coordinate| of those edges, rounded up,
-/// at least 2^-32; +inf for an analytic leaf) is what the watertight variant's certified test
-/// needs of the triangles' size (certified.h).
+/// its scalar routine.
 inline constexpr uint32_t kMaxLeafVertices = 24;
 inline constexpr uint32_t kLeafPad = 8;  ///< floats after the last leaf: 8-wide loads of its last rows stay in the array
 
 /// Words (floats) of a leaf of n primitives and v distinct vertices.
-constexpr uint32_t leaf_words(uint32_t n, uint32_t v) { return (3 * n + 4) / 4 + 1 + n + 3 * v; }
+constexpr uint32_t leaf_words(uint32_t n, uint32_t v) { return (3 * n + 4) / 4 + n + 3 * v; }
 
 /// One leaf as stored (see above), read in place.
 struct Leaf {
@@ -76,11 +73,9 @@ struct Leaf {
   }
   /// Row j: the block index of corner j of each primitive (n bytes).
   const uint8_t* corners(uint32_t j) const { return reinterpret_cast<const uint8_t*>(words) + 1 + j * n; }
-  /// The edge bound (see above).
-  float edge_bound() const { return words[(3 * n + 4) / 4]; }
-  uint32_t prim(uint32_t k) const { return std::bit_cast<uint32_t>(words[(3 * n + 4) / 4 + 1 + k]); }
+  uint32_t prim(uint32_t k) const { return std::bit_cast<uint32_t>(words[(3 * n + 4) / 4 + k]); }
   /// x[V], y[V], z[V].
-  const float* vertices() const { return words + (3 * n + 4) / 4 + 1 + n; }
+  const float* vertices() const { return words + (3 * n + 4) / 4 + n; }
   /// Corner j (0..2) of primitive k.
   Vec3f vertex(uint32_t k, uint32_t j) const {
     const uint32_t i = corners(j)[k];

@@ -750,24 +750,6 @@ CornerIndex index_corners(std::span<const Vec3f> corners) {
   return ci;
 }
 
-/// The edge bound of a leaf (see Leaf): the largest |coordinate| of the edges v0 - v1 and
-/// v2 - v0 of its triangles (exact in double), rounded up to a float, at least 2^-32; +inf
-/// when a corner is not finite (an analytic primitive's NaN corners).
-float edge_bound(std::span<const Vec3f> corners) {
-  double m = 0x1p-32;
-  for (size_t c = 0; c + 2 < corners.size(); c += 3) {
-    const Vec3f& a = corners[c];
-    for (const Vec3f& b : {corners[c + 1], corners[c + 2]})
-      for (int axis = 0; axis < 3; ++axis) {
-        const double e = std::abs(double(a[axis]) - double(b[axis]));
-        if (!(e <= 0x1p40)) return std::numeric_limits<float>::infinity();
-        m = std::max(m, e);
-      }
-  }
-  const float f = float(m);
-  return double(f) < m ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
-
 /// Writes the leaf of the primitives `ids` with these corners and their index (see Leaf):
 /// leaf_words(n, index.v) floats at `out`.
 void store_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids, const CornerIndex& index) {
@@ -777,8 +759,7 @@ void store_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint
   bytes[0] = uint8_t((n - 1) | (v - 1) << 3);
   for (uint32_t k = 0; k < n; ++k)
     for (uint32_t j = 0; j < 3; ++j) bytes[1 + j * n + k] = index.of[3 * k + j];
-  const uint32_t bound_at = (3 * n + 4) / 4, ids_at = bound_at + 1;
-  out[bound_at] = edge_bound(corners);
+  const uint32_t ids_at = (3 * n + 4) / 4;
   for (uint32_t k = 0; k < n; ++k) out[ids_at + k] = std::bit_cast<float>(ids[k]);
   float* x = out + ids_at + n;
   for (size_t c = 0; c < corners.size(); ++c) {  // a shared vertex is written once per corner, the same bits

@@ -71,7 +71,7 @@ struct CertifiedKernel {
       TriHit8 h;
       const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
       if (const uint32_t unsure =
-              certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1), float8(lv.leaf.edge_bound()), h))
+              certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1), edge_bound8(e1, e2), h))
           [[unlikely]] {
         Settled s;
         settle_single(lv.leaf, ray, tfar.get(0), s);
@@ -82,15 +82,15 @@ struct CertifiedKernel {
   };
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
-    float8 x;       ///< the leaf's edge bound
+    float8 x;       ///< the triangle's edge bound (edge_bound8)
     Vec3f a, b, c;  ///< the corners, for Woop's test
     Triangle() = default;
-    Triangle(const Leaf& leaf, uint32_t k)
-        : x(leaf.edge_bound()), a(leaf.vertex(k, 0)), b(leaf.vertex(k, 1)), c(leaf.vertex(k, 2)) {
+    Triangle(const Leaf& leaf, uint32_t k) : a(leaf.vertex(k, 0)), b(leaf.vertex(k, 1)), c(leaf.vertex(k, 2)) {
       v0 = Vec3x8(a);
       e1 = Vec3x8(a - b);  // as MtKernel::Triangle
       e2 = Vec3x8(c - a);
       ng = simd::cross_fma(e2, e1);
+      x = edge_bound8(e1, e2);
     }
   };
   struct Packet {

@@ -381,26 +381,7 @@ TEST(Bvh8, LeafStoresEachDistinctVertexOnceAndGivesBackEveryCorner) {
         EXPECT_EQ(0, std::memcmp(&stored, &c[j][k], 12)) << "iter " << iter << " corner " << j << " of " << k;
         EXPECT_EQ(0, std::memcmp(&lane, &c[j][k], 12)) << "iter " << iter << " lane " << k << " corner " << j;
       }
-    // The edge bound: the least float at or above every |coordinate| of e1 = v0 - v1 and
-    // e2 = v2 - v0 (exact in double), and at least 2^-32.
-    double longest = 0x1p-32;
-    for (uint32_t k = 0; k < n; ++k)
-      for (int a = 0; a < 3; ++a)
-        longest = std::max({longest, std::abs(double(c[0][k][a]) - double(c[1][k][a])),
-                            std::abs(double(c[2][k][a]) - double(c[0][k][a]))});
-    const float bound = leaf.edge_bound();
-    EXPECT_GE(double(bound), longest) << "iter " << iter;
-    EXPECT_LT(double(std::nextafter(bound, 0.0f)), longest) << "iter " << iter;
   }
-}
-
-/// An analytic primitive's leaf (NaN corners) has an infinite edge bound, and a leaf of a
-/// point-sized triangle the floor 2^-32.
-TEST(Bvh8, EdgeBoundOfAnalyticAndTinyLeaves) {
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const Vec3f n3{nan, nan, nan}, p{1.0f, 2.0f, 3.0f};
-  EXPECT_EQ(Leaf(make_leaf(&n3, &n3, &n3, 1).data()).edge_bound(), std::numeric_limits<float>::infinity());
-  EXPECT_EQ(Leaf(make_leaf(&p, &p, &p, 1).data()).edge_bound(), 0x1p-32f);
 }
 
 /// Möller–Trumbore ×8 reproduces rp::intersect_triangle_mt_normal bit for bit, both ways of

@@ -116,6 +116,35 @@ Intersection<float> woop(const Ray& r, const Fan& f, int l) {
   return intersect_triangle_watertight(r, f.v[0][l], f.v[1][l], f.v[2][l]);
 }
 
+/// The per-lane edge bound is at least every |coordinate| of the exact edges v0 - v1 and
+/// v2 - v0 (in double) and 2^-32, and within a few ulps of the largest: on triangles of every
+/// size from 2^-40 to 2^30 and at every distance from the origin.
+TEST(Certified, EdgeBoundCoversTheExactEdges) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-40, 30);
+  for (int iter = 0; iter < 20000; ++iter) {
+    Vec3f v[3][8];
+    const float far = std::ldexp(1.0f, exponent(rng) / 2 + 10), size = std::ldexp(1.0f, exponent(rng));
+    for (int k = 0; k < 8; ++k) {
+      const Vec3f c{far * unit(rng), far * unit(rng), far * unit(rng)};
+      for (auto& corner : v) corner[k] = c + Vec3f{size * unit(rng), size * unit(rng), size * unit(rng)};
+    }
+    const std::vector<float> words = make_leaf(v[0], v[1], v[2], 8);
+    const LeafView lv{Leaf(words.data())};
+    alignas(32) float x[8];
+    edge_bound8(lv.e1(), lv.e2()).store_aligned(x);
+    for (int k = 0; k < 8; ++k) {
+      double longest = 0x1p-32;
+      for (int a = 0; a < 3; ++a)
+        longest = std::max({longest, std::abs(double(v[0][k][a]) - double(v[1][k][a])),
+                            std::abs(double(v[2][k][a]) - double(v[0][k][a]))});
+      ASSERT_GE(double(x[k]), longest) << "iter " << iter << " lane " << k;
+      EXPECT_LE(double(x[k]), longest * (1.0 + 0x1p-20)) << "iter " << iter << " lane " << k;
+    }
+  }
+}
+
 /// Every lane of the certified test, one ray against a leaf and 8 rays against one triangle,
 /// hits or misses exactly as Woop's test does, at translations 0..10^6 (up to 10^5 times the
 /// fan's size) and scales 10^-3..10^3, with tfar infinite or tnear or tfar within ulps of a
@@ -147,7 +176,7 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
       }
       const CertifiedKernel::Single kernel(r);
       TriHit8 raw;
-      const uint32_t slow = certified_mt8(kernel.r, float8(r.tfar), lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), float8(leaf.edge_bound()), raw);
+      const uint32_t slow = certified_mt8(kernel.r, float8(r.tfar), lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), edge_bound8(lv.e1(), lv.e2()), raw);
       const TriHit8 h = kernel.block(lv, float8(r.tfar));
       for (int l = 0; l < 8; ++l) {
         if (l >= f.k) {
@@ -230,7 +259,7 @@ TEST(Certified, HitDistanceIsAsAccurateAsTheWatertightTest) {
     const CertifiedKernel::Single kernel(r);
     TriHit8 raw;
     const LeafView lv(leaf);
-    const uint32_t slow = certified_mt8(kernel.r, float8(r.tfar), lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), float8(leaf.edge_bound()), raw);
+    const uint32_t slow = certified_mt8(kernel.r, float8(r.tfar), lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), edge_bound8(lv.e1(), lv.e2()), raw);
     const Intersection<float> w = woop(r, f, l);
     const Rayd rd{Vec3d(r.org), 0.0, Vec3d(r.dir), std::numeric_limits<double>::infinity()};
     const Intersection<double> ref =
@@ -270,7 +299,7 @@ struct CountingKernel {
     Single(const RayPacket& p, int lane, const Ray& r) : k(p, lane, r) {}
     TriHit8 block(const LeafView& lv, const float8& tfar) const {
       TriHit8 raw;
-      const uint32_t slow = certified_mt8(k.r, tfar, lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), float8(lv.leaf.edge_bound()), raw);
+      const uint32_t slow = certified_mt8(k.r, tfar, lv.v0, lv.e1(), lv.e2(), simd::cross_fma(lv.e2(), lv.e1()), edge_bound8(lv.e1(), lv.e2()), raw);
       counts.lanes += lv.leaf.n;
       counts.slow += uint64_t(std::popcount(slow));
       counts.blocks += 1;
