@@ -19,6 +19,7 @@
 #include "backends/registry.h"
 #include "engine/cli/args.h"
 #include "engine/cli/build_info.h"
+#include "engine/cli/pareto.h"
 #include "engine/cli/plot.h"
 #include "engine/analysis/diff.h"
 #include "engine/error.h"
@@ -244,7 +245,10 @@ CLI::App* BenchArgs::add_to(CLI::App& app) {
   c->add_option("--rays", ray_file, "Time the rays of this ray file (one --scene) instead of the generated kinds");
   c->add_flag("--any-hit", occlusion, "With --rays: time any-hit (occlusion) queries, not closest hits");
   c->add_option("--json", json, "Write the results as JSON");
-  c->add_option("--chart", chart, "Also draw the charts (PNG and SVG, with gnuplot)");
+  c->add_option("--chart", chart, "Also draw the charts (.png or .svg by the extension, with gnuplot)");
+  c->add_option("--stability", stability,
+                "With --chart: a `raypack stability --json` file; also draw the speed-against-exactness chart FILE-pareto")
+      ->check(CLI::ExistingFile);
   add_threads_option(c, threads);
   add_quiet_flag(c, quiet);
   return c;
@@ -253,20 +257,25 @@ CLI::App* BenchArgs::add_to(CLI::App& app) {
 CLI::App* ChartArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("chart", "Redraw the charts of a saved `raypack bench --json` file");
   c->add_option("json", json, "The bench JSON")->required();
-  c->add_option("-o,--output", output, "Chart (PNG; an SVG and a -scaling chart are written beside it)")
+  c->add_option("-o,--output", output, "Chart (.png or .svg by the extension; a -scaling chart is written beside it)")
       ->capture_default_str();
+  c->add_option("--stability", stability,
+                "A `raypack stability --json` file: also draw the speed-against-exactness chart <output>-pareto")
+      ->check(CLI::ExistingFile);
   add_quiet_flag(c, quiet);
   return c;
 }
 
 int run_chart(const ChartArgs& a) {
-  draw_charts(a.json, a.output);
+  draw_charts(a.json, a.output, a.stability);
   say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", a.output.c_str());
   return 0;
 }
 
 int run_bench(const BenchArgs& a) {
   if (a.max_runs < a.min_runs) throw UsageError(cat("--max-runs: ", a.max_runs, " is below --min-runs ", a.min_runs));
+  if (!a.stability.empty() && a.chart.empty()) throw UsageError("--stability: draws a chart, so it needs --chart");
+  if (!a.stability.empty()) read_hard_failures(a.stability);  // a bad file is refused before the timing
   const ThreadLimit limit(a.threads);
   std::FILE* const table = a.quiet ? nullptr : stdout;
   const auto usage = [](bool ok, auto&&... message) {
@@ -384,7 +393,7 @@ int run_bench(const BenchArgs& a) {
   }
   for (const auto& [label, why] : skipped) say(table, "\n%s: not run: %s\n", label.c_str(), why.c_str());
   if (!a.json.empty()) write_file(a.json, out.dump(2) + "\n");
-  if (!a.chart.empty()) draw_charts(out, a.chart);
+  if (!a.chart.empty()) draw_charts(out, a.chart, a.stability);
   return 0;
 }
 
@@ -406,7 +415,7 @@ void check_bench_results(const Json& j) {
 
 }  // namespace
 
-void draw_charts(const std::string& json_path, const std::string& chart) {
+void draw_charts(const std::string& json_path, const std::string& chart, const std::string& stability) {
   const std::string text = read_file(json_path);
   check_json_depth(json_path, text);
   Json j;
@@ -417,7 +426,7 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
   }
   try {
     check_bench_results(j);
-    draw_charts(j, chart);
+    draw_charts(j, chart, stability);
   } catch (const Json::exception& e) {  // a value of the wrong type or a missing key
     throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
   } catch (const BenchFileError& e) {
@@ -425,7 +434,7 @@ void draw_charts(const std::string& json_path, const std::string& chart) {
   }
 }
 
-void draw_charts(const Json& j, const std::string& chart) {
+void draw_charts(const Json& j, const std::string& chart, const std::string& stability) {
   namespace fs = std::filesystem;
   check_bench_results(j);
   chart_format(chart);  // an unknown format is refused before anything is drawn
@@ -444,38 +453,49 @@ void draw_charts(const Json& j, const std::string& chart) {
       if (std::ranges::count(kinds, r["kind"].get<std::string>()) == 0) kinds.push_back(r["kind"].get<std::string>());
   const size_t n_kinds = kinds.size();
 
-  // Speed against accuracy: one panel per scene and kind, each an inline data block of
-  // "Mrays/s drawn-rate label"; a scene without results of a kind leaves its panel empty.
+  // Speed against accuracy: one panel per scene and kind, a point per method (an inline data
+  // block "Mrays/s drawn-rate" each), every method in the same style in every panel and named
+  // once in a legend column on the right; a scene without results of a kind leaves its panel
+  // empty.
+  std::vector<std::string> methods;  // in order of first appearance
+  for (const Json& sc : scenes)
+    for (const Json& r : sc["results"])
+      if (std::ranges::count(methods, r["method"].get<std::string>()) == 0) methods.push_back(r["method"].get<std::string>());
+  constexpr int kPanelW = 500, kPanelH = 380, kLegendW = 280, kTitleH = 60;
+  const int width = kPanelW * int(n_kinds) + kLegendW, height = kPanelH * int(n_scenes) + kTitleH;
   std::ostringstream g;
-  std::vector<std::vector<bool>> has(n_scenes, std::vector<bool>(n_kinds, false));
   for (size_t s = 0; s < n_scenes; ++s)
-    for (size_t k = 0; k < n_kinds; ++k) {
-      g << "$s" << s << "k" << k << " << EOD\n";
+    for (size_t k = 0; k < n_kinds; ++k)
       for (const Json& r : scenes[s]["results"])
         if (r["kind"] == kinds[k]) {
-          g << r["mrays_per_s"].get<double>() << ' ' << std::max(kFloor, r["mismatch_rate"].get<double>()) << " \""
-            << gnuplot_label(r["method"].get<std::string>()) << "\"\n";
-          has[s][k] = true;
+          const size_t m = size_t(std::ranges::find(methods, r["method"].get<std::string>()) - methods.begin());
+          g << "$s" << s << "k" << k << "m" << m << " << EOD\n"
+            << r["mrays_per_s"].get<double>() << ' ' << std::max(kFloor, r["mismatch_rate"].get<double>()) << "\nEOD\n";
         }
-      g << "EOD\n";
-    }
-  g << "set multiplot layout " << n_scenes << "," << n_kinds << " title "
-    << gnuplot_string("raypack bench: speed against accuracy (" + title + ")") << " font ',12'\n";
+  g << "set multiplot title " << gnuplot_string("raypack bench: speed against accuracy (" + title + ")") << " font ',12'\n";
   g << "set logscale y\nset yrange [" << kFloor / 3 << ":1]\nset format y '%.0e'\nset grid\nset key off\n";
   g << "set ytics add ('0 (floor)' " << kFloor << ")\nset xlabel 'Mrays/s'\nset ylabel 'mismatch rate vs reference'\n";
+  g << "set offsets graph 0.1, graph 0.1, 0, 0\n";
   for (size_t s = 0; s < n_scenes; ++s)
     for (size_t k = 0; k < n_kinds; ++k) {
-      if (!has[s][k]) {
-        g << "set multiplot next\n";
-        continue;
-      }
+      std::string plot;
+      for (const Json& r : scenes[s]["results"])
+        if (r["kind"] == kinds[k]) {
+          const size_t m = size_t(std::ranges::find(methods, r["method"].get<std::string>()) - methods.begin());
+          plot += cat(plot.empty() ? "plot " : ", ", "$s", s, "k", k, "m", m, " using 1:2 with points ps 1.5",
+                      point_style(m), " notitle");
+        }
+      if (plot.empty()) continue;
+      g << "set origin " << double(kPanelW) * double(k) / width << ","
+        << double(kPanelH) * double(n_scenes - 1 - s) / height << "\nset size " << double(kPanelW) / width << ","
+        << double(kPanelH) / height << "\n";
       g << "set title " << gnuplot_string(scenes[s]["scene"].get<std::string>() + ": " + kinds[k] + " rays") << "\n";
-      g << "set offsets graph 0.1, graph 0.45, 0, 0\n";
-      g << "plot $s" << s << "k" << k << " using 1:2:($0+1) with points pt 7 ps 1.5 lc variable, '' using 1:2:3 "
-        << "with labels rotate by 40 left offset 0.4,0.5 font ',8'\n";
+      g << plot << "\n";
     }
+  g << legend_cell(methods, double(kPanelW) * double(n_kinds) / width, 0.0, double(kLegendW) / width,
+                   double(kPanelH) * double(n_scenes) / height);
   g << "unset multiplot\n";
-  plot_to(chart, cat(500 * int(n_kinds), ",", 380 * int(n_scenes) + 60), g.str());
+  plot_to(chart, cat(width, ",", height), g.str());
 
   // Cost against scene size: Mrays/s on diffuse rays against triangles, a line per method.
   std::ostringstream c;
@@ -497,6 +517,7 @@ void draw_charts(const Json& j, const std::string& chart) {
     c << (m ? ", " : "plot ") << "$m" << m << " using 1:2 with linespoints title " << gnuplot_string(labels[m])
       << (m + 1 == labels.size() ? "\n" : "");
   plot_to(scaling, "900,500", c.str());
+  if (!stability.empty()) draw_pareto(j, stability, chart);
 }
 
 }  // namespace rp::cli

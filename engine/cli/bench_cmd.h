@@ -22,6 +22,7 @@ struct BenchArgs {
   std::string ray_file;           ///< time these rays (one scene) instead of the generated kinds
   bool occlusion = false;         ///< with ray_file: any-hit queries instead of closest hits
   std::string json, chart;
+  std::string stability;  ///< a `raypack stability --json` file: also draw the Pareto chart (pareto.h)
   int threads = 0;
   bool quiet = false;  ///< print nothing on success
 
@@ -32,6 +33,7 @@ struct BenchArgs {
 /// `raypack chart`: the charts of a saved bench JSON file.
 struct ChartArgs {
   std::string json, output = "chart.png";
+  std::string stability;  ///< a `raypack stability --json` file: also draw the Pareto chart (pareto.h)
   bool quiet = false;
 
   /// Adds the `chart` subcommand to `app` with these flags.
@@ -43,13 +45,14 @@ int run_bench(const BenchArgs& args);
 
 /// Draws `chart` (Mrays/s against mismatch rate, a panel per scene and ray kind) and, beside
 /// it, <name>-scaling.<ext> (Mrays/s against triangle count), both in the format of the
-/// extension (.png or .svg), from a saved bench JSON file. Throws rp::Error naming the file.
-void draw_charts(const std::string& json_path, const std::string& chart);
+/// extension (.png or .svg), from a saved bench JSON file, and <name>-pareto.<ext> (draw_pareto)
+/// when `stability` names a stability JSON file. Throws rp::Error naming the file.
+void draw_charts(const std::string& json_path, const std::string& chart, const std::string& stability = {});
 
 /// Draws the charts of `args`; returns 0.
 int run_chart(const ChartArgs& args);
 
 /// The same from the bench results in memory.
-void draw_charts(const nlohmann::ordered_json& results, const std::string& chart);
+void draw_charts(const nlohmann::ordered_json& results, const std::string& chart, const std::string& stability = {});
 
 }  // namespace rp::cli

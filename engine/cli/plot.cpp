@@ -89,6 +89,22 @@ std::string gnuplot_label(std::string_view text) {
   return out;
 }
 
+std::string point_style(size_t i) {
+  static constexpr const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+                                             "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"};
+  static constexpr int kPoints[] = {7, 5, 9, 11, 13, 6, 4, 8, 10, 12, 1, 2, 3};
+  return cat(" pt ", kPoints[i % std::size(kPoints)], " lc rgb '", kColours[i % std::size(kColours)], "'");
+}
+
+std::string legend_cell(const std::vector<std::string>& labels, double x, double y, double w, double h) {
+  std::string g = cat("set origin ", x, ",", y, "\nset size ", w, ",", h, "\n");
+  g += "unset title\nunset xlabel\nunset ylabel\nunset border\nunset tics\nunset grid\nunset logscale\n";
+  g += "set xrange [0:1]\nset yrange [0:1]\nset key inside center center vertical Left reverse samplen 1 font ',10'\n";
+  for (size_t i = 0; i < labels.size(); ++i)
+    g += cat(i ? ", " : "plot ", "NaN with points ps 1.5", point_style(i), " title ", gnuplot_string(labels[i]));
+  return g + (labels.empty() ? "plot NaN notitle\n" : "\n");
+}
+
 void plot_to(const std::string& file, const std::string& size, const std::string& script) {
   const ChartFormat format = chart_format(file);
   require_gnuplot();

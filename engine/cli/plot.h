@@ -8,6 +8,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rp::cli {
 
@@ -28,6 +29,15 @@ std::string gnuplot_string(std::string_view text);
 /// `text` for a double-quoted label inside an inline data block: quotes, backslashes and
 /// control characters become '?', so a label can neither end its field nor its line.
 std::string gnuplot_label(std::string_view text);
+
+/// The point style of series i, the same in every chart: " pt P lc rgb 'C'", a colour and a
+/// point type that differ from series to series (the pair repeats only after 130 series), so
+/// a legend names each point without labels on the plot.
+std::string point_style(size_t i);
+
+/// gnuplot commands that draw, in the multiplot cell at screen fractions (x, y) of size
+/// (w, h), nothing but a key: labels[i] beside a point of point_style(i).
+std::string legend_cell(const std::vector<std::string>& labels, double x, double y, double w, double h);
 
 /// Draws `file` with gnuplot: `script` (without `set terminal` and `set output`) run after
 /// `set terminal <terminal size> noenhanced`, the terminal chosen by the file's extension.

@@ -327,7 +327,7 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   for (const fs::path& p : {chart, dir_ / "c-scaling.png"})
     EXPECT_GT(fs::exists(p) ? fs::file_size(p) : 0u, 1000u) << p;
   EXPECT_FALSE(fs::exists(dir_ / "c.svg")) << "a .png chart is drawn as PNG only";
-  EXPECT_EQ(rp::read_image(chart.string()).width, 1500);
+  EXPECT_EQ(rp::read_image(chart.string()).width, 3 * 500 + 280) << "three kinds' panels and the legend column";
   r = run("chart " + json.string() + " -o " + again.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(again));
@@ -519,6 +519,58 @@ TEST_F(Cli, SpecialInputFilesAreRefusedAtOnce) {
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("not a regular file (a character device)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "h.bin"));
+}
+
+TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
+  const fs::path bench = dir_ / "b.json", stability = dir_ / "s.json", chart = dir_ / "c.svg";
+  Result r = run("stability --count 64 --family edges --family vertices --family translated --method simd/default "
+                 "--method simd/watertight --method embree/robust -q --json " + stability.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --kind diffuse --method 'simd large|simd watertight "
+          "large|robust 8|rtcIntersect8' -q --json " + bench.string() + " --chart " + chart.string() +
+          " --stability " + stability.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::string svg = file_bytes(dir_ / "c-pareto.svg");
+  ASSERT_EQ(svg.rfind("<?xml", 0), 0u);
+  // A point and a legend entry for each method in both files; embree/default is in the bench
+  // only (rtcIntersect8), so it has neither.
+  for (const char* method : {"simd/default", "simd/watertight", "embree/robust"})
+    EXPECT_NE(svg.find(method), std::string::npos) << method;
+  EXPECT_EQ(svg.find("embree/default"), std::string::npos);
+  for (const char* panel : {"primary rays", "diffuse rays"}) EXPECT_NE(svg.find(panel), std::string::npos) << panel;
+  EXPECT_EQ(svg.find("shadow rays"), std::string::npos) << "no panel for a kind not timed";
+  // The redraw from the saved file gives the same picture.
+  r = run("chart " + bench.string() + " -o " + (dir_ / "again.svg").string() + " --stability " + stability.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(file_bytes(dir_ / "again-pareto.svg"), svg);
+  // Files that cannot be joined: one-line errors naming the file, and no chart.
+  const fs::path only_needles = dir_ / "needles.json";
+  ASSERT_EQ(run("stability --count 16 --family needles -q --json " + only_needles.string()).status, 0);
+  for (const auto& [file, message] :
+       {std::pair{only_needles, ": no results of the families edges, vertices, translated 1e6, grazing"},
+        std::pair{bench, ": not a raypack stability file (no \"results\")"}}) {
+    r = run("chart " + bench.string() + " -o " + (dir_ / "bad.svg").string() + " --stability " + file.string());
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_EQ(r.output, "raypack: " + file.string() + message + "\n");
+    EXPECT_FALSE(fs::exists(dir_ / "bad-pareto.svg"));
+  }
+  // A stability file whose methods the bench did not time.
+  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --method 'embree stream' -q --json " +
+          (dir_ / "e.json").string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run("chart " + (dir_ / "e.json").string() + " -o " + (dir_ / "e.svg").string() + " --stability " + stability.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find(stability.string() + ": no method in common with the bench results"), std::string::npos)
+      << r.output;
+  // --stability draws a chart, so bench refuses it without --chart, and a bad file before timing.
+  r = run("bench --size 8 --min-runs 1 --max-runs 1 --stability " + stability.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--stability: draws a chart, so it needs --chart"), std::string::npos) << r.output;
+  r = run("bench --size 8 --min-runs 1 --max-runs 1 --chart " + (dir_ / "x.svg").string() + " --stability " +
+          only_needles.string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "x.svg"));
 }
 
 TEST_F(Cli, DeepJsonIsAOneLineError) {
