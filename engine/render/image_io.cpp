@@ -8,17 +8,9 @@
 
 #include "engine/error.h"
 #include "engine/output_file.h"
+#include "engine/render/srgb8.h"
 
 namespace rp {
-
-namespace {
-
-float srgb_encode(float c) {
-  c = std::clamp(c, 0.0f, 1.0f);
-  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-}
-
-}  // namespace
 
 namespace {
 
@@ -55,12 +47,14 @@ void write_image(const std::string& path, const Image& image) {
   OIIO::ImageSpec spec(image.width, image.height, 3, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   // Same pixels, same bytes: no write time in the header (OIIO stamps EXR files otherwise).
   spec.attribute("DateTime", "");
-  std::vector<float> pixels = image.rgb;
-  if (!is_float) {
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    for (float& c : pixels) c = srgb_encode(c);
+  if (is_float) {
+    write_with_oiio(path, spec, OIIO::TypeDesc::FLOAT, image.rgb.data());
+    return;
   }
-  write_with_oiio(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
+  spec.attribute("oiio:ColorSpace", "sRGB");
+  std::vector<uint8_t> bytes(image.rgb.size());  // the bytes OIIO made of sRGB floats, from a table (srgb8.h)
+  srgb8(image.rgb, bytes);
+  write_with_oiio(path, spec, OIIO::TypeDesc::UINT8, bytes.data());
 }
 
 void write_aovs(const std::string& path, const Aovs& a) {
