@@ -267,8 +267,9 @@ CLI::App* ChartArgs::add_to(CLI::App& app) {
 }
 
 int run_chart(const ChartArgs& a) {
-  draw_charts(a.json, a.output, a.stability);
-  say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", a.output.c_str());
+  std::string files;
+  for (const std::string& f : draw_charts(a.json, a.output, a.stability)) files += (files.empty() ? "" : ", ") + f;
+  say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", files.c_str());
   return 0;
 }
 
@@ -415,7 +416,8 @@ void check_bench_results(const Json& j) {
 
 }  // namespace
 
-void draw_charts(const std::string& json_path, const std::string& chart, const std::string& stability) {
+std::vector<std::string> draw_charts(const std::string& json_path, const std::string& chart,
+                                     const std::string& stability) {
   const std::string text = read_file(json_path);
   check_json_depth(json_path, text);
   Json j;
@@ -426,7 +428,7 @@ void draw_charts(const std::string& json_path, const std::string& chart, const s
   }
   try {
     check_bench_results(j);
-    draw_charts(j, chart, stability);
+    return draw_charts(j, chart, stability);
   } catch (const Json::exception& e) {  // a value of the wrong type or a missing key
     throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
   } catch (const BenchFileError& e) {
@@ -434,7 +436,7 @@ void draw_charts(const std::string& json_path, const std::string& chart, const s
   }
 }
 
-void draw_charts(const Json& j, const std::string& chart, const std::string& stability) {
+std::vector<std::string> draw_charts(const Json& j, const std::string& chart, const std::string& stability) {
   namespace fs = std::filesystem;
   check_bench_results(j);
   chart_format(chart);  // an unknown format is refused before anything is drawn
@@ -517,7 +519,9 @@ void draw_charts(const Json& j, const std::string& chart, const std::string& sta
     c << (m ? ", " : "plot ") << "$m" << m << " using 1:2 with linespoints title " << gnuplot_string(labels[m])
       << (m + 1 == labels.size() ? "\n" : "");
   plot_to(scaling, "900,500", c.str());
-  if (!stability.empty()) draw_pareto(j, stability, chart);
+  std::vector<std::string> written{chart, scaling};
+  if (!stability.empty()) written.push_back(draw_pareto(j, stability, chart));
+  return written;
 }
 
 }  // namespace rp::cli

@@ -46,13 +46,16 @@ int run_bench(const BenchArgs& args);
 /// Draws `chart` (Mrays/s against mismatch rate, a panel per scene and ray kind) and, beside
 /// it, <name>-scaling.<ext> (Mrays/s against triangle count), both in the format of the
 /// extension (.png or .svg), from a saved bench JSON file, and <name>-pareto.<ext> (draw_pareto)
-/// when `stability` names a stability JSON file. Throws rp::Error naming the file.
-void draw_charts(const std::string& json_path, const std::string& chart, const std::string& stability = {});
+/// when `stability` names a stability JSON file. Throws rp::Error naming the file. Returns the
+/// files written.
+std::vector<std::string> draw_charts(const std::string& json_path, const std::string& chart,
+                                     const std::string& stability = {});
 
 /// Draws the charts of `args`; returns 0.
 int run_chart(const ChartArgs& args);
 
 /// The same from the bench results in memory.
-void draw_charts(const nlohmann::ordered_json& results, const std::string& chart, const std::string& stability = {});
+std::vector<std::string> draw_charts(const nlohmann::ordered_json& results, const std::string& chart,
+                                     const std::string& stability = {});
 
 }  // namespace rp::cli

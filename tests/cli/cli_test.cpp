@@ -543,6 +543,8 @@ TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
   r = run("chart " + bench.string() + " -o " + (dir_ / "again.svg").string() + " --stability " + stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(file_bytes(dir_ / "again-pareto.svg"), svg);
+  EXPECT_EQ(r.output, "raypack: wrote " + (dir_ / "again.svg").string() + ", " + (dir_ / "again-scaling.svg").string() +
+                          ", " + (dir_ / "again-pareto.svg").string() + "\n");
   // Files that cannot be joined: one-line errors naming the file, and no chart.
   const fs::path only_needles = dir_ / "needles.json";
   ASSERT_EQ(run("stability --count 16 --family needles -q --json " + only_needles.string()).status, 0);
