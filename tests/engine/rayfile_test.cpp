@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -555,13 +556,41 @@ TEST(RayFileWrite, MissingDirectoryGivesTheWriteErrorAndLeavesNoFile) {
   EXPECT_EQ(tmp.entries(), std::set<std::string>{"file"});
 }
 
+/// The error of writing rays to `path` in a child process that has dropped root's rights
+/// first (to the user and group nobody, 65534), if it had them: root writes into any
+/// directory, so the refusal can only be seen without them.
+std::string write_error_without_root(const std::string& path) {
+  int fds[2];
+  if (::pipe(fds) != 0) return "pipe failed";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    std::string message;
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) message = "cannot drop root's rights";
+    else message = error_of([&] { write_rays(path, std::vector<Ray>(3)); });
+    const ssize_t written = ::write(fds[1], message.data(), message.size());
+    ::_exit(written == ssize_t(message.size()) ? 0 : 1);
+  }
+  ::close(fds[1]);
+  std::string message;
+  char buffer[256];
+  for (ssize_t n; (n = ::read(fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, size_t(n));
+  ::close(fds[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return message;
+}
+
 TEST(RayFileWrite, UnwritableDirectoryGivesTheWriteErrorAndLeavesNoFile) {
-  if (::geteuid() == 0) GTEST_SKIP() << "root writes into read-only directories; nothing to check";
   TempDir tmp;
   fs::create_directory(tmp / "ro");
-  fs::permissions(tmp / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+  // Others (the unprivileged child) may enter the folders but not write into "ro".
+  fs::permissions(tmp.dir, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                               fs::perms::others_read | fs::perms::others_exec);
+  fs::permissions(tmp / "ro", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                  fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
   const std::string p = tmp / "ro/rays.bin";
-  EXPECT_EQ(error_of([&] { write_rays(p, std::vector<Ray>(3)); }), p + ": cannot write: Permission denied");
+  EXPECT_EQ(write_error_without_root(p), p + ": cannot write: Permission denied");
   fs::permissions(tmp / "ro", fs::perms::owner_all);
   EXPECT_TRUE(fs::is_empty(tmp / "ro"));
 }
