@@ -59,6 +59,7 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <span>
 
 #include "backends/simd/kernels.h"
 #include "engine/geometry/triangle.h"
@@ -158,15 +159,12 @@ struct LazyWatertightRays {
   bool ready = false;
 };
 
-/// The same for the 8 rays of a packet against one triangle (a, b, c).
-[[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, LazyWatertightRays& wr, const float8& tfar,
-                                                       const Vec3f& a, const Vec3f& b, const Vec3f& c, Settled& out) {
-  if (!wr.ready) {
-    simd::Spill<1> tn(p.tnear);
-    Ray rays[8];
-    for (int l = 0; l < 8; ++l) rays[l] = {p.org.lane(l), tn.lanes[0][l], p.dir.lane(l), 0.0f};
-    wr = {WatertightRays(rays, 8), true};
-  }
+/// The same for the 8 rays of a packet (`rays`, as the packet was loaded from) against one
+/// triangle (a, b, c).
+[[gnu::noinline, gnu::cold]] inline void settle_packet(std::span<const Ray> rays, LazyWatertightRays& wr,
+                                                       const float8& tfar, const Vec3f& a, const Vec3f& b,
+                                                       const Vec3f& c, Settled& out) {
+  if (!wr.ready) wr = {WatertightRays(rays.data(), rays.size()), true};
   out.w = watertight8(wr.rays, Vec3x8(a), Vec3x8(b), Vec3x8(c), tfar);
 }
 

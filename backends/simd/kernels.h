@@ -405,6 +405,21 @@ struct LeafView {
   }
 };
 
+/// One ray's axis permutation (kx, ky, kz) and shear constants, by the scalar code of
+/// rp::intersect_triangle_watertight: kz the dominant axis of dir, kx and ky the next two,
+/// swapped when dir[kz] < 0 to keep the winding.
+struct Shear {
+  int k[3];
+  float sx, sy, sz;
+};
+inline Shear shear(const Vec3f& dir) {
+  const int kz = max_abs_axis(dir);
+  int kx = kz + 1 == 3 ? 0 : kz + 1;
+  int ky = kx + 1 == 3 ? 0 : kx + 1;
+  if (dir[kz] < 0.0f) std::swap(kx, ky);
+  return {{kx, ky, kz}, dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0f / dir[kz]};
+}
+
 /// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8
 /// lanes: one ray broadcast, or the 8 rays of a packet, each with its own axis permutation.
 /// The constants are computed per lane by the scalar code of rp::intersect_triangle_watertight,
@@ -414,64 +429,45 @@ struct WatertightRays {
   mask8 is_x[3], is_y[3];  ///< per lane: axis kx, ky, kz (index 0, 1, 2) is x / is y (else z)
   float8 sx, sy, sz;
   float8 tnear;
-  int k[3] = {0, 1, 2};
 
   WatertightRays() = default;
   /// One ray in every lane: its constants as the scalar routine computes them, broadcast.
   RP_SIMD_INLINE explicit WatertightRays(const Ray& r) {
-    const int kz = max_abs_axis(r.dir);
-    int kx = kz + 1 == 3 ? 0 : kz + 1;
-    int ky = kx + 1 == 3 ? 0 : kx + 1;
-    if (r.dir[kz] < 0.0f) std::swap(kx, ky);
-    k[0] = kx, k[1] = ky, k[2] = kz;
+    const Shear h = shear(r.dir);
     org = Vec3x8(r.org);
     dir = Vec3x8(r.dir);
-    sx = float8(r.dir[kx] / r.dir[kz]);
-    sy = float8(r.dir[ky] / r.dir[kz]);
-    sz = float8(1.0f / r.dir[kz]);
+    sx = float8(h.sx);
+    sy = float8(h.sy);
+    sz = float8(h.sz);
     tnear = float8(r.tnear);
     for (int j = 0; j < 3; ++j) {
-      is_x[j] = simd::mask_from_bits(k[j] == 0 ? 0xffu : 0u);
-      is_y[j] = simd::mask_from_bits(k[j] == 1 ? 0xffu : 0u);
+      is_x[j] = simd::mask_from_bits(h.k[j] == 0 ? 0xffu : 0u);
+      is_y[j] = simd::mask_from_bits(h.k[j] == 1 ? 0xffu : 0u);
     }
   }
   /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
   /// caller masks them).
   WatertightRays(const Ray* rays, size_t n) {
+    if (n == 1) {
+      *this = WatertightRays(rays[0]);
+      return;
+    }
     simd::Spill<10> s;
     auto& [ox, oy, oz, dx, dy, dz, fx, fy, fz, tn] = s.lanes;
     uint32_t x_bits[3] = {0, 0, 0}, y_bits[3] = {0, 0, 0};  // lane i: axis k_j is x / is y
-    const size_t lanes = n == 1 ? 1 : 8;
-    for (size_t i = 0; i < lanes; ++i) {
+    for (size_t i = 0; i < 8; ++i) {
       const Ray& r = rays[i < n ? i : 0];
-      const int kz = max_abs_axis(r.dir);
-      int kx = kz + 1 == 3 ? 0 : kz + 1;
-      int ky = kx + 1 == 3 ? 0 : kx + 1;
-      if (r.dir[kz] < 0.0f) std::swap(kx, ky);
-      fx[i] = r.dir[kx] / r.dir[kz];
-      fy[i] = r.dir[ky] / r.dir[kz];
-      fz[i] = 1.0f / r.dir[kz];
-      k[0] = kx, k[1] = ky, k[2] = kz;
+      const Shear h = shear(r.dir);
+      fx[i] = h.sx;
+      fy[i] = h.sy;
+      fz[i] = h.sz;
       for (int j = 0; j < 3; ++j) {
-        x_bits[j] |= uint32_t(k[j] == 0) << i;
-        y_bits[j] |= uint32_t(k[j] == 1) << i;
+        x_bits[j] |= uint32_t(h.k[j] == 0) << i;
+        y_bits[j] |= uint32_t(h.k[j] == 1) << i;
       }
       ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
       dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
       tn[i] = r.tnear;
-    }
-    if (lanes == 1) {
-      org = Vec3x8(rays[0].org);
-      dir = Vec3x8(rays[0].dir);
-      sx = float8(fx[0]);
-      sy = float8(fy[0]);
-      sz = float8(fz[0]);
-      tnear = float8(tn[0]);
-      for (int j = 0; j < 3; ++j) {
-        is_x[j] = simd::mask_from_bits(k[j] == 0 ? 0xffu : 0u);
-        is_y[j] = simd::mask_from_bits(k[j] == 1 ? 0xffu : 0u);
-      }
-      return;
     }
     org = {s.load(0), s.load(1), s.load(2)};
     dir = {s.load(3), s.load(4), s.load(5)};

@@ -94,16 +94,17 @@ struct CertifiedKernel {
     }
   };
   struct Packet {
-    const RayPacket* p = nullptr;
+    std::span<const Ray> rays;  ///< the packet's rays (alive while it is traced)
     CertifiedRays r;
     mutable LazyWatertightRays woop;  ///< Woop's set-up of the rays, made when first needed
     Packet() = default;
-    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet), r(packet.org, packet.dir, packet.tnear) {}
+    Packet(const RayPacket& packet, std::span<const Ray> rays_)
+        : rays(rays_), r(packet.org, packet.dir, packet.tnear) {}
     TriHit8 test(const Triangle& t, const float8& tfar) const {
       TriHit8 h;
       if (const uint32_t unsure = certified_mt8(r, tfar, t.v0, t.e1, t.e2, t.ng, t.x, h)) [[unlikely]] {
         Settled s;
-        settle_packet(*p, woop, tfar, t.a, t.b, t.c, s);
+        settle_packet(rays, woop, tfar, t.a, t.b, t.c, s);
         s.merge_into(h, unsure);
       }
       return h;
@@ -116,7 +117,7 @@ struct CertifiedKernel {
 inline uint32_t valid_lanes(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& tfar) {
   const float8 range(kMaxCoordinate), lo(kMinDirection), hi(kMaxDirection), zero(0.0f);
   const mask8 origin = (xsimd::abs(org.x) <= range) & (xsimd::abs(org.y) <= range) & (xsimd::abs(org.z) <= range);
-  const float8 largest = xsimd::max(xsimd::abs(dir.x), xsimd::max(xsimd::abs(dir.y), xsimd::abs(dir.z)));
+  const float8 largest = max_abs(dir);
   const mask8 not_nan = (dir.x == dir.x) & (dir.y == dir.y) & (dir.z == dir.z);
   const mask8 direction = (largest >= lo) & (largest <= hi) & not_nan;
   return simd::movemask(origin & direction & (tnear >= zero) & (tnear <= tfar));

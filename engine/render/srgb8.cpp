@@ -90,20 +90,26 @@ uint8_t srgb8_direct(float linear) {
   return out[0];
 }
 
-uint8_t srgb8(float linear) {
-  const Table& t = table();
+namespace {
+
+uint8_t encode(const Table& t, float linear) {
   const uint32_t bits = std::bit_cast<uint32_t>(linear);
   if (linear != linear) return t.nan;
   if (bits >> 31) return t.base[0];  // negative (and -0): clamped to 0
   if (bits >= kOne) return t.one;    // 1 and above, +inf
-  const uint32_t b = bits >> 16;
   if (!t.one_step_per_bucket) return t.by_steps(linear);
+  const uint32_t b = bits >> 16;
   return uint8_t(t.base[b] + (linear >= t.next[b]));
 }
 
+}  // namespace
+
+uint8_t srgb8(float linear) { return encode(table(), linear); }
+
 void srgb8(std::span<const float> linear, std::span<uint8_t> out) {
   RP_CHECK(linear.size() == out.size(), "srgb8: ", linear.size(), " channels into ", out.size(), " bytes");
-  for (size_t i = 0; i < linear.size(); ++i) out[i] = srgb8(linear[i]);
+  const Table& t = table();
+  for (size_t i = 0; i < linear.size(); ++i) out[i] = encode(t, linear[i]);
 }
 
 }  // namespace rp
