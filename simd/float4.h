@@ -13,6 +13,8 @@
 
 #include <cstdint>
 
+#include "simd/prefetch.h"
+
 namespace rp::simd {
 
 /// Four floats in one SSE register.
@@ -53,6 +55,11 @@ inline float area4(float4 lo, float4 hi) {
               zx = _mm_cvtss_f32(_mm_shuffle_ps(p, p, 2));
   return 2.0f * ((xy + yz) + zx);
 }
+
+/// All lanes set (m true) or clear, as a mask for select4.
+inline float4 mask4(bool m) { return _mm_castsi128_ps(_mm_set1_epi32(-int32_t(m))); }
+/// Lane-wise: a where the mask's lane is set, else b (BLENDVPS: no branch).
+inline float4 select4(float4 mask, float4 a, float4 b) { return _mm_blendv_ps(b, a, mask); }
 
 /// Each lane truncated toward zero (CVTTPS2DQ; 0x80000000 for NaN and out-of-range lanes).
 inline int4 truncate4(float4 v) { return _mm_cvttps_epi32(v); }

@@ -14,6 +14,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include "engine/math.h"
+#include "simd/prefetch.h"
 
 /// For the small 8-wide routines of a hot loop that GCC would otherwise call out of line once
 /// their caller grows (a call passes every Vec3x8 through memory): the leaf decode and the
@@ -205,9 +206,6 @@ struct Count8 {
   /// The 8 counts at the 32-byte aligned `out`.
   void store(uint32_t* out) const { _mm256_store_si256(reinterpret_cast<__m256i*>(out), n); }
 };
-
-/// Starts loading the cache line holding `p` into L1 (a hint: no fault, no wait).
-inline void prefetch(const void* p) { _mm_prefetch(static_cast<const char*>(p), _MM_HINT_T0); }
 
 /// Number of set bits.
 inline int lane_count(uint32_t bits) { return std::popcount(bits); }

@@ -10,6 +10,7 @@
 #include <limits>
 #include <new>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "engine/bbox.h"
@@ -88,9 +89,12 @@ struct Leaf {
 /// corners are corners[3k .. 3k + 2] (an analytic primitive: three NaN corners); returns V.
 uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint32_t> ids);
 
-/// Allocator for the tree's arrays: 2 MiB-aligned and advised as transparent huge pages
-/// (madvise MADV_HUGEPAGE) when large, so random traversal of a big tree misses the TLB far
-/// less often. Small arrays use ordinary aligned allocation.
+/// Allocator for the tree's arrays (and the build's): 2 MiB-aligned and advised as
+/// transparent huge pages (madvise MADV_HUGEPAGE) when large, so random traversal of a big
+/// tree misses the TLB far less often and a build takes one page fault per 2 MiB. Small
+/// arrays use ordinary aligned allocation. resize() leaves new elements default-initialised
+/// (a trivial type's are not written), so no serial zeroing pass precedes the parallel
+/// loops that fill the arrays, and each page is first touched by the thread that fills it.
 template <typename T>
 struct HugePageAllocator {
   using value_type = T;
@@ -107,6 +111,11 @@ struct HugePageAllocator {
     return static_cast<T*>(p);
   }
   void deallocate(T* p, size_t) { std::free(p); }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <typename U>
   bool operator==(const HugePageAllocator<U>&) const { return true; }
 };

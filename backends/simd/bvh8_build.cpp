@@ -30,45 +30,29 @@ namespace {
 using simd::float4;
 using simd::int4;
 
-/// A primitive's box and the point the splits sort it by (triangle centroid, the lecture notes'
-/// "centre of mass"; box centre for analytic primitives). Trivial, so that the build's array
-/// of them is allocated without a serial zeroing pass and first touched by the parallel loop
-/// that fills it (see RefArray).
-struct PrimRef {
-  float lo[3], hi[3], centroid[3];
+/// A primitive's box and its prim_id, 32 bytes: two aligned 16-byte rows, each a box corner in
+/// its first three lanes. The SAH splits sort primitives by the box's centre (as Embree's
+/// builders do), which gave lower SAH costs here than the triangle's centre of mass (dragon
+/// 15.86 -> 15.40, bunny 10.35 -> 10.09, Sponza inside 21.41 -> 19.07); the lecture notes'
+/// median rule sorts by the centre of mass, which it computes (Builder::mass_center). The
+/// leaves' corners are gathered straight from the meshes (Collapser::make_chunk), so a ref
+/// need not hold them. Trivial, so that the build's array of them is allocated without a
+/// serial zeroing pass and first touched by the parallel loop that fills it.
+struct alignas(16) PrimRef {
+  float lo[3];
   uint32_t prim_id;
-  static PrimRef make(const Box3f& box, const Vec3f& c, uint32_t id) {
-    return {{box.lo.x, box.lo.y, box.lo.z}, {box.hi.x, box.hi.y, box.hi.z}, {c.x, c.y, c.z}, id};
+  float hi[3];
+  uint32_t pad;
+  static PrimRef make(const Box3f& box, uint32_t id) {
+    return {{box.lo.x, box.lo.y, box.lo.z}, id, {box.hi.x, box.hi.y, box.hi.z}, 0};
   }
-  /// Once the binary tree is built the box and centroid are no longer read, and the layout
-  /// keeps the primitive's three corners in their 9 floats instead (Collapser::fill), so
-  /// the mesh is gathered once, not once per pass over the leaves.
-  void set_corners(const Vec3f* c) {
-    const float f[9] = {c[0].x, c[0].y, c[0].z, c[1].x, c[1].y, c[1].z, c[2].x, c[2].y, c[2].z};
-    std::memcpy(static_cast<void*>(this), f, sizeof(f));
-  }
-  Vec3f corner(uint32_t j) const {
-    float f[3];
-    std::memcpy(f, reinterpret_cast<const char*>(this) + j * sizeof(f), sizeof(f));
-    return {f[0], f[1], f[2]};
-  }
+  /// The box's centre on `axis`, as load_center computes it.
+  float center(int axis) const { return (lo[axis] + hi[axis]) * 0.5f; }
 };
-static_assert(sizeof(PrimRef) == 40 && offsetof(PrimRef, hi) == 12 && offsetof(PrimRef, centroid) == 24,
-              "PrimRef is read as 10 floats, and its first 9 as three corners");
+static_assert(sizeof(PrimRef) == 32 && offsetof(PrimRef, hi) == 16);
 static_assert(std::is_trivially_default_constructible_v<PrimRef>);
 
-/// Leaves a new element uninitialised (default-initialisation of a trivial type).
-template <typename T>
-struct NoInitAllocator : std::allocator<T> {
-  template <typename U>
-  struct rebind { using other = NoInitAllocator<U>; };
-  template <typename U, typename... Args>
-  void construct(U* p, Args&&... args) {
-    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
-    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-using RefArray = std::vector<PrimRef, NoInitAllocator<PrimRef>>;
+using RefArray = std::vector<PrimRef, HugePageAllocator<PrimRef>>;
 
 /// Where the build reads a primitive's three corners (NaN for an analytic primitive): the
 /// scene's meshes (an index and three scattered vertices), or, for spatial splits, which clip
@@ -109,19 +93,66 @@ class CornerSource {
     return {m.vertex(at.local, 0), m.vertex(at.local, 1), m.vertex(at.local, 2)};
   }
 
+  /// The corners of primitives `ids` into out[3 i .. 3 i + 2]. Primitives in tree order are
+  /// scattered over the mesh, so the loop reads ahead: a primitive's index row 16 primitives
+  /// before its turn, its corners 8 before, so that many reads are in flight instead of one
+  /// (dragon: the leaves' gather 21 -> 15 ms on 2 threads). Each primitive's mesh is looked
+  /// up once, into a ring of the next 32.
+  void gather(std::span<const uint32_t> ids, Vec3f* out) const {
+    const size_t n = ids.size();
+    if (!copy_.empty()) {
+      for (size_t i = 0; i < n; ++i) {
+        const float* f = copy_[ids[i]].f;
+        for (int j = 0; j < 3; ++j) out[3 * i + j] = {f[3 * j], f[3 * j + 1], f[3 * j + 2]};
+      }
+      return;
+    }
+    constexpr size_t kIndexAhead = 16, kCornersAhead = 8, kRing = 32;
+    Triangle ring[kRing];
+    for (size_t i = 0; i < std::min(n, kIndexAhead); ++i) ring[i] = triangle(ids[i]);
+    const Vec3f nan(std::numeric_limits<float>::quiet_NaN());
+    for (size_t i = 0; i < n; ++i) {
+      if (i + kIndexAhead < n) {
+        Triangle& t = ring[(i + kIndexAhead) % kRing];
+        t = triangle(ids[i + kIndexAhead]);
+        if (t.row) simd::prefetch(t.row);
+      }
+      if (i + kCornersAhead < n) {
+        const Triangle& t = ring[(i + kCornersAhead) % kRing];
+        if (t.row)
+          for (int j = 0; j < 3; ++j) simd::prefetch(t.positions + t.row[j]);
+      }
+      const Triangle& t = ring[i % kRing];
+      for (int j = 0; j < 3; ++j) out[3 * i + j] = t.row ? t.positions[t.row[j]] : nan;
+    }
+  }
+
  private:
+  /// Where a primitive's corners are: its index row and its mesh's positions; no row for
+  /// an analytic primitive (NaN corners).
+  struct Triangle {
+    const uint32_t* row;
+    const Vec3f* positions;
+  };
+  Triangle triangle(uint32_t prim) const {
+    if (prim >= scene_.triangle_count()) return {nullptr, nullptr};
+    const PrimLocation at = scene_.locate(prim);
+    const TriangleMesh& m = scene_.meshes()[at.shape];
+    return {m.indices.data() + 3 * size_t(at.local), m.positions.data()};
+  }
+
   struct Record {
     float f[9];
   };
   const Scene& scene_;
-  std::vector<Record, NoInitAllocator<Record>> copy_;
+  std::vector<Record, HugePageAllocator<Record>> copy_;
 };
 
-/// Four floats of a PrimRef from float `at` (0: box.lo, 3: box.hi); the fourth lane holds the
-/// next field and is never used.
-inline float4 load4(const PrimRef& r, int at) { return simd::load4(reinterpret_cast<const float*>(&r) + at); }
-/// The centroid with a zero fourth lane (the prim_id's bits would be a denormal float).
-inline float4 load_centroid(const PrimRef& r) { return simd::load3(r.centroid); }
+/// A ref's box corners with a zero fourth lane (the prim_id's bits there would be a denormal
+/// float, slow in arithmetic), and its box's centre.
+inline float4 load_lo(const PrimRef& r) { return simd::load3(r.lo); }
+inline float4 load_hi(const PrimRef& r) { return simd::load3(r.hi); }
+inline float4 load_center(float4 lo, float4 hi) { return (lo + hi) * simd::splat4(0.5f); }
 inline Box3f to_box(float4 lo, float4 hi) {
   alignas(16) float l[4], h[4];
   simd::store4(l, lo);
@@ -155,27 +186,35 @@ class NodeArena {
  public:
   BuildNode* make() {
     if (used_ == kBlock) {
-      blocks_.push_back(std::make_unique<BuildNode[]>(kBlock));
+      blocks_.emplace_back(kBlock);
       used_ = 0;
     }
     return &blocks_.back()[used_++];
   }
 
  private:
-  static constexpr size_t kBlock = 4096;
-  std::vector<std::unique_ptr<BuildNode[]>> blocks_;
+  static constexpr size_t kBlock = (size_t(2) << 20) / sizeof(BuildNode);  ///< one huge page
+  std::vector<std::vector<BuildNode, HugePageAllocator<BuildNode>>> blocks_;
   size_t used_ = kBlock;
 };
 
 constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use fewer (bins_for)
 
-/// Bins for a node of n primitives: 32 near the root, where the split matters most, down to
-/// 8 near the leaves, where a sweep over 32 mostly empty bins would cost more than it finds.
-constexpr int bins_for(uint32_t n) { return n >= 1024 ? 32 : (n >= 64 ? 16 : 8); }
+/// Bins for a node of n primitives: 32 near the root, where the split matters most, fewer
+/// below 560 (Embree's 4 + n / 20, but at least 6), where a sweep over mostly
+/// empty bins would cost more than it finds. Against 8 / 16 / 32 bins below 64 / 1024 / above:
+/// dragon's build 145 -> 140 ms (alternated runs), SAH cost dragon 15.78 -> 15.86, bunny
+/// 10.30 -> 10.35, Sponza inside 21.58 -> 21.41.
+constexpr int bins_for(uint32_t n) { return n >= 560 ? kBins : std::max(6, int(4 + n / 20)); }
 constexpr float kTraversalCost = 1.0f;      ///< SAH cost of visiting a node
 constexpr float kIntersectionCost = 0.15f;  ///< binary build: SAH cost of one primitive test (8-wide leaf tests: cheap)
 constexpr float kLeafCost = 0.5f;           ///< collapse: SAH cost of one leaf's block test...
 constexpr float kPrimCost = 0.1f;           ///< ...plus this per primitive in it
+/// A node of at most this many primitives that may be a leaf is one, whatever its best split
+/// (leaf_cheaper: kIntersectionCost * n <= kTraversalCost <= a split's cost), so it is not
+/// binned: about half of the binary tree's nodes (dragon: 154k of 421k).
+constexpr uint32_t kAlwaysLeaf = uint32_t(kTraversalCost / kIntersectionCost);
+static_assert(kIntersectionCost * float(kAlwaysLeaf) <= kTraversalCost);
 constexpr uint32_t kParallelThreshold = 4096;
 constexpr uint32_t kMaxSahDepth = 64;  ///< deeper than this, median splits bound the depth
 
@@ -183,7 +222,15 @@ class Builder {
  public:
   /// `first_analytic`: prim_ids from here on are analytic primitives.
   Builder(const CornerSource& corners, RefArray& refs, const BuildOptions& o, uint32_t first_analytic)
-      : corners_(corners), refs_(refs), opt_(o), first_analytic_(first_analytic) {}
+      : corners_(corners), refs_(refs), opt_(o), first_analytic_(first_analytic) {
+    if (o.rule != SplitRule::median) return;
+    uint32_t prims = 0;
+    for (const PrimRef& r : refs) prims = std::max(prims, r.prim_id + 1);
+    mass_ = centers_of_mass(corners, std::min(prims, first_analytic));
+    mass_.resize(prims);
+    for (const PrimRef& r : refs)
+      if (r.prim_id >= first_analytic) mass_[r.prim_id] = {r.center(0), r.center(1), r.center(2)};
+  }
 
   /// The binary tree over every ref; its nodes live as long as the builder. With spatial
   /// splits the refs are replaced by the leaves' refs (pieces of split triangles included),
@@ -241,8 +288,10 @@ class Builder {
     Split split{begin, {}, {}};  // stays a leaf
     if (n <= 1) {
     } else if (opt_.rule == SplitRule::sah && depth < kMaxSahDepth) {
-      const BinnedSplit o = object_split(base, begin, end, b.centroids);
-      if (!(may_leaf(*node) && leaf_cheaper(n, o.cut.sah, b.box))) split = apply(base, begin, end, o, b.centroids);
+      if (!(may_leaf(*node) && n <= kAlwaysLeaf)) {
+        const BinnedSplit o = object_split(base, begin, end, b.centroids);
+        if (!(may_leaf(*node) && leaf_cheaper(n, o.cut.sah, b.box))) split = apply(base, begin, end, o, b.centroids);
+      }
     } else if (!may_leaf(*node)) {
       split = halves(base, begin, end, median_split(base, begin, end, node->box));
     }
@@ -377,8 +426,8 @@ class Builder {
         right.push_back(r);
       } else {
         const auto [l, rr] = clip(corners_(r.prim_id), box_of(r), axis, at);
-        if (!l.empty()) left.push_back(PrimRef::make(l, l.center(), r.prim_id));
-        if (!rr.empty()) right.push_back(PrimRef::make(rr, rr.center(), r.prim_id));
+        if (!l.empty()) left.push_back(PrimRef::make(l, r.prim_id));
+        if (!rr.empty()) right.push_back(PrimRef::make(rr, r.prim_id));
       }
     }
     return !left.empty() && !right.empty();
@@ -472,9 +521,9 @@ class Builder {
     float4 clo = lo, chi = hi;
     uint32_t analytic = 0;
     void add(const PrimRef& p, uint32_t first_analytic) {
-      const float4 c = load_centroid(p);
-      lo = simd::min4(lo, load4(p, 0));
-      hi = simd::max4(hi, load4(p, 3));
+      const float4 l = load_lo(p), h = load_hi(p), c = load_center(l, h);
+      lo = simd::min4(lo, l);
+      hi = simd::max4(hi, h);
       clo = simd::min4(clo, c);
       chi = simd::max4(chi, c);
       analytic += p.prim_id >= first_analytic;
@@ -505,21 +554,58 @@ class Builder {
     return {mid, bounds(base, begin, mid), bounds(base, mid, end)};
   }
 
-  /// Moves the refs for which `left` holds before the others (Hoare's two-pointer partition)
-  /// and returns the split, the bounds of each side gathered on the way: no second scan.
-  template <class Pred>
-  Split partition(PrimRef* base, uint32_t begin, uint32_t end, Pred left) const {
-    Bounds bl, br;
-    PrimRef *l = base + begin, *r = base + end;
-    for (;;) {
-      while (l < r && left(*l)) bl.add(*l++, first_analytic_);
-      while (l < r && !left(r[-1])) br.add(*--r, first_analytic_);
-      if (l == r) break;
-      std::swap(*l, r[-1]);  // *l now belongs left, r[-1] right
-      bl.add(*l++, first_analytic_);
-      br.add(*--r, first_analytic_);
+  /// A node's bin mapping on the three axes at once: lane a of (*this)(centre) is a ref's bin
+  /// on axis a, clamp(int((centre - lo) * nbins / extent), 0, nbins - 1), the one rule of
+  /// the binning and the partition (0 on an axis of zero extent).
+  struct BinMap {
+    float4 origin, scale;
+    int4 top;
+    BinMap(const Box3f& centroids, int nbins) {
+      const Vec3f extent = centroids.extent();
+      const float nb = float(nbins);
+      origin = simd::make_float4(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
+      scale = simd::make_float4(extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
+                                extent.z > 0.0f ? nb / extent.z : 0.0f, 0.0f);
+      top = simd::splat4(nbins - 1);
     }
-    return {uint32_t(l - base), bl.boxes(), br.boxes()};
+    int4 operator()(float4 center) const {
+      return simd::min4(simd::max4(simd::truncate4((center - origin) * scale), simd::splat4(0)), top);
+    }
+  };
+
+  /// Moves the refs whose bin on the split's axis lies below its cut before the others and
+  /// returns the split: each side's box is the cut's, each side's centroid bounds and
+  /// analytic flag are gathered on the way (no second scan). Lomuto's scheme with the swap
+  /// made whether or not the ref goes left, so which side a ref takes is data, not a branch:
+  /// the two-pointer scheme this replaced guessed wrong about once per ref, and the guesses
+  /// were half of its time (dragon's binary build 97 -> 76 ms).
+  Split partition(PrimRef* base, uint32_t begin, uint32_t end, const BinnedSplit& o, const BinMap& map) const {
+    const float4 inf = simd::splat4(std::numeric_limits<float>::infinity());
+    const float4 ninf = simd::splat4(-std::numeric_limits<float>::infinity());
+    float4 left_lo = inf, left_hi = ninf, right_lo = inf, right_hi = ninf;
+    uint32_t left_analytic = 0, right_analytic = 0;
+    PrimRef* j = base + begin;
+    for (PrimRef* i = base + begin; i != base + end; ++i) {
+      const PrimRef x = *i;
+      const float4 c = load_center(load_lo(x), load_hi(x));
+      alignas(16) int32_t k[4];
+      simd::store4(k, map(c));
+      const bool left = k[o.axis] < o.cut.bin;
+      *i = *j;  // [base + begin, j) went left, [j, i) right
+      *j = x;
+      j += left;
+      const float4 m = simd::mask4(left);
+      left_lo = simd::min4(left_lo, simd::select4(m, c, inf));
+      left_hi = simd::max4(left_hi, simd::select4(m, c, ninf));
+      right_lo = simd::min4(right_lo, simd::select4(m, inf, c));
+      right_hi = simd::max4(right_hi, simd::select4(m, ninf, c));
+      const uint32_t analytic = x.prim_id >= first_analytic_;
+      left_analytic += analytic & left;
+      right_analytic += analytic & !left;
+    }
+    return {uint32_t(j - base),
+            {to_box(o.cut.left_lo, o.cut.left_hi), to_box(left_lo, left_hi), left_analytic != 0},
+            {to_box(o.cut.right_lo, o.cut.right_hi), to_box(right_lo, right_hi), right_analytic != 0}};
   }
 
   /// Bin boxes and counts for all three axes in one pass over the refs: the three bin indices
@@ -547,23 +633,13 @@ class Builder {
     }
   };
   /// Fills `out` (constructed for nbins): a return by value would copy its 3.5 KB per node.
-  void bin(const PrimRef* base, uint32_t begin, uint32_t end, const Box3f& centroids, Bins& out) const {
-    const int nbins = out.nbins;
-    const Vec3f extent = centroids.extent();
-    const float nb = float(nbins);
-    const Vec3f scale{extent.x > 0.0f ? nb / extent.x : 0.0f, extent.y > 0.0f ? nb / extent.y : 0.0f,
-                      extent.z > 0.0f ? nb / extent.z : 0.0f};
-    const float4 origin = simd::make_float4(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
-    const float4 scale4 = simd::make_float4(scale.x, scale.y, scale.z, 0.0f);
-    const int4 top = simd::splat4(nbins - 1), zero = simd::splat4(0);
+  void bin(const PrimRef* base, uint32_t begin, uint32_t end, const BinMap& map, Bins& out) const {
     auto scan_into = [&](const tbb::blocked_range<uint32_t>& r, Bins& b) {
       for (uint32_t i = r.begin(); i < r.end(); ++i) {
         const PrimRef& p = base[i];
-        // bin_of for x, y, z at once: the same subtraction, product and truncation
-        const float4 t = (load_centroid(p) - origin) * scale4;
+        const float4 lo = load_lo(p), hi = load_hi(p);
         alignas(16) int32_t k[4];
-        simd::store4(k, simd::min4(simd::max4(simd::truncate4(t), zero), top));
-        const float4 lo = load4(p, 0), hi = load4(p, 3);
+        simd::store4(k, map(load_center(lo, hi)));
         for (int a = 0; a < 3; ++a) {
           b.lo[a][k[a]] = simd::min4(b.lo[a][k[a]], lo);
           b.hi[a][k[a]] = simd::max4(b.hi[a][k[a]], hi);
@@ -579,7 +655,7 @@ class Builder {
       scan_into(r, b);
       return b;
     };
-    out = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins(nbins), scan,
+    out = tbb::parallel_reduce(tbb::blocked_range<uint32_t>(begin, end, kParallelThreshold), Bins(out.nbins), scan,
                                [](Bins a, const Bins& b) { a.join(b); return a; });
   }
 
@@ -620,7 +696,7 @@ class Builder {
     BinnedSplit best;
     const int nbins = bins_for(end - begin);
     Bins bins(nbins);
-    bin(base, begin, end, centroids, bins);
+    bin(base, begin, end, BinMap(centroids, nbins), bins);
     for (int axis = 0; axis < 3; ++axis) {
       if (!(extent[axis] > 0.0f)) continue;
       const Cut c = sweep(bins.lo[axis], bins.hi[axis], bins.count[axis], bins.count[axis], nbins);
@@ -641,22 +717,42 @@ class Builder {
   /// it would leave a side empty).
   Split apply(PrimRef* base, uint32_t begin, uint32_t end, const BinnedSplit& o, const Box3f& centroids) const {
     if (o.axis < 0) return halves(base, begin, end, object_median(begin, end));  // every centroid coincides
-    const int axis = o.axis, nbins = o.nbins, cut = o.cut.bin;
-    const float lo = centroids.lo[axis], scale = float(nbins) / centroids.extent()[axis];
-    const Split s =
-        partition(base, begin, end, [&](const PrimRef& r) { return bin_of(r.centroid[axis], lo, scale, nbins) < cut; });
+    const Split s = partition(base, begin, end, o, BinMap(centroids, o.nbins));
     return (s.mid == begin || s.mid == end) ? halves(base, begin, end, object_median(begin, end)) : s;
   }
 
-  /// The lecture notes' rule: split the longest axis of the node's box at the median centroid, so
-  /// both halves hold the same number of primitives.
-  static uint32_t median_split(PrimRef* base, uint32_t begin, uint32_t end, const Box3f& box) {
+  /// The lecture notes' rule: split the longest axis of the node's box at the median centre of
+  /// mass, so both halves hold the same number of primitives.
+  uint32_t median_split(PrimRef* base, uint32_t begin, uint32_t end, const Box3f& box) const {
     const int axis = max_abs_axis(box.extent());
     const uint32_t mid = begin + (end - begin) / 2;
-    std::nth_element(base + begin, base + mid, base + end, [axis](const PrimRef& a, const PrimRef& b) {
-      return a.centroid[axis] < b.centroid[axis] || (a.centroid[axis] == b.centroid[axis] && a.prim_id < b.prim_id);
+    std::nth_element(base + begin, base + mid, base + end, [&](const PrimRef& a, const PrimRef& b) {
+      const float ca = mass_center(a, axis), cb = mass_center(b, axis);
+      return ca < cb || (ca == cb && a.prim_id < b.prim_id);
     });
     return mid;
+  }
+
+  /// A triangle's centre of mass (the lecture notes' "center of mass"), an analytic
+  /// primitive's box centre, on `axis`: from mass_ with the median rule, else (the SAH
+  /// build's median splits past kMaxSahDepth, rare) from the corners.
+  float mass_center(const PrimRef& r, int axis) const {
+    if (!mass_.empty()) return mass_[r.prim_id][axis];
+    if (r.prim_id >= first_analytic_) return r.center(axis);
+    const std::array<Vec3f, 3> v = corners_(r.prim_id);
+    return ((v[0] + v[1] + v[2]) * (1.0f / 3.0f))[axis];
+  }
+
+  /// mass_center of triangles [0, triangles), by prim_id, for the median rule.
+  static std::vector<Vec3f> centers_of_mass(const CornerSource& corners, uint32_t triangles) {
+    std::vector<Vec3f> c(triangles);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, triangles, 4096), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t id = r.begin(); id < r.end(); ++id) {
+        const std::array<Vec3f, 3> v = corners(id);
+        c[id] = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+      }
+    });
+    return c;
   }
 
   static uint32_t object_median(uint32_t begin, uint32_t end) { return begin + (end - begin) / 2; }
@@ -727,6 +823,7 @@ class Builder {
   const BuildOptions& opt_;
   uint32_t first_analytic_;
   tbb::enumerable_thread_specific<NodeArena> arenas_;
+  std::vector<Vec3f> mass_;                     ///< median rule: mass_center by prim_id
   float root_area_ = 0.0f;                      ///< spatial splits: the root box's area
   tbb::concurrent_vector<RefArray> leaf_refs_;  ///< spatial splits: each leaf's refs until place()
 };
@@ -738,13 +835,35 @@ struct CornerIndex {
   uint8_t of[3 * 8];
 };
 
+/// Finds each corner's vertex through a 32-slot hash table of the vertices seen so far (a
+/// leaf has at most 24), probing on from the hashed slot past occupied slots whose vertex
+/// differs. A match and a new vertex then take the same instructions: the linear search
+/// this replaced branched on where its match lay, a guess that failed about once per
+/// corner (dragon: 11 -> 9 ms of the build).
 CornerIndex index_corners(std::span<const Vec3f> corners) {
+  constexpr uint32_t kSlots = 32, kFree = 0xff;
+  static_assert(kSlots > kMaxLeafVertices);
   CornerIndex ci;
-  uint32_t first[3 * 8];  // first[i]: the corner that vertex i was first seen as
+  uint32_t bits[3 * 8][3];  // each corner's coordinates as integers
+  uint32_t first[3 * 8];    // first[i]: the corner that vertex i was first seen as
+  uint8_t slot_of[kSlots];
+  std::memcpy(bits, corners.data(), corners.size() * sizeof(Vec3f));
+  std::memset(slot_of, kFree, sizeof(slot_of));
   for (size_t c = 0; c < corners.size(); ++c) {
-    uint32_t i = 0;
-    while (i < ci.v && std::memcmp(&corners[first[i]], &corners[c], sizeof(Vec3f)) != 0) ++i;
-    if (i == ci.v) first[ci.v++] = uint32_t(c);
+    const uint32_t* k = bits[c];
+    uint32_t slot = ((k[0] * 0x9E3779B1u) ^ (k[1] * 0x85EBCA77u) ^ (k[2] * 0xC2B2AE3Du)) >> 27;
+    for (;;) {
+      const uint32_t i = slot_of[slot];
+      if (i == kFree) break;
+      const uint32_t* o = bits[first[i]];
+      if (((k[0] ^ o[0]) | (k[1] ^ o[1]) | (k[2] ^ o[2])) == 0) break;
+      slot = (slot + 1) % kSlots;
+    }
+    const bool seen = slot_of[slot] != kFree;
+    const uint32_t i = seen ? slot_of[slot] : ci.v;
+    first[ci.v] = uint32_t(c);  // kept only when the vertex is new
+    ci.v += !seen;
+    slot_of[slot] = uint8_t(i);
     ci.of[c] = uint8_t(i);
   }
   return ci;
@@ -774,20 +893,77 @@ void store_leaf(float* out, std::span<const Vec3f> corners, std::span<const uint
 /// (depth-first, single-threaded, so the layout is deterministic).
 class Collapser {
  public:
-  Collapser(const CornerSource& corners, RefArray& refs, Bvh8& out) : corners_(corners), refs_(refs), out_(out) {}
+  /// `repeats`: a primitive may have several refs (spatial splits).
+  Collapser(const CornerSource& corners, RefArray& refs, Bvh8& out, bool repeats)
+      : corners_(corners), refs_(refs), out_(out), repeats_(repeats) {}
 
+  /// Lays the tree out: the nodes over subtrees of at least kSubtree refs in one thread, then
+  /// those subtrees in parallel, each at the places its counts give (counted in parallel
+  /// too), so the layout is the same whatever the thread count. The binary tree's nodes
+  /// are read once more per subtree (to count), but by all threads: walking them is a chain
+  /// of cache misses.
   void root(const BuildNode& bn) {
-    out_.nodes.emplace_back();
+    out_.nodes.resize(1);
     clear(out_.nodes[0]);
     if (bn.as_leaf) {  // a one-leaf tree still needs a root node
-      set_child(0, 0, bn, emit_leaf(bn));
+      leaves_.resize(1);
+      set_child(0, 0, bn, place_leaf(bn, 0));
       out_.stats.depth = 1;
+      out_.stats.leaves = 1;
       return;
     }
-    collapse(0, bn, 1);
+    std::vector<Subtree> subtrees;
+    Cursor top{1, 0, 0};
+    lay_out(0, bn, 1, top, &subtrees);
+    out_.nodes.resize(top.node);
+    leaves_.resize(top.leaf);
+    tbb::parallel_for(size_t(0), subtrees.size(), [&](size_t i) { subtrees[i].size = count(*subtrees[i].bn); });
+    Cursor next = top;
+    for (Subtree& t : subtrees) {
+      t.at = {next.node, next.leaf, 0};
+      next.node += t.size.nodes;
+      next.leaf += t.size.leaves;
+    }
+    RP_CHECK(next.leaf <= kMaxLeafOffset, "bvh8: more than ", kMaxLeafOffset, " leaves");
+    out_.nodes.resize(next.node);
+    leaves_.resize(next.leaf);
+    tbb::parallel_for(size_t(0), subtrees.size(), [&](size_t i) {
+      Subtree& t = subtrees[i];
+      const size_t index = t.at.node++;
+      clear(out_.nodes[index]);
+      set_child(t.parent, t.slot, *t.bn, int32_t(index));
+      lay_out(index, *t.bn, t.depth, t.at, nullptr);
+    });
+    uint32_t depth = top.depth;
+    for (const Subtree& t : subtrees) depth = std::max(depth, t.at.depth);
+    out_.stats.depth = depth;
+    out_.stats.leaves = uint32_t(next.leaf);
   }
 
  private:
+  /// Subtrees of fewer refs are laid out by one task each.
+  static constexpr uint32_t kSubtree = 4096;
+
+  /// The next free node and leaf numbers, and the deepest level laid out.
+  struct Cursor {
+    size_t node, leaf;
+    uint32_t depth;
+  };
+  /// 8-wide nodes and leaves of the layout of an inner `bn` (itself included).
+  struct Counts {
+    size_t nodes = 0, leaves = 0;
+  };
+  /// An inner child left by the top of the layout: where its node goes (parent, slot), its
+  /// level, size and, once counted, its places.
+  struct Subtree {
+    size_t parent;
+    int slot;
+    const BuildNode* bn;
+    uint32_t depth;
+    Counts size;
+    Cursor at;
+  };
+
   static void clear(Bvh8Node& n) {
     constexpr float inf = std::numeric_limits<float>::infinity();
     for (int i = 0; i < 8; ++i) {
@@ -804,87 +980,104 @@ class Collapser {
     n.child[slot] = ref;
   }
 
-  /// Appends the pieces of `bn` when its subtree takes at most i children of a node.
-  static void gather(const BuildNode& bn, int i, std::vector<const BuildNode*>& out) {
+  /// Appends the pieces of `bn` at out[size] when its subtree takes at most i children of a
+  /// node.
+  static void gather(const BuildNode& bn, int i, const BuildNode** out, int& size) {
     while (i > 1 && bn.split[i - 1] == 0) --i;
     if (i == 1) {
-      out.push_back(&bn);
+      out[size++] = &bn;
       return;
     }
-    gather(*bn.left, bn.split[i - 1], out);
-    gather(*bn.right, i - bn.split[i - 1], out);
+    gather(*bn.left, bn.split[i - 1], out, size);
+    gather(*bn.right, i - bn.split[i - 1], out, size);
+  }
+  /// The children of the 8-wide node an inner `bn` becomes; returns how many (2..8).
+  static int children(const BuildNode& bn, const BuildNode** kids) {
+    int size = 0;
+    gather(*bn.left, bn.node_split, kids, size);
+    gather(*bn.right, bn.node_width - bn.node_split, kids, size);
+    return size;
+  }
+
+  /// Counts of the layout of an inner `bn`.
+  static Counts count(const BuildNode& bn) {
+    const BuildNode* kids[8];
+    const int size = children(bn, kids);
+    Counts c{1, 0};
+    for (int k = 0; k < size; ++k) {
+      if (kids[k]->as_leaf) {
+        ++c.leaves;
+      } else {
+        const Counts below = count(*kids[k]);
+        c.nodes += below.nodes;
+        c.leaves += below.leaves;
+      }
+    }
+    return c;
   }
 
   /// Fills node `index` with the children of an inner `bn` (as_leaf false), as the plan cut
-  /// them, then descends. A node's leaves are placed one after another, and so are its inner
-  /// children's nodes (as Embree allocates a node's children together): what one ray visits
-  /// next is often adjacent in memory.
-  void collapse(size_t index, const BuildNode& bn, uint32_t depth) {
-    out_.stats.depth = std::max(out_.stats.depth, depth);
-    std::vector<const BuildNode*> kids;
-    const int width = bn.node_width, k = bn.node_split;
-    gather(*bn.left, k, kids);
-    gather(*bn.right, width - k, kids);
-    std::vector<size_t> inner;
-    for (size_t c = 0; c < kids.size(); ++c) {
+  /// them, then descends, taking node and leaf numbers from `at`. A node's leaves are
+  /// numbered one after another, and its inner children's nodes are placed together (as
+  /// Embree allocates a node's children): what one ray visits next is often adjacent in
+  /// memory. With `defer` (the top of the layout) the arrays grow as it goes, and an inner
+  /// child of fewer than kSubtree refs is left to `defer` instead of descended into.
+  void lay_out(size_t index, const BuildNode& bn, uint32_t depth, Cursor& at, std::vector<Subtree>* defer) {
+    at.depth = std::max(at.depth, depth);
+    const BuildNode* kids[8];
+    const int size = children(bn, kids);
+    if (defer) leaves_.resize(at.leaf + size_t(size));
+    int inner[8], inners = 0;
+    for (int c = 0; c < size; ++c) {
       if (kids[c]->as_leaf) {
-        set_child(index, int(c), *kids[c], emit_leaf(*kids[c]));
+        set_child(index, c, *kids[c], place_leaf(*kids[c], at.leaf++));
+      } else if (defer && kids[c]->count() < kSubtree) {
+        defer->push_back({index, c, kids[c], depth + 1, {}, {}});
       } else {
-        inner.push_back(c);
+        inner[inners++] = c;
       }
     }
-    const size_t first = out_.nodes.size();
-    for (size_t i = 0; i < inner.size(); ++i) {
-      out_.nodes.emplace_back();
-      clear(out_.nodes.back());
-      set_child(index, int(inner[i]), *kids[inner[i]], int32_t(first + i));
+    const size_t first = at.node;
+    at.node += size_t(inners);
+    if (defer) out_.nodes.resize(at.node);
+    for (int i = 0; i < inners; ++i) {
+      clear(out_.nodes[first + i]);
+      set_child(index, inner[i], *kids[inner[i]], int32_t(first + i));
     }
-    for (size_t i = 0; i < inner.size(); ++i) collapse(first + i, *kids[inner[i]], depth + 1);
+    for (int i = 0; i < inners; ++i) lay_out(first + i, *kids[inner[i]], depth + 1, at, defer);
   }
 
-  /// Numbers the leaf; its place in leaf_data is known once every leaf's size is (fill), so
-  /// until then the node holds the leaf's number where its offset will go.
-  int32_t emit_leaf(const BuildNode& bn) {
-    const uint32_t index = uint32_t(leaves_.size());
-    RP_CHECK(index <= kMaxLeafOffset, "bvh8: more than ", kMaxLeafOffset, " leaves");
-    leaves_.push_back({bn.begin, bn.end - bn.begin, 0, {}});
-    ++out_.stats.leaves;
-    return leaf_ref(index);
+  /// Records leaf number `index`; its place in leaf_data is known once every leaf's size is
+  /// (fill), so until then the node holds the leaf's number where its offset will go.
+  int32_t place_leaf(const BuildNode& bn, size_t index) {
+    leaves_[index] = {bn.begin, bn.end - bn.begin, 0};
+    return leaf_ref(uint32_t(index));
   }
 
  public:
-  /// Writes every leaf, in tree order, and points the nodes at them: the leaves' corners
-  /// gathered from the meshes (into their refs, see PrimRef::set_corners) and their vertex
-  /// blocks numbered (hence their sizes) in parallel, their offsets by a prefix sum, their
-  /// words in parallel (each written once, so the bytes do not depend on the thread count),
-  /// then the nodes' leaf references.
+  /// Writes every leaf and points the nodes at them. The leaves are made in chunks of
+  /// kChunk, in parallel, each chunk into a buffer of its own (its primitives' corners
+  /// gathered from the meshes, each leaf's vertex block numbered and the leaf written); then
+  /// the chunks are copied back to back into leaf_data, at offsets from a prefix sum over
+  /// their sizes, and the nodes' leaf numbers become offsets. A leaf's words depend on the
+  /// leaf alone and the chunks on the leaf numbering, so the bytes do not depend on the
+  /// thread count. One pass over the refs and the meshes: no corners kept between passes.
   void fill() {
-    const size_t leaves = leaves_.size();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
-      Vec3f corners[3 * 8];
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        Placed& leaf = leaves_[i];
-        drop_repeats(leaf);
-        gather_corners(leaf);
-        leaf.index = index_corners(corners_of(leaf, corners));
-      }
+    const size_t leaves = leaves_.size(), chunks = (leaves + kChunk - 1) / kChunk;
+    std::vector<std::vector<float>> made(chunks);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+      made[c] = make_chunk(c * kChunk, std::min(leaves, (c + 1) * kChunk));
     });
-    uint64_t next = 0;
-    for (Placed& leaf : leaves_) {
-      leaf.offset = uint32_t(next);
-      next += leaf_words(leaf.count, leaf.index.v);
-      RP_CHECK(next <= kMaxLeafOffset, "bvh8: the leaves need more than ", uint64_t(kMaxLeafOffset) * 4, " bytes");
-    }
-    out_.leaf_data.assign(size_t(next) + kLeafPad, 0.0f);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves, 256), [&](const tbb::blocked_range<size_t>& r) {
-      Vec3f corners[3 * 8];
-      uint32_t ids[8];
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        const Placed& leaf = leaves_[i];
-        for (uint32_t k = 0; k < leaf.count; ++k) ids[k] = refs_[leaf.ref + k].prim_id;
-        store_leaf(out_.leaf_data.data() + leaf.offset, corners_of(leaf, corners), std::span(ids, leaf.count),
-                   leaf.index);
-      }
+    std::vector<size_t> base(chunks + 1, 0);
+    for (size_t c = 0; c < chunks; ++c) base[c + 1] = base[c] + made[c].size();
+    RP_CHECK(base[chunks] <= kMaxLeafOffset, "bvh8: the leaves need more than ", uint64_t(kMaxLeafOffset) * 4,
+             " bytes");
+    out_.leaf_data.resize(base[chunks] + kLeafPad);
+    std::fill_n(out_.leaf_data.end() - kLeafPad, kLeafPad, 0.0f);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+      std::copy(made[c].begin(), made[c].end(), out_.leaf_data.begin() + ptrdiff_t(base[c]));
+      for (size_t i = c * kChunk; i < std::min(leaves, (c + 1) * kChunk); ++i) leaves_[i].offset += uint32_t(base[c]);
+      std::vector<float>().swap(made[c]);
     });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out_.nodes.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i < r.end(); ++i)
@@ -894,12 +1087,41 @@ class Collapser {
   }
 
  private:
-  /// A leaf: its primitives refs_[ref, ref + count), its offset in leaf_data and its corners'
-  /// vertex numbers.
+  /// Leaves made by one task (fill): about 17 KB of leaf words, whose corners (37 KB)
+  /// stay in L1 and L2 between the gather and the writes.
+  static constexpr size_t kChunk = 128;
+
+  /// A leaf: its primitives refs_[ref, ref + count) and its offset in leaf_data (in its
+  /// chunk's buffer until fill copies it).
   struct Placed {
     uint32_t ref, count, offset;
-    CornerIndex index;
   };
+
+  /// The words of leaves [first, last) back to back; each leaf's offset among them set.
+  std::vector<float> make_chunk(size_t first, size_t last) {
+    uint32_t ids[kChunk * 8];
+    Vec3f corners[kChunk * 8 * 3];
+    size_t n = 0;
+    for (size_t i = first; i < last; ++i) {
+      Placed& leaf = leaves_[i];
+      if (repeats_) drop_repeats(leaf);
+      for (uint32_t k = 0; k < leaf.count; ++k) ids[n++] = refs_[leaf.ref + k].prim_id;
+    }
+    corners_.gather(std::span(ids, n), corners);
+    std::vector<float> words;
+    words.reserve(n * 6 + (last - first) * 8);  // about 5.8 words per primitive, 3 per vertex
+    n = 0;
+    for (size_t i = first; i < last; ++i) {
+      Placed& leaf = leaves_[i];
+      const std::span<const Vec3f> c(corners + 3 * n, 3 * size_t(leaf.count));
+      const CornerIndex index = index_corners(c);
+      leaf.offset = uint32_t(words.size());
+      words.resize(words.size() + leaf_words(leaf.count, index.v));
+      store_leaf(words.data() + leaf.offset, c, std::span(ids + n, leaf.count), index);
+      n += leaf.count;
+    }
+    return words;
+  }
 
   /// Keeps the first ref of each primitive in the leaf's range (with spatial splits, pieces of
   /// one triangle can meet again in a leaf that took a whole subtree). The plan allows at
@@ -917,26 +1139,11 @@ class Collapser {
     leaf.count = kept;
   }
 
-  /// Stores the corners of the leaf's primitives in their refs, so the second pass over the
-  /// leaves reads them in order.
-  void gather_corners(const Placed& leaf) {
-    for (uint32_t k = 0; k < leaf.count; ++k) {
-      PrimRef& ref = refs_[leaf.ref + k];
-      ref.set_corners(corners_(ref.prim_id).data());
-    }
-  }
-
-  /// The corners of the leaf's primitives (3 per primitive), once gathered, into `out`.
-  std::span<const Vec3f> corners_of(const Placed& leaf, Vec3f* out) const {
-    for (uint32_t k = 0; k < leaf.count; ++k)
-      for (uint32_t j = 0; j < 3; ++j) out[3 * k + j] = refs_[leaf.ref + k].corner(j);
-    return {out, 3 * size_t(leaf.count)};
-  }
-
   const CornerSource& corners_;
   RefArray& refs_;
   Bvh8& out_;
-  std::vector<Placed> leaves_;  ///< numbered by emit_leaf; sizes, then offsets (words) by fill
+  bool repeats_;
+  std::vector<Placed> leaves_;  ///< numbered by lay_out; their offsets (words) by fill
 };
 
 /// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
@@ -989,14 +1196,14 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
         box.extend(a);
         box.extend(b);
         box.extend(c);
-        refs[base + t] = PrimRef::make(box, (a + b + c) * (1.0f / 3.0f), keep ? base + t : kInvalidId);
+        refs[base + t] = PrimRef::make(box, keep ? base + t : kInvalidId);
       }
       degenerate += zero_area;
     });
   }
   for (uint32_t id = first_analytic; id < scene.plane_base(); ++id) {
     const Box3f box = scene.prim_bounds(id);
-    refs[id] = PrimRef::make(box, box.center(), id);
+    refs[id] = PrimRef::make(box, id);
   }
   if (degenerate > 0)
     refs.erase(std::remove_if(refs.begin(), refs.end(), [](const PrimRef& r) { return r.prim_id == kInvalidId; }),
@@ -1004,11 +1211,12 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   Bvh8 out;
   out.stats.prims = uint32_t(refs.size());
   if (!refs.empty()) {
-    const CornerSource corners(scene, options.spatial_splits && options.rule == SplitRule::sah);
+    const bool spatial = options.spatial_splits && options.rule == SplitRule::sah;
+    const CornerSource corners(scene, spatial);
     Builder builder(corners, refs, options, first_analytic);
     const BuildNode& root = builder.build();
     out.bounds = root.box;
-    Collapser collapser(corners, refs, out);
+    Collapser collapser(corners, refs, out, spatial);
     collapser.root(root);
     collapser.fill();
   }

@@ -239,6 +239,29 @@ TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   EXPECT_GE(lo, 2u);
 }
 
+/// The rule sorts by the triangles' centres of mass, not by their boxes' centres: on x, P's
+/// centre of mass (1.0) lies left of Q's (1.3) and R's (1.4), its box centre (1.5) right of
+/// them, so the median of four splits {P, Q} from {R, S}, where box centres would give
+/// {Q, R} and {P, S}.
+TEST(Bvh8Build, MedianRuleSortsByCentreOfMass) {
+  TriangleMesh m;
+  m.positions = {{0, 0, 0},    {0, 0.1f, 0},   {3, 0, 0},       // P
+                 {1.25f, 0, 0}, {1.35f, 0, 0}, {1.3f, 0.1f, 0},  // Q
+                 {1.35f, 0, 0}, {1.45f, 0, 0}, {1.4f, 0.1f, 0},  // R
+                 {4.9f, 0, 0},  {5.1f, 0, 0},  {5, 0.1f, 0}};    // S
+  m.indices = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  Scene sc;
+  sc.add_mesh(m);
+  const Bvh8 t = build(sc, {SplitRule::median, 2});
+  std::set<std::vector<uint32_t>> got;
+  for (int32_t ref : leaves(t)) {
+    std::vector<uint32_t> ids = leaf_prims(t, ref);
+    std::sort(ids.begin(), ids.end());
+    got.insert(ids);
+  }
+  EXPECT_EQ(got, (std::set<std::vector<uint32_t>>{{0, 1}, {2, 3}}));
+}
+
 /// Copies of one triangle cannot be separated by any plane: each spatial split would send
 /// all of them to both sides. The split budget bounds the tree at twice as many leaf entries
 /// as primitives, and the build ends.
