@@ -16,6 +16,7 @@ struct BenchArgs {
   std::vector<std::string> scenes{"default"};
   int size = 512;          ///< primary rays: size x size pixels
   int min_runs = 5, max_runs = 25;
+  int build_runs = 5;  ///< builds timed per backend variant after a first, untimed one (median reported)
   double target_spread = 0.03;  ///< stop when (max - min) / median of the last min_runs runs is below
   std::string method_filter;      ///< ECMAScript regex searched in method labels; empty: every method
   std::vector<std::string> kinds;  ///< primary, shadow, diffuse: the ray kinds timed (empty: all)

@@ -316,11 +316,11 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
                            "embree rtcIntersect1", "embree robust 1", "simd stream", "simd spatial stream", "embree high 1",
                            "bytes/prim", "primary", "shadow", "diffuse",
-                           "best simd", "best embree"})
+                           "best simd", "best embree", "build: simd/default", "fastest Embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);
   for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
-                          "\"build_seconds\"", "\"commit\"", "\"compiler\"", "\"flags\"", "\"caches\"", "\"isa\"",
+                          "\"build_seconds\"", "\"build_seconds_first\"", "\"build_runs\"", "\"commit\"", "\"compiler\"", "\"flags\"", "\"caches\"", "\"isa\"",
                           "\"coherent_method\"", "\"incoherent_method\"", "\"skipped_methods\""})
     EXPECT_NE(text.find(key), std::string::npos) << key;
   EXPECT_NE(text.find("\"version\": \"3."), std::string::npos) << "Embree's version recorded";
