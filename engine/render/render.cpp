@@ -30,7 +30,9 @@ float to_unit(uint64_t h) { return float(h >> 40) * 0x1.0p-24f; }  // 24 random 
 
 /// The per-sample streams of one render: pixel_sample and lens_sample with what does not
 /// depend on the pixel and the sample (the seed's hash, the stratification grid) worked out
-/// once; the same values.
+/// once; the same values. A sample's hash is mix(key ^ sample) of its pixel's key, so a
+/// tile works its pixels' keys out once for all its samples (pixel_key, lens_key), and each
+/// sample's stratum once for all its pixels (stratum).
 struct SampleStreams {
   uint64_t pixel_seed, lens_seed;
   int spp, grid;  ///< grid: the side of the largest square of strata, sqrt(spp) rounded down
@@ -40,18 +42,27 @@ struct SampleStreams {
       : pixel_seed(mix(seed ^ 0x9e3779b97f4a7c15ull)), lens_seed(mix(seed ^ 0x5851f42d4c957f2dull)), spp(spp_),
         grid(int(std::sqrt(double(spp_)))), sampler(s) {}
 
-  Vec2f pixel(uint64_t pixel, int sample) const {
-    const uint64_t h = mix(mix(pixel_seed ^ pixel) ^ uint64_t(sample));
+  /// Sample `sample`'s cell of the grid, and whether it lies past the grid (a free sample).
+  struct Stratum {
+    int sample, x, y;
+    bool free;
+  };
+  Stratum stratum(int sample) const { return {sample, sample % grid, sample / grid, sample >= grid * grid}; }
+
+  uint64_t pixel_key(uint64_t pixel) const { return mix(pixel_seed ^ pixel); }
+  uint64_t lens_key(uint64_t pixel) const { return mix(lens_seed ^ pixel); }
+
+  Vec2f pixel(uint64_t key, const Stratum& s) const {
+    if (sampler == Sampler::uniform) return {(float(s.x) + 0.5f) / float(grid), (float(s.y) + 0.5f) / float(grid)};
+    const uint64_t h = mix(key ^ uint64_t(s.sample));
     const float jx = to_unit(h), jy = to_unit(mix(h));
     if (sampler == Sampler::random) return {jx, jy};
     if (spp == 1) return {0.5f, 0.5f};
-    const int m = grid;
-    if (sampler == Sampler::uniform) return {(float(sample % m) + 0.5f) / float(m), (float(sample / m) + 0.5f) / float(m)};
-    if (sample >= m * m) return {jx, jy};
-    return {(float(sample % m) + jx) / float(m), (float(sample / m) + jy) / float(m)};
+    if (s.free) return {jx, jy};
+    return {(float(s.x) + jx) / float(grid), (float(s.y) + jy) / float(grid)};
   }
-  Vec2f lens(uint64_t pixel, int sample) const {
-    const uint64_t h = mix(mix(lens_seed ^ pixel) ^ uint64_t(sample));
+  Vec2f lens(uint64_t key, int sample) const {
+    const uint64_t h = mix(key ^ uint64_t(sample));
     return {to_unit(h), to_unit(mix(h))};
   }
 };
@@ -161,7 +172,22 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
   uint64_t primary = 0;
   const SampleStreams streams(st.seed, st.spp, st.sampler);
   const bool thin_lens = camera.model() == CameraModel::thin_lens, pinhole = camera.model() == CameraModel::pinhole;
+  // Each lane's pixel (clamped to the image: lanes past it are traced as invalid rays) and
+  // its keys, in the tile's 4x2-block order, for all the samples.
+  uint64_t pixel_keys[kTile * kTile], lens_keys[kTile * kTile];
+  float base_x[kTile * kTile], base_y[kTile * kTile];
+  for (int by = 0, at = 0; by < kTile; by += 2)
+    for (int bx = 0; bx < kTile; bx += 4)
+      for (int lane = 0; lane < 8; ++lane, ++at) {
+        const int x = std::min(x0 + bx + lane % 4, st.width - 1), y = std::min(y0 + by + lane / 4, st.height - 1);
+        const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
+        pixel_keys[at] = streams.pixel_key(pixel);
+        if (thin_lens) lens_keys[at] = streams.lens_key(pixel);
+        base_x[at] = float(x);
+        base_y[at] = float(y);
+      }
   for (int s = 0; s < st.spp; ++s) {
+    const SampleStreams::Stratum stratum = streams.stratum(s);
     // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
     w.rays.resize(kTile * kTile);
     w.paths.resize(kTile * kTile);
@@ -171,12 +197,10 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
         float px[8], py[8];
         Vec2f lens[8];
         for (int lane = 0; lane < 8; ++lane) {
-          const int x = std::min(x0 + bx + lane % 4, st.width - 1), y = std::min(y0 + by + lane / 4, st.height - 1);
-          const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
-          const Vec2f j = streams.pixel(pixel, s);
-          px[lane] = float(x) + j.x;
-          py[lane] = float(y) + j.y;
-          if (thin_lens) lens[lane] = streams.lens(pixel, s);
+          const Vec2f j = streams.pixel(pixel_keys[at + size_t(lane)], stratum);
+          px[lane] = base_x[at + size_t(lane)] + j.x;
+          py[lane] = base_y[at + size_t(lane)] + j.y;
+          if (thin_lens) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);
         }
         camera.generate8(px, py, thin_lens ? lens : nullptr, &w.rays[at]);
         for (int lane = 0; lane < 8; ++lane) {
@@ -279,10 +303,14 @@ uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatc
 }  // namespace
 
 Vec2f pixel_sample(uint64_t seed, uint64_t pixel, int sample, int spp, Sampler sampler) {
-  return SampleStreams(seed, spp, sampler).pixel(pixel, sample);
+  const SampleStreams s(seed, spp, sampler);
+  return s.pixel(s.pixel_key(pixel), s.stratum(sample));
 }
 
-Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) { return SampleStreams(seed, 1, Sampler::random).lens(pixel, sample); }
+Vec2f lens_sample(uint64_t seed, uint64_t pixel, int sample) {
+  const SampleStreams s(seed, 1, Sampler::random);
+  return s.lens(s.lens_key(pixel), sample);
+}
 
 float fresnel_dielectric(float cos_i, float n1, float n2) {
   cos_i = std::clamp(cos_i, 0.0f, 1.0f);

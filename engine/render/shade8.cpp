@@ -51,14 +51,18 @@ TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t 
     const TriangleMesh& m = scene.meshes()[mesh];
     const mask8 on = simd::mask_from_bits(hit);
     const int8 local = simd::as_int(xsimd::select(on, simd::as_float(simd::as_int(prim) - int8(int32_t(begin))), float8(0.0f)));
-    const int32_t* indices = reinterpret_cast<const int32_t*>(m.indices.data());
-    const float* positions = &m.positions[0].x;
+    alignas(32) int32_t triangle[8], corner[3][8];
+    local.store_aligned(triangle);
+    float8 rows[3];
+    simd::gather_records3(reinterpret_cast<const float*>(m.indices.data()), m.triangle_count(), triangle, rows);
+    for (int k = 0; k < 3; ++k) simd::as_int(rows[k]).store_aligned(corner[k]);
+    const uint32_t vertices = uint32_t(m.positions.size());
     for (int k = 0; k < 3; ++k) {
-      const int8 vertex3 = simd::gather(indices, local * int8(3) + int8(k)) * int8(3);
-      in.c[k] = {simd::gather(positions, vertex3), simd::gather(positions + 1, vertex3), simd::gather(positions + 2, vertex3)};
+      simd::gather_records3(&m.positions[0].x, vertices, corner[k], rows);
+      in.c[k] = {rows[0], rows[1], rows[2]};
       if (!m.normals.empty()) {
-        const float* normals = &m.normals[0].x;
-        in.n[k] = {simd::gather(normals, vertex3), simd::gather(normals + 1, vertex3), simd::gather(normals + 2, vertex3)};
+        simd::gather_records3(&m.normals[0].x, vertices, corner[k], rows);
+        in.n[k] = {rows[0], rows[1], rows[2]};
       } else {
         in.n[k] = {float8(0.0f), float8(0.0f), float8(0.0f)};
       }
