@@ -1,8 +1,10 @@
 #include "engine/render/render.h"
 
 #include <tbb/blocked_range2d.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -17,7 +19,7 @@ namespace rp {
 
 namespace {
 
-constexpr int kTile = 16;  ///< tile edge in pixels; a tile holds 32 packets of 4x2 pixels
+constexpr int kTile = kTileSize;
 
 /// splitmix64 finaliser (Steele, Lea, Flood 2014), the per-sample counter hash.
 uint64_t mix(uint64_t z) {
@@ -166,9 +168,9 @@ void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_ba
   }
 }
 
-/// Renders the tile at (x0, y0) with one of the per-sample samplers into `tile` (kTile^2 colours).
+/// Renders the tile at (x0, y0) with one of the per-sample samplers into `tile` (kTile^2 colours, zero).
 uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, const Camera& camera,
-                     const RenderSettings& st, int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+                     const RenderSettings& st, int x0, int y0, ShadeWork& w, std::span<Vec3f> tile, Counters& n) {
   uint64_t primary = 0;
   const SampleStreams streams(st.seed, st.spp, st.sampler);
   const bool thin_lens = camera.model() == CameraModel::thin_lens, pinhole = camera.model() == CameraModel::pinhole;
@@ -232,7 +234,7 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
 /// positions are integers on the finest grid, shared between neighbouring cells through a
 /// cache, so each point is traced once per tile.
 uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, const Camera& camera,
-                       const RenderSettings& st, int x0, int y0, ShadeWork& w, std::vector<Vec3f>& tile, Counters& n) {
+                       const RenderSettings& st, int x0, int y0, ShadeWork& w, std::span<Vec3f> tile, Counters& n) {
   const int scale = 1 << st.adaptive_depth;
   const int tw = std::min(kTile, st.width - x0), th = std::min(kTile, st.height - y0);
   auto key = [](int64_t x, int64_t y) { return uint64_t(x) << 32 | uint64_t(uint32_t(y)); };
@@ -323,8 +325,24 @@ float fresnel_dielectric(float cos_i, float n1, float n2) {
   return 0.5f * (r_perp * r_perp + r_par * r_par);
 }
 
-RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
-                    const ProgressFn& progress, TraceLog* log) {
+TileCounts& TileCounts::operator+=(const TileCounts& o) {
+  primary += o.primary;
+  shadow += o.shadow;
+  reflection += o.reflection;
+  refraction += o.refraction;
+  return *this;
+}
+
+struct TileRenderer::Impl {
+  const Backend& backend;
+  const Camera& camera;
+  RenderSettings settings;
+  ShadeScene shade_scene;
+  ShadeBatchFn shade_batch;
+  int tiles_x, tiles_y;
+};
+
+TileRenderer::TileRenderer(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
   RP_CHECK(st.spp >= 1, "render: spp ", st.spp, " must be >= 1");
@@ -336,58 +354,88 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
   RP_CHECK(st.adaptive_depth >= 0 && st.adaptive_depth <= 8, "render: adaptive depth ", st.adaptive_depth,
            " must be in 0..8");
   RP_CHECK(st.adaptive_threshold >= 0.0f, "render: adaptive threshold ", st.adaptive_threshold, " must be >= 0");
+  impl_.reset(new Impl{backend, camera, st, ShadeScene(scene), shade_batch_function(), (st.width + kTile - 1) / kTile,
+                       (st.height + kTile - 1) / kTile});
+}
+
+TileRenderer::~TileRenderer() = default;
+
+const RenderSettings& TileRenderer::settings() const { return impl_->settings; }
+int TileRenderer::tiles_x() const { return impl_->tiles_x; }
+int TileRenderer::tiles_y() const { return impl_->tiles_y; }
+
+void TileRenderer::render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts,
+                          std::vector<TraceLog::Call>* log) const {
+  const Impl& m = *impl_;
+  const Tracer tracer{m.backend, log};
+  ShadeWork w;
+  Counters n;
+  const int x0 = index % m.tiles_x * kTile, y0 = index / m.tiles_x * kTile;
+  std::fill(pixels.begin(), pixels.end(), Vec3f{});
+  counts.primary += m.settings.sampler == Sampler::adaptive
+                        ? adaptive_tile(m.shade_scene, tracer, m.shade_batch, m.camera, m.settings, x0, y0, w, pixels, n)
+                        : sample_tile(m.shade_scene, tracer, m.shade_batch, m.camera, m.settings, x0, y0, w, pixels, n);
+  counts.shadow += n.shadow;
+  counts.reflection += n.reflection;
+  counts.refraction += n.refraction;
+}
+
+void TileRenderer::place(int index, std::span<const Vec3f, kTilePixels> pixels, Image& image) const {
+  const Impl& m = *impl_;
+  const int x0 = index % m.tiles_x * kTile, y0 = index / m.tiles_x * kTile;
+  for (int ly = 0; ly < kTile && y0 + ly < image.height; ++ly)
+    for (int lx = 0; lx < kTile && x0 + lx < image.width; ++lx) {
+      const Vec3f c = pixels[size_t(ly * kTile + lx)];
+      float* out = &image.rgb[(size_t(y0 + ly) * size_t(image.width) + size_t(x0 + lx)) * 3];
+      out[0] = c.x;
+      out[1] = c.y;
+      out[2] = c.z;
+    }
+}
+
+RenderStats TileRenderer::stats(const TileCounts& counts, double seconds) const {
+  const RenderSettings& st = impl_->settings;
+  RenderStats s;
+  s.primary = counts.primary;
+  s.shadow = counts.shadow;
+  s.reflection = counts.reflection;
+  s.refraction = counts.refraction;
+  const uint64_t scale = st.sampler == Sampler::adaptive ? (uint64_t(1) << st.adaptive_depth) : 1;
+  s.uniform_primary = st.sampler == Sampler::adaptive
+                          ? (uint64_t(st.width) * scale + 1) * (uint64_t(st.height) * scale + 1)
+                          : uint64_t(st.width) * uint64_t(st.height) * uint64_t(st.spp);
+  s.seconds = seconds;
+  return s;
+}
+
+RenderResult render(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st,
+                    const ProgressFn& progress, TraceLog* log) {
+  const TileRenderer tiles(scene, backend, camera, st);
   const auto start = std::chrono::steady_clock::now();
   RenderResult result;
   Image& img = result.image;
   img.width = st.width;
   img.height = st.height;
   img.rgb.assign(size_t(st.width) * st.height * 3, 0.0f);
-  std::atomic<uint64_t> n_primary{0}, n_shadow{0}, n_reflection{0}, n_refraction{0};
+  const int n_tiles = tiles.tile_count();
+  if (log) log->tiles.assign(size_t(n_tiles), {});
+  tbb::combinable<TileCounts> counts;
   std::atomic<int> tiles_done{0};
-  const int tiles_x = (st.width + kTile - 1) / kTile, tiles_y = (st.height + kTile - 1) / kTile;
-
-  if (log) log->tiles.assign(size_t(tiles_x) * size_t(tiles_y), {});
-  const ShadeBatchFn shade_batch = shade_batch_function();
-  const ShadeScene shade_scene(scene);
-  auto render_tile = [&](int tx, int ty) {
-    const Tracer tracer{backend, log ? &log->tiles[size_t(ty) * size_t(tiles_x) + size_t(tx)] : nullptr};
-    ShadeWork w;
-    std::vector<Vec3f> tile(kTile * kTile, Vec3f{});
-    Counters n;
-    const int x0 = tx * kTile, y0 = ty * kTile;
-    const uint64_t primary = st.sampler == Sampler::adaptive
-                                 ? adaptive_tile(shade_scene, tracer, shade_batch, camera, st, x0, y0, w, tile, n)
-                                 : sample_tile(shade_scene, tracer, shade_batch, camera, st, x0, y0, w, tile, n);
-    for (int ly = 0; ly < kTile && y0 + ly < st.height; ++ly)
-      for (int lx = 0; lx < kTile && x0 + lx < st.width; ++lx) {
-        const Vec3f c = tile[size_t(ly * kTile + lx)];
-        float* out = &img.rgb[(size_t(y0 + ly) * size_t(st.width) + size_t(x0 + lx)) * 3];
-        out[0] = c.x;
-        out[1] = c.y;
-        out[2] = c.z;
-      }
-    n_primary += primary;
-    n_shadow += n.shadow;
-    n_reflection += n.reflection;
-    n_refraction += n.refraction;
-    const int done = ++tiles_done;
-    if (progress) progress(double(done) / double(tiles_x * tiles_y));
-  };
-
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
-    for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
-      for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) render_tile(tx, ty);
-  });
-  RenderStats& s = result.stats;
-  s.primary = n_primary;
-  s.shadow = n_shadow;
-  s.reflection = n_reflection;
-  s.refraction = n_refraction;
-  const uint64_t scale = st.sampler == Sampler::adaptive ? (uint64_t(1) << st.adaptive_depth) : 1;
-  s.uniform_primary = st.sampler == Sampler::adaptive
-                          ? (uint64_t(st.width) * scale + 1) * (uint64_t(st.height) * scale + 1)
-                          : uint64_t(st.width) * uint64_t(st.height) * uint64_t(st.spp);
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles.tiles_y(), 1, 0, tiles.tiles_x(), 1),
+                    [&](const tbb::blocked_range2d<int>& r) {
+                      std::array<Vec3f, kTilePixels> pixels;
+                      for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
+                        for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
+                          const int index = ty * tiles.tiles_x() + tx;
+                          tiles.render(index, pixels, counts.local(), log ? &log->tiles[size_t(index)] : nullptr);
+                          tiles.place(index, pixels, img);
+                          const int done = ++tiles_done;
+                          if (progress) progress(double(done) / double(n_tiles));
+                        }
+                    });
+  TileCounts total;
+  counts.combine_each([&](const TileCounts& c) { total += c; });
+  result.stats = tiles.stats(total, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return result;
 }
 

@@ -6,6 +6,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <span>
 #include <vector>
 
 #include "engine/backend.h"
@@ -63,6 +65,50 @@ struct TraceLog {
   };
   std::vector<std::vector<Call>> tiles;  ///< by tile (row-major over the tile grid)
   uint64_t rays() const;
+};
+
+/// Edge of the renderer's square tiles, in pixels; a tile holds 32 packets of 4x2 pixels.
+inline constexpr int kTileSize = 16;
+inline constexpr int kTilePixels = kTileSize * kTileSize;
+
+/// Rays traced by some of a render's tiles, by kind (the adaptive sampler's corner rays are
+/// primary rays).
+struct TileCounts {
+  uint64_t primary = 0, shadow = 0, reflection = 0, refraction = 0;
+  TileCounts& operator+=(const TileCounts& o);
+};
+
+/// One render cut into kTileSize-pixel tiles, numbered row-major over the tile grid, that can
+/// be rendered one at a time in any order, on any thread or process: a tile's pixels depend on
+/// the inputs and its number only (render() is every tile of one of these). Holds references
+/// to the scene, backend and camera, which must outlive it.
+class TileRenderer {
+ public:
+  /// Throws rp::Error for settings out of range, as render() does.
+  TileRenderer(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& settings);
+  ~TileRenderer();
+  TileRenderer(const TileRenderer&) = delete;
+  TileRenderer& operator=(const TileRenderer&) = delete;
+
+  const RenderSettings& settings() const;
+  int tiles_x() const;
+  int tiles_y() const;
+  int tile_count() const { return tiles_x() * tiles_y(); }
+
+  /// Renders tile `index` (in [0, tile_count())) into `pixels`, row-major within the tile
+  /// (those past the image's right or bottom edge are left black), adds its rays to
+  /// `counts`, and records its calls to the backend in `log` when one is given. Thread-safe.
+  void render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts,
+              std::vector<TraceLog::Call>* log = nullptr) const;
+  /// Copies the part of tile `index`'s `pixels` that lies inside the image into `image`
+  /// (settings' size, rgb allocated).
+  void place(int index, std::span<const Vec3f, kTilePixels> pixels, Image& image) const;
+  /// The statistics of a render whose tiles traced `counts` in `seconds`.
+  RenderStats stats(const TileCounts& counts, double seconds) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<const Impl> impl_;
 };
 
 /// Renders `scene` as seen by `camera` (camera.width()/height() must equal settings'),
