@@ -129,6 +129,12 @@ std::vector<size_t> parse_header(std::string_view line, const CsvColumns& column
   return field;
 }
 
+/// floor(n * i / parts) without overflow (i <= parts).
+uint64_t share_of(uint64_t n, int i, int parts) {
+  const uint64_t p = uint64_t(parts), k = uint64_t(i);
+  return n / p * k + n % p * k / p;
+}
+
 /// count * k in decimal, exact even when the product does not fit in 64 bits.
 std::string times(uint64_t count, uint64_t k) {
   if (k == 0 || count <= UINT64_MAX / k) return std::to_string(count * k);
@@ -209,6 +215,11 @@ class ByteSource {
     if (std::fread(dst, 1, n, in_.get()) != n) in_.fail_read(offset_);
     offset_ += n;
   }
+  /// Moves past the next n bytes without reading them.
+  void skip(uint64_t n) {
+    if (n > 0 && ::fseeko(in_.get(), off_t(offset_ + n), SEEK_SET) != 0) in_.fail_read(offset_);
+    offset_ += n;
+  }
 
  private:
   InputFile& in_;
@@ -226,9 +237,10 @@ uint64_t load_u64(const unsigned char* p) {
   return v;
 }
 
-/// Reads a binary file of `fmt`, decoding each record with decode(bytes, Record&).
+/// Reads the records of `part` of a binary file of `fmt`, decoding each with
+/// decode(bytes, Record&).
 template <typename Record, typename Decode>
-std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode decode) {
+std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode decode, FilePart part) {
   const std::string& path = in.path();
   ByteSource src(in);
   const uint64_t size = src.size();
@@ -248,7 +260,9 @@ std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode d
     throw Error(cat(path, ": the header declares ", count, " ", count == 1 ? fmt.one : fmt.many, " (",
                     times(count, fmt.record_bytes), " bytes) but ", follow, " bytes follow it"));
 
-  std::vector<Record> out(static_cast<size_t>(count));
+  const RecordRange range = part_records(count, part);
+  src.skip(range.first * fmt.record_bytes);
+  std::vector<Record> out(static_cast<size_t>(range.last - range.first));
   std::vector<unsigned char> chunk(kChunkRecords * fmt.record_bytes);
   for (size_t first = 0; first < out.size(); first += kChunkRecords) {
     const size_t n = std::min(kChunkRecords, out.size() - first);
@@ -299,20 +313,35 @@ void encode_hit(const HitRecord& h, unsigned char* p) {
   std::memcpy(p + 24, &h.ng.z, 4);
 }
 
-template <typename Record, typename Encode>
-void write_binary(const std::string& path, const BinaryFormat& fmt, std::span<const Record> records, Encode encode) {
-  OutputFile out(path);
+/// The 16-byte header of a binary file of `fmt` with `count` records.
+std::string binary_head(const BinaryFormat& fmt, uint64_t count) {
   unsigned char header[kHeaderBytes];
   std::memcpy(header, fmt.magic, 4);
   std::memcpy(header + 4, &kVersion, 4);
-  const uint64_t count = records.size();
   std::memcpy(header + 8, &count, 8);
-  out.write(header, kHeaderBytes);
-  std::vector<unsigned char> chunk(kChunkRecords * fmt.record_bytes);
+  return {reinterpret_cast<const char*>(header), kHeaderBytes};
+}
+
+/// Appends `records` to `out` as binary records of `fmt`, each encoded by encode(record, bytes).
+template <typename Record, typename Encode>
+void append_binary(std::span<const Record> records, const BinaryFormat& fmt, Encode encode, std::string& out) {
+  const size_t at = out.size();
+  out.resize(at + records.size() * fmt.record_bytes);
+  for (size_t i = 0; i < records.size(); ++i)
+    encode(records[i], reinterpret_cast<unsigned char*>(out.data() + at + i * fmt.record_bytes));
+}
+
+/// Writes `head`, then the records, kChunkRecords at a time, each chunk's bytes made by
+/// append(chunk, bytes).
+template <typename Record, typename Append>
+void write_records(const std::string& path, const std::string& head, std::span<const Record> records, Append append) {
+  OutputFile out(path);
+  out.write(head.data(), head.size());
+  std::string bytes;
   for (size_t first = 0; first < records.size(); first += kChunkRecords) {
-    const size_t n = std::min(kChunkRecords, records.size() - first);
-    for (size_t i = 0; i < n; ++i) encode(records[first + i], chunk.data() + i * fmt.record_bytes);
-    out.write(chunk.data(), n * fmt.record_bytes);
+    bytes.clear();
+    append(records.subspan(first, std::min(kChunkRecords, records.size() - first)), bytes);
+    out.write(bytes.data(), bytes.size());
   }
   out.commit();
 }
@@ -327,6 +356,7 @@ class LineReader {
 
   /// The next line, or false at the end of the file.
   bool next(std::string_view& line) {
+    start_ = offset_;
     const ssize_t n = ::getline(&buf_, &cap_, in_.get());
     if (n < 0) {
       if (std::ferror(in_.get())) in_.fail_read(offset_);
@@ -340,12 +370,15 @@ class LineReader {
     return true;
   }
   uint64_t number() const { return number_; }
+  /// The byte offset of the last line read, and of the next.
+  uint64_t start() const { return start_; }
+  uint64_t offset() const { return offset_; }
 
  private:
   InputFile& in_;
   char* buf_ = nullptr;
   size_t cap_ = 0;
-  uint64_t number_ = 0, offset_ = 0;
+  uint64_t number_ = 0, start_ = 0, offset_ = 0;
 };
 
 /// Where a CSV value came from, for messages.
@@ -372,27 +405,33 @@ uint32_t parse_prim_id(const CsvPlace& at, std::string_view s) {
   return v == -1 ? kInvalidId : uint32_t(v);
 }
 
-/// Reads a CSV file of `columns` (line 1 names them, see parse_header; every other line holds
-/// one value per column), each line turned into a Record by make(place, values), the values in
-/// the order of `columns` with the defaults for absent ones.
+/// Reads `part` of a CSV file of `columns` (line 1 names them, see parse_header; every other
+/// line holds one value per column), each line turned into a Record by make(place, values), the
+/// values in the order of `columns` with the defaults for absent ones. The part's lines are
+/// those that start in its share of the bytes after line 1; the lines before them are read
+/// but not parsed, so that line numbers and the blank-line rule are the whole file's.
 template <typename Record, typename Make>
-std::vector<Record> read_csv(InputFile& in, const CsvColumns& columns, Make make) {
+std::vector<Record> read_csv(InputFile& in, const CsvColumns& columns, Make make, FilePart part) {
   const std::string& path = in.path();
   LineReader lines(in);
   std::string_view line;
   std::string why = "empty file: expected a header naming the columns";
   const std::vector<size_t> field = lines.next(line) ? parse_header(line, columns, why) : std::vector<size_t>();
   if (field.empty()) throw Error(cat(path, ": line 1: ", why));
+  const uint64_t body = lines.offset(), share = in.size() - std::min(in.size(), body);
+  const uint64_t begin = body + share_of(share, part.index, part.count);
+  const uint64_t end = part.index + 1 == part.count ? UINT64_MAX : body + share_of(share, part.index + 1, part.count);
   std::vector<Record> out;
   uint64_t blank = 0;  // first blank line seen; fine only if nothing follows it
   std::string_view values[8];
   for (size_t f = columns.required; f < columns.count; ++f) values[f] = columns.defaults[f];
-  while (lines.next(line)) {
+  while (lines.next(line) && lines.start() < end) {
     if (trim(line).empty()) {
       if (blank == 0) blank = lines.number();
       continue;
     }
     if (blank != 0) throw Error(cat(path, ": line ", blank, ": blank line before the end of the data"));
+    if (lines.start() < begin) continue;
     const std::vector<std::string_view> v = split_csv(line);
     if (v.size() != field.size())
       throw Error(cat(path, ": line ", lines.number(), ": ", v.size(), v.size() == 1 ? " value" : " values", ", expected ",
@@ -414,23 +453,38 @@ void append_float(std::string& s, float x) {
   s.append(buf, r.ptr);
 }
 
-/// Writes the names of `columns` and one line per record, formed by line(record, text).
-template <typename Record, typename Line>
-void write_csv(const std::string& path, const CsvColumns& columns, std::span<const Record> records, Line line) {
-  OutputFile out(path);
+/// Line 1 of a CSV file of `columns`: their names.
+std::string csv_head(const CsvColumns& columns) {
   std::string text;
   for (size_t f = 0; f < columns.count; ++f) text += cat(f ? "," : "", columns.names[f]);
-  text += '\n';
+  return text + '\n';
+}
+
+/// Appends `records` to `out` as CSV lines, each formed by line(record, text).
+template <typename Record, typename Line>
+void append_csv(std::span<const Record> records, Line line, std::string& out) {
   for (const Record& r : records) {
-    line(r, text);
-    text += '\n';
-    if (text.size() >= (1 << 16)) {
-      out.write(text.data(), text.size());
-      text.clear();
-    }
+    line(r, out);
+    out += '\n';
   }
-  out.write(text.data(), text.size());
-  out.commit();
+}
+
+void ray_line(const Ray& r, std::string& s) {
+  const float v[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
+  for (int i = 0; i < 8; ++i) {
+    if (i) s += ',';
+    append_float(s, v[i]);
+  }
+}
+
+void hit_line(const HitRecord& h, std::string& s) {
+  append_float(s, h.t);
+  s += ',';
+  s += h.prim_id == kInvalidId ? std::string("-1") : std::to_string(h.prim_id);
+  for (float x : {h.u, h.v, h.ng.x, h.ng.y, h.ng.z}) {
+    s += ',';
+    append_float(s, x);
+  }
 }
 
 }  // namespace
@@ -443,55 +497,69 @@ void check_hit_file_name(const std::string& path) {
   if (path != "-") is_csv(path, kHitFormat);
 }
 
-std::vector<Ray> read_rays(const std::string& path) {
+RecordRange part_records(uint64_t n, FilePart part) {
+  RP_CHECK(part.count >= 1 && part.index >= 0 && part.index < part.count, "file part ", part.index, " of ", part.count);
+  const auto bound = [&](int i) { return i == part.count ? n : share_of(n, i, part.count) / 8 * 8; };
+  return {bound(part.index), bound(part.index + 1)};
+}
+
+std::vector<Ray> read_rays(const std::string& path) { return read_rays(path, FilePart{}); }
+
+std::vector<Ray> read_rays(const std::string& path, FilePart part) {
+  RP_CHECK(path != "-" || part.count == 1, "standard input cannot be read in parts");
   InputFile in(path);
-  if (!is_csv(in, kRayFormat, kRayColumns)) return read_binary<Ray>(in, kRayFormat, decode_ray);
-  return read_csv<Ray>(in, kRayColumns, [](const CsvPlace& at, const std::string_view* s) {
-    Ray r;
-    r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
-    r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
-    r.tnear = parse_float(at, s[6]);
-    r.tfar = parse_float(at, s[7]);
-    return r;
-  });
+  if (!is_csv(in, kRayFormat, kRayColumns)) return read_binary<Ray>(in, kRayFormat, decode_ray, part);
+  return read_csv<Ray>(
+      in, kRayColumns,
+      [](const CsvPlace& at, const std::string_view* s) {
+        Ray r;
+        r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
+        r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
+        r.tnear = parse_float(at, s[6]);
+        r.tfar = parse_float(at, s[7]);
+        return r;
+      },
+      part);
 }
 
 void write_rays(const std::string& path, std::span<const Ray> rays) {
-  if (!is_csv(path, kRayFormat)) return write_binary(path, kRayFormat, rays, encode_ray);
-  write_csv(path, kRayColumns, rays, [](const Ray& r, std::string& s) {
-    const float v[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
-    for (int i = 0; i < 8; ++i) {
-      if (i) s += ',';
-      append_float(s, v[i]);
-    }
-  });
+  if (!is_csv(path, kRayFormat))
+    return write_records(path, binary_head(kRayFormat, rays.size()), rays, [](std::span<const Ray> chunk, std::string& out) {
+      append_binary(chunk, kRayFormat, encode_ray, out);
+    });
+  write_records(path, csv_head(kRayColumns), rays,
+                [](std::span<const Ray> chunk, std::string& out) { append_csv(chunk, ray_line, out); });
 }
 
 std::vector<HitRecord> read_hits(const std::string& path) {
   InputFile in(path);
-  if (!is_csv(in, kHitFormat, kHitColumns)) return read_binary<HitRecord>(in, kHitFormat, decode_hit);
-  return read_csv<HitRecord>(in, kHitColumns, [](const CsvPlace& at, const std::string_view* s) {
-    HitRecord h;
-    h.t = parse_float(at, s[0]);
-    h.prim_id = parse_prim_id(at, s[1]);
-    h.u = parse_float(at, s[2]);
-    h.v = parse_float(at, s[3]);
-    h.ng = {parse_float(at, s[4]), parse_float(at, s[5]), parse_float(at, s[6])};
-    return h;
-  });
+  if (!is_csv(in, kHitFormat, kHitColumns)) return read_binary<HitRecord>(in, kHitFormat, decode_hit, FilePart{});
+  return read_csv<HitRecord>(
+      in, kHitColumns,
+      [](const CsvPlace& at, const std::string_view* s) {
+        HitRecord h;
+        h.t = parse_float(at, s[0]);
+        h.prim_id = parse_prim_id(at, s[1]);
+        h.u = parse_float(at, s[2]);
+        h.v = parse_float(at, s[3]);
+        h.ng = {parse_float(at, s[4]), parse_float(at, s[5]), parse_float(at, s[6])};
+        return h;
+      },
+      FilePart{});
+}
+
+std::string hit_file_head(const std::string& path, uint64_t count) {
+  return is_csv(path, kHitFormat) ? csv_head(kHitColumns) : binary_head(kHitFormat, count);
+}
+
+void append_hit_records(const std::string& path, std::span<const HitRecord> hits, std::string& out) {
+  if (is_csv(path, kHitFormat)) return append_csv(hits, hit_line, out);
+  append_binary(hits, kHitFormat, encode_hit, out);
 }
 
 void write_hits(const std::string& path, std::span<const HitRecord> hits) {
-  if (!is_csv(path, kHitFormat)) return write_binary(path, kHitFormat, hits, encode_hit);
-  write_csv(path, kHitColumns, hits, [](const HitRecord& h, std::string& s) {
-    append_float(s, h.t);
-    s += ',';
-    s += h.prim_id == kInvalidId ? std::string("-1") : std::to_string(h.prim_id);
-    for (float x : {h.u, h.v, h.ng.x, h.ng.y, h.ng.z}) {
-      s += ',';
-      append_float(s, x);
-    }
-  });
+  write_records(path, hit_file_head(path, hits.size()), hits,
+                [&](std::span<const HitRecord> chunk, std::string& out) { append_hit_records(path, chunk, out); });
 }
 
 }  // namespace rp

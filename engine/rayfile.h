@@ -80,6 +80,23 @@ struct HitRecord {
   Vec3f ng{};                                         ///< unit geometric normal; (0,0,0) on a miss
 };
 
+/// One of `count` consecutive shares of a file's rays, for processes that read one file
+/// together (raypack trace and diff across MPI ranks); the shares hold every ray once, in file
+/// order.
+struct FilePart {
+  int index = 0;  ///< in [0, count)
+  int count = 1;
+};
+
+/// Records [first, last) of a batch.
+struct RecordRange {
+  uint64_t first = 0, last = 0;
+};
+
+/// The records of `part` of a batch of `n`: its bounds n * index / count rounded down to a
+/// multiple of 8 (so that packets of 8 consecutive rays stay whole); the last part ends at n.
+RecordRange part_records(uint64_t n, FilePart part);
+
 /// Throws rp::Error naming `path` when its extension names no ray-file format (see the top of
 /// this header), so a command can refuse the name before any work.
 void check_ray_file_name(const std::string& path);
@@ -92,6 +109,14 @@ void check_hit_file_name(const std::string& path);
 /// line or byte count (see the top of this header for the formats and messages).
 std::vector<Ray> read_rays(const std::string& path);
 
+/// Reads `part` of the rays of `path`, a file (not standard input). Binary: the records of
+/// part_records(); CSV: the lines that start in the part's share of the bytes after line 1
+/// (from the body's size times index / count up to the next part's). Every part checks what
+/// read_rays checks, and names a line by its number in the whole file: the lines before a
+/// part's own are read, not parsed, so the count and the blank-line rule see the whole file.
+/// So when read_rays refuses a file, the lowest part that throws gives read_rays' message.
+std::vector<Ray> read_rays(const std::string& path, FilePart part);
+
 /// Writes `rays` to `path` in the format its extension names, by rp::OutputFile: `path` is never half-written; on failure rp::Error
 /// `<path>: cannot write: <reason>` is thrown and no temporary file is left.
 void write_rays(const std::string& path, std::span<const Ray> rays);
@@ -100,7 +125,17 @@ void write_rays(const std::string& path, std::span<const Ray> rays);
 std::vector<HitRecord> read_hits(const std::string& path);
 
 /// Writes `hits` to `path` in the format the extension selects, by rp::OutputFile exactly as
-/// write_rays; prim_id kInvalidId is written -1 in CSV.
+/// write_rays; prim_id kInvalidId is written -1 in CSV. The file's bytes are
+/// hit_file_head(path, hits.size()) followed by append_hit_records(path, hits).
 void write_hits(const std::string& path, std::span<const HitRecord> hits);
+
+/// The bytes of a hit file at `path` (its format by the extension, as write_hits) before its
+/// records: the 16-byte header declaring `count` hits, or the CSV column line.
+std::string hit_file_head(const std::string& path, uint64_t count);
+
+/// Appends `hits` to `out` as consecutive records of a hit file at `path`: 28 bytes each, or
+/// one line each. Records of consecutive batches follow each other, so processes can write
+/// their batches' records at offsets that add up (raypack trace across MPI ranks).
+void append_hit_records(const std::string& path, std::span<const HitRecord> hits, std::string& out);
 
 }  // namespace rp

@@ -342,6 +342,110 @@ TEST(RayFileCsv, AcceptsCrlfAndTrailingBlankLines) {
   EXPECT_EQ(read_rays(path).size(), 0u);
 }
 
+// ---- parts of a file, as the ranks of an MPI run read them --------------------------------
+
+/// The rays of every part of `path` for `count` parts, concatenated in part order.
+std::vector<Ray> read_in_parts(const std::string& path, int count) {
+  std::vector<Ray> all;
+  for (int i = 0; i < count; ++i) {
+    const std::vector<Ray> part = read_rays(path, FilePart{i, count});
+    all.insert(all.end(), part.begin(), part.end());
+  }
+  return all;
+}
+
+TEST(RayFileParts, RecordRangesCoverTheBatchInWholePacketsOfEight) {
+  for (uint64_t n : {0ull, 1ull, 7ull, 8ull, 9ull, 100ull, 4097ull, 1000003ull})
+    for (int count = 1; count <= 7; ++count) {
+      uint64_t next = 0;
+      for (int i = 0; i < count; ++i) {
+        const RecordRange r = part_records(n, {i, count});
+        EXPECT_EQ(r.first, next) << n << " " << i << "/" << count;
+        EXPECT_LE(r.first, r.last);
+        if (i + 1 < count) {
+          EXPECT_EQ(r.last % 8, 0u) << n << " " << i << "/" << count;
+        }
+        next = r.last;
+      }
+      EXPECT_EQ(next, n) << n << " in " << count;
+    }
+  // The bounds are n * index / count rounded down to a multiple of 8, without overflow.
+  EXPECT_EQ(part_records(100, {1, 3}).first, 32u);
+  EXPECT_EQ(part_records(100, {1, 3}).last, 64u);
+  const uint64_t huge = uint64_t(1) << 62;
+  EXPECT_EQ(part_records(huge, {1, 2}).first, huge / 2);
+}
+
+TEST(RayFileParts, PartsTogetherAreTheWholeFileInEitherFormat) {
+  TempDir tmp;
+  const std::vector<Ray> rays = bit_pattern_rays(5000);
+  for (const std::string name : {"r.bin", "r.csv"}) {
+    const std::string path = tmp / name;
+    write_rays(path, rays);
+    const std::vector<Ray> whole = read_rays(path);
+    ASSERT_EQ(whole.size(), rays.size());
+    for (int count : {1, 2, 3, 5, 64}) {
+      const std::vector<Ray> parts = read_in_parts(path, count);
+      ASSERT_EQ(parts.size(), whole.size()) << name << " in " << count;
+      for (size_t i = 0; i < whole.size(); ++i) ASSERT_EQ(bits(parts[i]), bits(whole[i])) << name << " ray " << i;
+    }
+  }
+  // CSV by bytes: CRLF, blank trailing lines, no newline at the end, and more parts than lines.
+  const std::string path = tmp / "crlf.csv";
+  write_bytes(path, "# ox, oy, oz, dx, dy, dz\r\n1,2,3,4,5,6\r\n7,8,9,1,2,3\r\n-1,-2,-3,4,5,6\r\n\r\n\n");
+  for (int count : {1, 2, 3, 4, 9, 40}) {
+    const std::vector<Ray> parts = read_in_parts(path, count);
+    ASSERT_EQ(parts.size(), 3u) << count;
+    EXPECT_EQ(parts[2].org, (Vec3f{-1, -2, -3})) << count;
+  }
+  write_bytes(path, "ox,oy,oz,dx,dy,dz\n1,2,3,4,5,6\n1,2,3,4,5,7");
+  EXPECT_EQ(read_in_parts(path, 2).back().dir.z, 7.0f);
+}
+
+TEST(RayFileParts, TheLowestFailingPartGivesTheWholeReadsMessage) {
+  TempDir tmp;
+  const std::string p = tmp / "bad.csv";
+  const std::string head = "ox,oy,oz,dx,dy,dz,tnear,tfar\n";
+  std::string good;
+  for (int i = 0; i < 40; ++i) good += "1,2,3,4,5,6,0,1\n";
+  // Errors early, late and across the parts' boundaries: a bad value, a short line, a blank line
+  // in one part followed by data in the next, and a bad line after a blank one.
+  const std::vector<std::string> files = {
+      head + good + "1,2,3,4,5,6,0,x\n" + good,       head + good + good + "1,2,3\n",
+      head + good + "\n\n\n" + good,                    head + "1,2,3,4,5,6,0,1\n\n" + good + "1,2\n",
+      head + good + good + good + "\n" + "1,2,3,4,5,6,0,1\n", head + "ox\n" + good};
+  for (const std::string& text : files) {
+    write_bytes(p, text);
+    const std::string whole = error_of([&] { read_rays(p); });
+    ASSERT_NE(whole, test::kNoError);
+    for (int count : {2, 3, 4, 7}) {
+      std::string first = test::kNoError;
+      for (int i = 0; i < count && first == test::kNoError; ++i) first = error_of([&] { read_rays(p, FilePart{i, count}); });
+      EXPECT_EQ(first, whole) << count << " parts";
+    }
+  }
+  // A binary file's header and size are every part's to check.
+  const std::string b = tmp / "bad.bin";
+  write_bytes(b, header("RPRY", 1, 3) + std::string(32 * 2, '\0'));
+  const std::string whole = error_of([&] { read_rays(b); });
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(error_of([&] { read_rays(b, FilePart{i, 3}); }), whole);
+}
+
+TEST(HitFileParts, HeadAndRecordsOfConsecutiveBatchesAreWhatWriteHitsWrites) {
+  TempDir tmp;
+  const std::vector<HitRecord> hits = special_hits();
+  for (const std::string name : {"h.hits", "h.csv"}) {
+    const std::string path = tmp / name;
+    write_hits(path, hits);
+    for (size_t cut : {size_t(0), size_t(1), hits.size() / 2, hits.size()}) {
+      std::string bytes = hit_file_head(path, hits.size());
+      append_hit_records(path, std::span(hits).first(cut), bytes);
+      append_hit_records(path, std::span(hits).subspan(cut), bytes);
+      EXPECT_EQ(bytes, read_bytes(path)) << name << " cut at " << cut;
+    }
+  }
+}
+
 TEST(HitFileCsv, RoundTripAndMissIsWrittenAsMinusOne) {
   TempDir tmp;
   const std::string path = tmp / "hits.csv";
