@@ -44,37 +44,43 @@ bool supported(const Hit& h, const ReferenceHit& r, const DiffOptions& o) {
   return close(h.t, r.t, o.tie_tolerance);
 }
 
-double percentile(std::vector<double>& v, double p) {
-  if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
-  return v[k];
-}
-
-ErrorStats error_stats(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
-                       std::span<const ReferenceHit> ref) {
-  std::vector<double> t_err, angle;
+ErrorSamples error_samples(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> hits,
+                           std::span<const ReferenceHit> ref) {
+  ErrorSamples s;
   for (size_t i = 0; i < rays.size(); ++i) {
     if (!hits[i].hit() || hits[i].prim_id != ref[i].prim_id) continue;
-    t_err.push_back(std::abs(double(hits[i].t) - ref[i].t) / std::max(ref[i].t, 1e-30));
+    s.t_rel.push_back(std::abs(double(hits[i].t) - ref[i].t) / std::max(ref[i].t, 1e-30));
     const Vec3f na = scene.surface(rays[i], hits[i]).geometric_normal;
     const Hit rh{float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
     const Vec3f nr = scene.surface(rays[i], rh).geometric_normal;
     const Vec3d a(na), r(nr);  // atan2 of |a x r| and a.r: accurate for tiny angles, unlike acos
-    angle.push_back(std::atan2(length(cross(a, r)), dot(a, r)) * 180.0 / kPi);
+    s.angle_deg.push_back(std::atan2(length(cross(a, r)), dot(a, r)) * 180.0 / kPi);
   }
-  ErrorStats s;
-  s.rays = t_err.size();
-  if (t_err.empty()) return s;
-  s.t_max = *std::max_element(t_err.begin(), t_err.end());
-  s.angle_max = *std::max_element(angle.begin(), angle.end());
-  s.t_p50 = percentile(t_err, 0.50);
-  s.t_p99 = percentile(t_err, 0.99);
-  s.angle_p99 = percentile(angle, 0.99);
   return s;
 }
 
+double percentile(std::vector<double>& v, double p) {
+  if (v.empty()) return 0;
+  const size_t k = percentile_index(v.size(), p);
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
+  return v[k];
+}
+
 }  // namespace
+
+size_t percentile_index(size_t n, double p) { return std::min(n - 1, size_t(p * double(n - 1) + 0.5)); }
+
+ErrorStats summarize(ErrorSamples& samples) {
+  ErrorStats s;
+  s.rays = samples.t_rel.size();
+  if (samples.t_rel.empty()) return s;
+  s.t_max = *std::max_element(samples.t_rel.begin(), samples.t_rel.end());
+  s.angle_max = *std::max_element(samples.angle_deg.begin(), samples.angle_deg.end());
+  s.t_p50 = percentile(samples.t_rel, 0.50);
+  s.t_p99 = percentile(samples.t_rel, 0.99);
+  s.angle_p99 = percentile(samples.angle_deg, 0.99);
+  return s;
+}
 
 DiffResult diff_hits(const Scene& scene, std::span<const Ray> rays, std::span<const Hit> a, std::span<const Hit> b,
                      std::span<const ReferenceHit> ref, const DiffOptions& o) {
@@ -96,8 +102,10 @@ DiffResult diff_hits(const Scene& scene, std::span<const Ray> rays, std::span<co
     (sa && sb ? s.both : sa ? s.a : sb ? s.b : s.neither) += 1;
   }
   if (d.has_reference) {
-    d.a_vs_reference = error_stats(scene, rays, a, ref);
-    d.b_vs_reference = error_stats(scene, rays, b, ref);
+    d.a_samples = error_samples(scene, rays, a, ref);
+    d.b_samples = error_samples(scene, rays, b, ref);
+    d.a_vs_reference = summarize(d.a_samples);
+    d.b_vs_reference = summarize(d.b_samples);
   }
   return d;
 }

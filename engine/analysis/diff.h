@@ -45,12 +45,29 @@ struct ErrorStats {
   double angle_p99 = 0, angle_max = 0;
 };
 
+/// The values ErrorStats summarises, one of each per ray where the backend hits the
+/// reference's primitive (in ray order until summarize() reorders them).
+struct ErrorSamples {
+  std::vector<double> t_rel;      ///< |t - t_ref| / t_ref
+  std::vector<double> angle_deg;  ///< angle between the geometric normals
+};
+
+/// Which of n sorted values (n > 0) is percentile p (in [0, 1]): the nearest rank,
+/// p * (n - 1) rounded half up, at most n - 1.
+size_t percentile_index(size_t n, double p);
+
+/// p50, p99 and max of the samples (reordering them).
+ErrorStats summarize(ErrorSamples& samples);
+
 struct DiffResult {
   size_t rays = 0;
   std::array<size_t, kDiffClasses> count{};
   std::array<Support, kDiffClasses> support{};  ///< empty when no reference was given
   bool has_reference = false;
   ErrorStats a_vs_reference, b_vs_reference;
+  /// What a_vs_reference and b_vs_reference summarise (for combining the diffs of several
+  /// processes: raypack diff across MPI ranks).
+  ErrorSamples a_samples, b_samples;
   std::vector<DiffClass> per_ray;
 
   /// Fraction of rays that agree or tie, in [0, 1] (1 for no rays).
