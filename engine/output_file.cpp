@@ -47,13 +47,6 @@ void release_slot(int i) {
   if (i >= 0) g_slots[i].state.store(0);
 }
 
-extern "C" void remove_temporaries_and_reraise(int sig) {
-  for (Slot& s : g_slots)
-    if (s.state.load() == 2) ::unlink(s.path);
-  std::signal(sig, SIG_DFL);
-  std::raise(sig);
-}
-
 std::atomic<uint64_t> g_serial{0};
 
 std::string temp_name(const std::string& file_name) {
@@ -72,6 +65,23 @@ int write_all(int fd, const char* data, size_t n) {
     n -= size_t(w);
   }
   return 0;
+}
+
+/// What the handler prints before it ends the process (empty: nothing); %s is the signal.
+char g_signal_message[512];
+
+extern "C" void remove_temporaries_and_reraise(int sig) {
+  for (Slot& s : g_slots)
+    if (s.state.load() == 2) ::unlink(s.path);
+  if (g_signal_message[0] != '\0') {
+    const char* name = sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP";
+    const char* at = std::strstr(g_signal_message, "%s");
+    write_all(STDERR_FILENO, g_signal_message, size_t(at - g_signal_message));
+    write_all(STDERR_FILENO, name, std::strlen(name));
+    write_all(STDERR_FILENO, at + 2, std::strlen(at + 2));
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
 }
 
 }  // namespace
@@ -185,6 +195,13 @@ void write_file(const std::string& path, std::string_view bytes) {
   OutputFile out(path);
   out.write(bytes.data(), bytes.size());
   out.commit();
+}
+
+void set_signal_message(std::string_view message) {
+  RP_CHECK(message.empty() || (message.size() < sizeof g_signal_message && message.find("%s") != std::string_view::npos),
+           "signal message: at most ", sizeof g_signal_message - 1, " bytes, with %s for the signal");
+  std::memcpy(g_signal_message, message.data(), message.size());
+  g_signal_message[message.size()] = '\0';
 }
 
 void install_signal_cleanup() {

@@ -39,6 +39,10 @@ class OutputFile {
   /// The temporary file, open for reading and writing at offset 0, for writers that take a
   /// descriptor (a child process's standard output, say).
   int fd() const { return fd_; }
+  /// True when path() names a device, FIFO or socket: temp_path() is then a private file in
+  /// the temporary folder, copied into the device by commit(); else it lies beside the file
+  /// it replaces.
+  bool into_device() const { return target_.empty(); }
 
   /// Appends n bytes to the temporary file.
   void write(const void* data, size_t n);
@@ -63,5 +67,11 @@ void write_file(const std::string& path, std::string_view bytes);
 /// file of every live OutputFile, then end the process by the same signal (so the exit
 /// status says which). Call once, early in main().
 void install_signal_cleanup();
+
+/// A line for those handlers to print on standard error before the process ends (none by
+/// default, and none after an empty one); "%s" in it stands for the signal's name (SIGTERM).
+/// Rank 0 of an MPI run sets one, because mpirun ends every rank by SIGTERM when one dies.
+/// Throws rp::Error beyond 511 bytes or without "%s".
+void set_signal_message(std::string_view message);
 
 }  // namespace rp

@@ -1,5 +1,7 @@
 #include "engine/text.h"
 
+#include <atomic>
+
 #include <cstdio>
 
 namespace rp {
@@ -57,8 +59,14 @@ void split_fields(std::string_view line, bool (*separator)(char), std::vector<st
   }
 }
 
+namespace {
+std::atomic<bool> g_warnings{true};
+}  // namespace
+
+void set_warnings(bool on) { g_warnings = on; }
+
 void warn(std::string_view message) {
-  std::fprintf(stderr, "raypack: warning: %s\n", one_line(message).c_str());
+  if (g_warnings.load()) std::fprintf(stderr, "raypack: warning: %s\n", one_line(message).c_str());
 }
 
 }  // namespace rp

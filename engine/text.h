@@ -19,7 +19,12 @@ std::string one_line(std::string_view s);
 /// fields), into `out` (cleared first).
 void split_fields(std::string_view line, bool (*separator)(char), std::vector<std::string_view>& out);
 
-/// Prints "raypack: warning: <one_line(message)>" and a newline on standard error.
+/// Prints "raypack: warning: <one_line(message)>" and a newline on standard error, unless
+/// warnings are off.
 void warn(std::string_view message);
+
+/// Turns warn() on (the default) or off for the whole process: the MPI ranks other than rank
+/// 0 turn it off, since rank 0 prints the same warnings.
+void set_warnings(bool on);
 
 }  // namespace rp
