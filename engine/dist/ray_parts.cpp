@@ -1,0 +1,67 @@
+#include "engine/dist/ray_parts.h"
+
+#include <cstring>
+#include <filesystem>
+#include <optional>
+
+#include "engine/output_file.h"
+
+namespace rp::dist {
+
+RecordRange share(const Comm& comm, uint64_t n) { return part_records(n, {comm.rank(), comm.size()}); }
+
+std::vector<Ray> read_rays_across(const Comm& comm, const std::string& path) {
+  if (path != "-") return together(comm, [&] { return read_rays(path, {comm.rank(), comm.size()}); });
+  std::vector<std::string> parts;
+  together(comm, [&] {
+    if (!comm.root()) return;
+    const std::vector<Ray> rays = read_rays(path);
+    for (int r = 0; r < comm.size(); ++r) {
+      const RecordRange range = part_records(rays.size(), {r, comm.size()});
+      parts.emplace_back(reinterpret_cast<const char*>(rays.data() + range.first), (range.last - range.first) * sizeof(Ray));
+    }
+  });
+  const std::string mine = comm.scatter(parts);
+  parts.clear();
+  std::vector<Ray> rays(mine.size() / sizeof(Ray));
+  if (!rays.empty()) std::memcpy(rays.data(), mine.data(), mine.size());
+  return rays;
+}
+
+void write_hits_across(const Comm& comm, const std::string& path, std::span<const HitRecord> hits) {
+  uint64_t total[] = {hits.size()};
+  comm.sum(total);
+  const std::string records = together(comm, [&] {
+    std::string bytes;
+    append_hit_records(path, hits, bytes);
+    return bytes;
+  });
+  // Rank 0 opens the output and writes the head; the others learn where their records go:
+  // the temporary file's absolute path, or nothing for a device.
+  std::optional<OutputFile> out;
+  std::string temp;
+  together(comm, [&] {
+    if (!comm.root()) return;
+    const std::string head = hit_file_head(path, total[0]);
+    out.emplace(path);
+    out->write(head.data(), head.size());
+    if (!out->into_device()) temp = std::filesystem::absolute(out->temp_path()).string();
+  });
+  comm.broadcast(temp);
+  if (temp.empty()) {
+    const std::string all = comm.gather(records);
+    together(comm, [&] {
+      if (!comm.root()) return;
+      out->write(all.data(), all.size());
+      out->commit();
+    });
+    return;
+  }
+  const uint64_t offset = hit_file_head(path, total[0]).size() + comm.sum_before(records.size());
+  together(comm, [&] { comm.write_at(temp, offset, records); });
+  together(comm, [&] {
+    if (comm.root()) out->commit();
+  });
+}
+
+}  // namespace rp::dist
