@@ -10,6 +10,8 @@
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
 #include "engine/analysis/diff.h"
+#include "engine/dist/diff_ranks.h"
+#include "engine/dist/ray_parts.h"
 #include "engine/render/image_io.h"
 #include "engine/output_file.h"
 #include "engine/rayfile.h"
@@ -58,31 +60,39 @@ CLI::App* DiffArgs::add_to(CLI::App& app) {
   return c;
 }
 
-int run_diff(const DiffArgs& a) {
-  if (a.a != "reference") check_method("-a", a.a, "--variant-a", a.variant_a);
-  if (a.b != "reference") check_method("-b", a.b, "--variant-b", a.variant_b);
+int run_diff(const DiffArgs& a, const dist::Comm& comm) {
+  const bool across = comm.size() > 1;
+  dist::together(comm, [&] {
+    if (a.a != "reference") check_method("-a", a.a, "--variant-a", a.variant_a);
+    if (a.b != "reference") check_method("-b", a.b, "--variant-b", a.variant_b);
+  });
   const ThreadLimit limit(a.threads);
-  if (a.count == 0 || a.count > (size_t(1) << 28))
-    throw UsageError(cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
-  if (a.kind != "primary" && a.kind != "diffuse" && a.kind != "random")
-    throw UsageError(cat("--kind: '", a.kind, "' is not primary, diffuse or random"));
-  if ((a.rays == "primary" || a.rays == "diffuse" || a.rays == "random") && !std::filesystem::exists(a.rays))
-    throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
-  if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
-  const Scene scene = load_scene_or_default(a.scene);
+  dist::together(comm, [&] {
+    if (a.count == 0 || a.count > (size_t(1) << 28))
+      throw UsageError(cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
+    if (a.kind != "primary" && a.kind != "diffuse" && a.kind != "random")
+      throw UsageError(cat("--kind: '", a.kind, "' is not primary, diffuse or random"));
+    if ((a.rays == "primary" || a.rays == "diffuse" || a.rays == "random") && !std::filesystem::exists(a.rays))
+      throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
+    if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
+  });
+  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene); });
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
+  // Across ranks each rank diffs its share: a file's share is all it reads; generated rays
+  // are made whole on every rank (from one seeded stream), then shared out below.
   RaySet set;
   Coherence coherence = Coherence::incoherent;
   if (!a.rays.empty()) {
-    set.rays = with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
+    set.rays = across ? dist::read_rays_across(comm, a.rays)
+                      : with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
   } else if (a.kind == "primary" || a.kind == "diffuse") {
     // The smallest image of 4x2-pixel packets with at least --count pixels; primary rays are
     // its first --count rays.
     const int side = std::max(2, int(std::ceil(std::sqrt(double(a.count)))));
     const int w = (side + 3) / 4 * 4, h = (side + 1) / 2 * 2;
-    set = primary_rays(scene, w, h);
+    set = dist::together(comm, [&] { return primary_rays(scene, w, h); });
     coherence = Coherence::coherent;
     if (a.kind == "primary") {
       set.rays.resize(a.count);
@@ -90,72 +100,90 @@ int run_diff(const DiffArgs& a) {
     } else {
       // Bounces from the primary hits (found by the reference), as many rounds of one bounce
       // per hit as it takes to reach --count rays.
-      const Reference reference(scene);
-      std::vector<ReferenceHit> rh(set.rays.size());
-      reference.intersect(set.rays, rh);
-      std::vector<Hit> hits(set.rays.size());
-      size_t n_hit = 0;
-      for (size_t i = 0; i < rh.size(); ++i)
-        if (rh[i].hit()) {
-          hits[i] = {float(rh[i].t), rh[i].prim_id, float(rh[i].u), float(rh[i].v)};
-          ++n_hit;
+      const std::vector<Hit> hits = dist::reference_hits_across(comm, scene, set.rays);
+      set = dist::together(comm, [&] {
+        const size_t n_hit = size_t(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.hit(); }));
+        if (n_hit == 0) throw Error(cat(a.scene, ": no camera ray hits the scene, so there are no diffuse rays"));
+        RaySet bounces;
+        for (uint64_t round = 0; bounces.rays.size() < a.count; ++round) {
+          const RaySet more = diffuse_rays(scene, set, hits, a.seed + round);
+          bounces.rays.insert(bounces.rays.end(), more.rays.begin(), more.rays.end());
+          bounces.pixel.insert(bounces.pixel.end(), more.pixel.begin(), more.pixel.end());
         }
-      if (n_hit == 0) throw Error(cat(a.scene, ": no camera ray hits the scene, so there are no diffuse rays"));
-      RaySet bounces;
-      for (uint64_t round = 0; bounces.rays.size() < a.count; ++round) {
-        const RaySet more = diffuse_rays(scene, set, hits, a.seed + round);
-        bounces.rays.insert(bounces.rays.end(), more.rays.begin(), more.rays.end());
-        bounces.pixel.insert(bounces.pixel.end(), more.pixel.begin(), more.pixel.end());
-      }
-      bounces.rays.resize(a.count);
-      bounces.pixel.resize(a.count);
-      bounces.width = set.width;
-      bounces.height = set.height;
-      set = std::move(bounces);
+        bounces.rays.resize(a.count);
+        bounces.pixel.resize(a.count);
+        bounces.width = set.width;
+        bounces.height = set.height;
+        return bounces;
+      });
       coherence = Coherence::incoherent;
     }
   } else {
-    set = random_rays(scene, a.count, a.seed);
+    set = dist::together(comm, [&] { return random_rays(scene, a.count, a.seed); });
   }
   const std::string rays_label = a.rays.empty() ? a.kind : a.rays;
-  if (!a.coherence.empty()) coherence = parse_coherence("--coherence", a.coherence);
+  if (!a.coherence.empty()) coherence = dist::together(comm, [&] { return parse_coherence("--coherence", a.coherence); });
+  // This rank's rays: its share of generated rays, all it read of a file.
+  std::vector<Ray> shared_out;
+  if (across && a.rays.empty()) {
+    const RecordRange mine = dist::share(comm, set.rays.size());
+    shared_out.assign(set.rays.begin() + std::ptrdiff_t(mine.first), set.rays.begin() + std::ptrdiff_t(mine.last));
+  }
+  const std::span<const Ray> rays = across && a.rays.empty() ? std::span<const Ray>(shared_out) : std::span<const Ray>(set.rays);
 
   std::vector<ReferenceHit> ref;
   if (a.reference || a.a == "reference" || a.b == "reference") {
-    const Reference reference(scene);
-    ref.resize(set.rays.size());
-    reference.intersect(set.rays, ref);
+    dist::together(comm, [&] {
+      const Reference reference(scene);
+      ref.resize(rays.size());
+      reference.intersect(rays, ref);
+    });
   }
   auto side = [&](const std::string& name, const std::string& variant) {
-    DiffSide s{name == "reference" ? name : name + "/" + variant, std::vector<Hit>(set.rays.size())};
+    DiffSide s{name == "reference" ? name : name + "/" + variant, std::vector<Hit>(rays.size())};
     if (name == "reference") {
       for (size_t i = 0; i < ref.size(); ++i)
         if (ref[i].hit()) s.hits[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
     } else {
       const auto backend = build_backend(name, variant, scene, a.scene);
-      with_memory_context(cat("tracing ", set.rays.size(), " rays"),
-                          [&] { intersect_parallel(*backend, set.rays, s.hits, coherence); });
+      with_memory_context(cat("tracing ", rays.size(), " rays"),
+                          [&] { intersect_parallel(*backend, rays, s.hits, coherence); });
     }
     return s;
   };
-  const DiffSide sa = side(a.a, a.variant_a), sb = side(a.b, a.variant_b);
+  const DiffSide sa = dist::together(comm, [&] { return side(a.a, a.variant_a); });
+  const DiffSide sb = dist::together(comm, [&] { return side(a.b, a.variant_b); });
   const DiffOptions options{a.tie_tolerance, a.t_tolerance};
-  const DiffResult d = diff_hits(scene, set.rays, sa.hits, sb.hits, a.reference ? std::span<const ReferenceHit>(ref) : std::span<const ReferenceHit>(), options);
+  DiffResult d = dist::together(comm, [&] {
+    return diff_hits(scene, rays, sa.hits, sb.hits,
+                     a.reference ? std::span<const ReferenceHit>(ref) : std::span<const ReferenceHit>(), options);
+  });
+  if (across) d = dist::combine_across(comm, std::move(d));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  std::FILE* const out = a.quiet ? nullptr : stdout;
+  std::FILE* const out = a.quiet || !comm.root() ? nullptr : stdout;
   say(out, "raypack diff: scene %s, rays %s%s, %s\n%s", a.scene.c_str(), rays_label.c_str(),
               a.reference ? ", reference: double-precision watertight" : "",
               coherence == Coherence::coherent ? "coherent (packets)" : "incoherent (single rays or streams)",
               format_table(d, sa.label, sb.label).c_str());
   say(out, "(%.2f s)\n", seconds);
   if (!a.json.empty()) {
-    const std::string text = to_json(d, a.scene, rays_label, sa.label, sb.label, options);
-    write_file(a.json, text);
+    dist::together(comm, [&] {
+      if (comm.root()) write_file(a.json, to_json(d, a.scene, rays_label, sa.label, sb.label, options));
+    });
   }
-  if (!a.image.empty()) write_image(a.image, mismatch_image(d, set, sa.hits));
+  if (!a.image.empty()) {
+    // The image needs every ray's class and whether A hit: rank 0 gathers them.
+    const std::vector<Hit> hits_a = dist::gather_vector(comm, std::span<const Hit>(sa.hits));
+    d.per_ray = dist::gather_vector(comm, std::span<const DiffClass>(d.per_ray));
+    dist::together(comm, [&] {
+      if (comm.root()) write_image(a.image, mismatch_image(d, set, hits_a));
+    });
+  }
   if (100.0 * d.agreement() < a.min_agreement) {
-    std::fprintf(stderr, "raypack: agreement %.5f%% is below --min-agreement %g%%\n", 100.0 * d.agreement(), a.min_agreement);
+    if (comm.root())
+      std::fprintf(stderr, "raypack: agreement %.5f%% is below --min-agreement %g%%\n", 100.0 * d.agreement(),
+                   a.min_agreement);
     return 3;
   }
   return 0;

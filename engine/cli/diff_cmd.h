@@ -7,6 +7,7 @@
 #include <string>
 
 #include "backends/registry.h"
+#include "engine/dist/comm.h"
 
 namespace CLI {
 class App;
@@ -33,7 +34,9 @@ struct DiffArgs {
   CLI::App* add_to(CLI::App& app);
 };
 
-/// Runs the diff and writes what was asked; returns 0, or 3 below --min-agreement.
-int run_diff(const DiffArgs& args);
+/// Runs the diff and writes what was asked; returns 0, or 3 below --min-agreement. Across the
+/// ranks of `comm` when there are several: each diffs its share of the rays, and the counts
+/// and error statistics are combined into those of one process.
+int run_diff(const DiffArgs& args, const dist::Comm& comm);
 
 }  // namespace rp::cli

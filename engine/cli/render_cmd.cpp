@@ -13,6 +13,7 @@
 #include "engine/render/camera.h"
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
+#include "engine/dist/render_ranks.h"
 #include "engine/render/image_io.h"
 #include "engine/render/render.h"
 
@@ -165,38 +166,73 @@ CLI::App* RenderArgs::add_to(CLI::App& app) {
       ->capture_default_str();
   c->add_flag("--measure-traces", measure_traces,
               "Also trace the render's own rays again without the rest of the render, and print both rates");
+  c->add_option("--tiles-per-request", tiles_per_request,
+                "Under mpirun: tiles rank 0 hands another rank per request (0: a share of what is left)")
+      ->check(CLI::Range(0, 1 << 20))
+      ->capture_default_str();
   return c;
 }
 
-int run_render(const RenderArgs& a) {
+int run_render(const RenderArgs& a, const dist::Comm& comm) {
   using clock = std::chrono::steady_clock;
   auto seconds_since = [](clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); };
-  const Resolution res = parse_resolution(a.resolution);
-  const RenderSettings settings = render_settings(a, res);
-  std::vector<PointLight> lights;
-  for (const std::string& l : a.lights) lights.push_back(parse_light(l));
+  const bool across = comm.size() > 1, quiet = a.quiet || !comm.root();
+  // The flags, checked on every rank before any work.
+  struct Flags {
+    Resolution res;
+    RenderSettings settings;
+    std::vector<PointLight> lights;
+  };
+  const Flags f = dist::together(comm, [&] {
+    if (across && a.measure_traces)
+      throw UsageError("--measure-traces: times the traces of one process; start it without mpirun");
+    const Resolution res = parse_resolution(a.resolution);
+    Flags flags{res, render_settings(a, res), {}};
+    for (const std::string& l : a.lights) flags.lights.push_back(parse_light(l));
+    check_method("--backend", a.backend, "--variant", a.variant);
+    return flags;
+  });
+  const Resolution& res = f.res;
   const ThreadLimit limit(a.threads);
-  check_method("--backend", a.backend, "--variant", a.variant);
 
+  // Every rank loads the scene and builds its own backend (replicated data).
   auto t = clock::now();
-  Scene scene = load_scene_or_default(a.scene);
-  for (const PointLight& l : lights) scene.add_light(l);
+  Scene scene = dist::together(comm, [&] {
+    Scene s = load_scene_or_default(a.scene);
+    for (const PointLight& l : f.lights) s.add_light(l);
+    return s;
+  });
   const double load_s = seconds_since(t);
-  const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds())));
   std::optional<Camera> camera_or;
-  try {
-    camera_or.emplace(desc, res.width, res.height);
-  } catch (const Error& e) {
-    if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
-    throw Error(cat(a.scene, ": ", e.what()));
-  }
+  dist::together(comm, [&] {
+    const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds())));
+    try {
+      camera_or.emplace(desc, res.width, res.height);
+    } catch (const Error& e) {
+      if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
+      throw Error(cat(a.scene, ": ", e.what()));
+    }
+  });
   const Camera& camera = *camera_or;
-  const std::unique_ptr<Backend> backend = build_backend(a.backend, a.variant, scene, a.scene);
+  const std::unique_ptr<Backend> backend =
+      dist::together(comm, [&] { return build_backend(a.backend, a.variant, scene, a.scene); });
 
   ProgressBar bar;
-  const RenderResult r = with_memory_context(cat("rendering ", res.width, "x", res.height), [&] {
-    return render(scene, *backend, camera, settings, a.quiet ? ProgressFn{} : ProgressFn(std::ref(bar)));
-  });
+  const ProgressFn progress = quiet ? ProgressFn{} : ProgressFn(std::ref(bar));
+  RenderResult r;
+  std::vector<dist::RankRender> ranks;
+  if (across) {
+    std::optional<TileRenderer> tiles;
+    dist::together(comm, [&] { tiles.emplace(scene, *backend, camera, f.settings); });
+    t = clock::now();
+    dist::RenderAcross all = dist::render_across(comm, *tiles, a.tiles_per_request, progress);
+    r.image = std::move(all.image);
+    r.stats = tiles->stats(all.counts, seconds_since(t));
+    ranks = std::move(all.ranks);
+  } else {
+    r = with_memory_context(cat("rendering ", res.width, "x", res.height),
+                            [&] { return render(scene, *backend, camera, f.settings, progress); });
+  }
   bar.finish();
   // The render again, untimed, recording its calls to the backend (the same rays: a render
   // depends on its inputs only), then those calls alone, twice: the second is timed.
@@ -204,35 +240,54 @@ int run_render(const RenderArgs& a) {
   double trace_s = 0;
   if (a.measure_traces) {
     with_memory_context(cat("recording the rays of ", res.width, "x", res.height), [&] {
-      return render(scene, *backend, camera, settings, {}, &log);
+      return render(scene, *backend, camera, f.settings, {}, &log);
     });
     replay_traces(log, *backend);
     trace_s = replay_traces(log, *backend);
   }
+  // Rank 0 writes the image (and the AOVs, which it traces alone: primary rays only).
   t = clock::now();
-  write_image(a.output, r.image);
-  if (!a.aov.empty()) write_aovs(a.aov, render_aovs(scene, *backend, camera));
+  dist::together(comm, [&] {
+    if (!comm.root()) return;
+    write_image(a.output, r.image);
+    if (!a.aov.empty()) write_aovs(a.aov, render_aovs(scene, *backend, camera));
+  });
   const double write_s = seconds_since(t);
-  if (!a.quiet) {
+  struct RankSetup {
+    double load, build;
+  };
+  const std::vector<RankSetup> setups =
+      across ? dist::gather_each(comm, RankSetup{load_s, backend->info().build_seconds}) : std::vector<RankSetup>();
+  if (!quiet) {
     const BackendInfo& info = backend->info();
     const RenderStats& s = r.stats;
     const std::string sampling =
-        settings.sampler == Sampler::adaptive ? "adaptive" : std::to_string(a.spp) + " spp " + a.sampler;
-    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s\n", a.output.c_str(), res.width, res.height,
-                 sampling.c_str(), info.name.c_str(), info.variant.c_str(), a.aov.empty() ? "" : " and AOVs to ",
+        f.settings.sampler == Sampler::adaptive ? "adaptive" : std::to_string(a.spp) + " spp " + a.sampler;
+    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s%s\n", a.output.c_str(), res.width, res.height,
+                 sampling.c_str(), info.name.c_str(), info.variant.c_str(),
+                 across ? cat(" on ", comm.size(), " ranks").c_str() : "", a.aov.empty() ? "" : " and AOVs to ",
                  a.aov.c_str());
     std::fprintf(stderr, "raypack: %.2f Mrays/s: %llu primary, %llu shadow, %llu reflection, %llu refraction rays\n",
                  double(s.rays()) / s.seconds * 1e-6, (unsigned long long)s.primary, (unsigned long long)s.shadow,
                  (unsigned long long)s.reflection, (unsigned long long)s.refraction);
     std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB), render %.3f s, write %.3f s\n", load_s,
                  info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
+    for (size_t k = 0; k < ranks.size(); ++k) {
+      const dist::RankRender& rr = ranks[k];
+      std::fprintf(stderr, "raypack: rank %zu: %llu tiles in %.3f s (%d threads; load %.3f s, build %.3f s", k,
+                   (unsigned long long)rr.tiles, rr.seconds, rr.threads, setups[k].load, setups[k].build);
+      if (k > 0)
+        std::fprintf(stderr, "; %llu requests, waited %.3f s", (unsigned long long)rr.handout.requests,
+                     rr.handout.wait_seconds);
+      std::fprintf(stderr, ")\n");
+    }
     if (a.measure_traces)
       std::fprintf(stderr,
                    "raypack: the render's %llu rays traced alone: %.3f s, %.2f Mrays/s; the render ran at %.2f of "
                    "that rate (%.0f%% of its time in the traces)\n",
                    (unsigned long long)log.rays(), trace_s, double(log.rays()) / trace_s * 1e-6, trace_s / s.seconds,
                    100.0 * trace_s / s.seconds);
-    if (settings.sampler == Sampler::adaptive)
+    if (f.settings.sampler == Sampler::adaptive)
       std::fprintf(stderr,
                    "raypack: adaptive sampling traced %llu primary rays where a uniform grid at depth %d needs %llu "
                    "(%.1f%% saved)\n",

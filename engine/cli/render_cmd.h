@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "backends/registry.h"
+#include "engine/dist/comm.h"
 
 namespace CLI {
 class App;
@@ -42,12 +43,15 @@ struct RenderArgs {
   int max_depth = 3;
   bool quiet = false;
   bool measure_traces = false;
+  int tiles_per_request = 0;  ///< under mpirun: tiles per request to rank 0 (0: guided)
 
   /// Adds the `render` subcommand to `app` with these flags.
   CLI::App* add_to(CLI::App& app);
 };
 
-/// Renders and writes the image (and the AOVs when asked); returns the exit status.
-int run_render(const RenderArgs& args);
+/// Renders and writes the image (and the AOVs when asked); returns the exit status. Across the
+/// ranks of `comm` when there are several: every rank renders the tiles rank 0 hands it, rank
+/// 0 writes the image and prints.
+int run_render(const RenderArgs& args, const dist::Comm& comm);
 
 }  // namespace rp::cli

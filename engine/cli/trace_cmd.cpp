@@ -7,6 +7,7 @@
 
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
+#include "engine/dist/ray_parts.h"
 #include "engine/rayfile.h"
 #include "engine/analysis/raygen.h"
 #include "engine/text.h"
@@ -38,31 +39,49 @@ CLI::App* TraceArgs::add_to(CLI::App& app) {
   return c;
 }
 
-int run_trace(const TraceArgs& a) {
-  check_method("--backend", a.backend, "--variant", a.variant);
-  const Coherence coherence = parse_coherence("--coherence", a.coherence);
-  check_file_name("--rays", a.rays, check_ray_file_name);
-  check_file_name("-o", a.output, check_hit_file_name);
+int run_trace(const TraceArgs& a, const dist::Comm& comm) {
+  const bool across = comm.size() > 1, quiet = a.quiet || !comm.root();
+  const Coherence coherence = dist::together(comm, [&] {
+    check_method("--backend", a.backend, "--variant", a.variant);
+    const Coherence c = parse_coherence("--coherence", a.coherence);
+    check_file_name("--rays", a.rays, check_ray_file_name);
+    check_file_name("-o", a.output, check_hit_file_name);
+    return c;
+  });
   const ThreadLimit limit(a.threads);
-  const Scene scene = load_scene_or_default(a.scene);
-  const std::vector<Ray> rays = with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
-  const auto backend = build_backend(a.backend, a.variant, scene, a.scene);
+  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene); });
+  // Across ranks each rank reads, traces and writes its share of the rays, in file order.
+  const std::vector<Ray> rays =
+      across ? dist::read_rays_across(comm, a.rays)
+             : with_memory_context("reading " + a.rays, [&] { return read_rays(a.rays); });
+  const auto backend = dist::together(comm, [&] { return build_backend(a.backend, a.variant, scene, a.scene); });
   std::vector<Hit> hits;
   const auto start = std::chrono::steady_clock::now();
-  with_memory_context(cat("tracing ", rays.size(), " rays"), [&] {
-    hits.resize(rays.size());
-    intersect_parallel(*backend, rays, hits, coherence);
+  dist::together(comm, [&] {
+    with_memory_context(cat("tracing ", rays.size(), " rays"), [&] {
+      hits.resize(rays.size());
+      intersect_parallel(*backend, rays, hits, coherence);
+    });
   });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  with_memory_context("writing " + a.output, [&] { write_hits(a.output, to_records(scene, rays, hits)); });
-  if (!a.quiet) {
-    const size_t n_hit = size_t(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.hit(); }));
-    const size_t invalid = size_t(std::count_if(rays.begin(), rays.end(), [](const Ray& r) { return !valid_ray(r); }));
-    std::fprintf(stderr, "raypack: traced %zu rays (%zu hits) with %s/%s in %.3f s (%.2f Mrays/s); wrote %s\n",
-                 rays.size(), n_hit, a.backend.c_str(), a.variant.c_str(), seconds,
-                 seconds > 0 ? double(rays.size()) / seconds * 1e-6 : 0.0, a.output.c_str());
+  const std::vector<HitRecord> records = dist::together(comm, [&] { return to_records(scene, rays, hits); });
+  if (across)
+    dist::write_hits_across(comm, a.output, records);
+  else
+    with_memory_context("writing " + a.output, [&] { write_hits(a.output, records); });
+  uint64_t counts[] = {rays.size(), uint64_t(std::count_if(hits.begin(), hits.end(), [](const Hit& h) { return h.hit(); })),
+                       uint64_t(std::count_if(rays.begin(), rays.end(), [](const Ray& r) { return !valid_ray(r); }))};
+  comm.sum(counts);
+  const std::vector<double> rank_seconds = dist::gather_each(comm, seconds);
+  if (!quiet) {
+    const uint64_t n = counts[0], n_hit = counts[1], invalid = counts[2];
+    const double s = *std::max_element(rank_seconds.begin(), rank_seconds.end());
+    std::fprintf(stderr, "raypack: traced %llu rays (%llu hits) with %s/%s in %.3f s (%.2f Mrays/s)%s; wrote %s\n",
+                 (unsigned long long)n, (unsigned long long)n_hit, a.backend.c_str(), a.variant.c_str(), s,
+                 s > 0 ? double(n) / s * 1e-6 : 0.0, across ? cat(" on ", comm.size(), " ranks").c_str() : "",
+                 a.output.c_str());
     if (invalid > 0)
-      warn(cat(a.rays, ": ", invalid, " of ", rays.size(), " rays are outside the valid-ray rule (finite, origin "
+      warn(cat(a.rays, ": ", invalid, " of ", n, " rays are outside the valid-ray rule (finite, origin "
                "|x| <= 2^30, largest direction component in [2^-26, 2^31], 0 <= tnear <= tfar) and were "
                "reported as misses"));
   }

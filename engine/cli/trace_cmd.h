@@ -5,6 +5,7 @@
 #include <string>
 
 #include "backends/registry.h"
+#include "engine/dist/comm.h"
 
 namespace CLI {
 class App;
@@ -22,7 +23,8 @@ struct TraceArgs {
   CLI::App* add_to(CLI::App& app);
 };
 
-/// Traces and writes the hit file; returns the exit status.
-int run_trace(const TraceArgs& args);
+/// Traces and writes the hit file; returns the exit status. Across the ranks of `comm` when
+/// there are several: each traces its share of the rays and writes its hits at their place.
+int run_trace(const TraceArgs& args, const dist::Comm& comm);
 
 }  // namespace rp::cli
