@@ -13,10 +13,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
   libtinyobjloader-dev gnuplot-nox
+  libopenmpi-dev openmpi-bin
 )
 
 .ci/apt-install.sh setup "${packages[@]}"
 
 jobs=${RAYPACK_JOBS:-2}
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRAYPACK_MPI=ON >/dev/null
 cmake --build build -j"$jobs"

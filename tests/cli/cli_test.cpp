@@ -15,27 +15,17 @@
 #include "engine/render/image_io.h"
 #include "engine/rayfile.h"
 #include "engine/text.h"
+#include "tests/support/shell.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
+using Result = rp::test::ShellResult;
 
 /// Runs `raypack <args>` through the shell, after `prefix` (shell commands such as a ulimit).
 Result run(const std::string& args, const std::string& prefix = "") {
-  const std::string cmd = prefix + std::string(RAYPACK_EXE) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return {-1, "popen failed"};
-  std::string out;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  const int st = pclose(p);
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+  return rp::test::run_shell(prefix + std::string(RAYPACK_EXE) + " " + args);
 }
 
 class Cli : public ::testing::Test {

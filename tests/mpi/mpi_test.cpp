@@ -1,0 +1,288 @@
+// raypack across MPI ranks as a user runs it: mpirun -n 2 and -n 3 on this machine against
+// one process with the same flags. Images, hit files, diff JSON and mismatch images must be
+// the same bytes, exit statuses the same; a rank that fails or dies must end the run with one
+// line and no output. Needs Open MPI's mpirun (RP_MPIEXEC, found by CMake).
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "engine/rayfile.h"
+#include "tests/support/shell.h"
+#include "tests/support/temp_dir.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using rp::test::TempDir;
+
+using Result = rp::test::ShellResult;  // the output: every rank's and mpirun's
+using rp::test::run_shell;
+
+const std::string kRaypack = RAYPACK_EXE;
+
+/// The start of an mpirun command line: Open MPI's, quiet (no banners of its own), as root
+/// when the tests run as root, more ranks than cores, no binding (ctest runs tests side by
+/// side). Under AddressSanitizer the ranks unwind fully on malloc so that LeakSanitizer can
+/// tell Open MPI's own allocations (suppressed) from raypack's.
+std::string mpirun() {
+  std::string env = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ";
+#if defined(__SANITIZE_ADDRESS__)
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  env += "ASAN_OPTIONS=" + std::string(asan ? asan : "") + ":fast_unwind_on_malloc=0 ";
+  env += "LSAN_OPTIONS=suppressions=" + std::string(RP_LSAN_SUPPRESSIONS) + ":print_suppressions=0 ";
+#endif
+  return env + RP_MPIEXEC + " -q --oversubscribe --bind-to none";
+}
+
+/// `raypack <args>` on `ranks` ranks.
+Result ranks(int n, const std::string& args) { return run_shell(mpirun() + " -n " + std::to_string(n) + " " + kRaypack + " " + args); }
+
+/// `raypack <args>` as one process, without mpirun.
+Result one(const std::string& args) { return run_shell(kRaypack + " " + args); }
+
+std::string bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// True when nothing in `dir` is a raypack temporary.
+bool no_temporaries(const TempDir& dir) {
+  for (const std::string& name : dir.entries())
+    if (name.rfind(".raypack-", 0) == 0) return false;
+  return true;
+}
+
+TEST(Mpi, RenderIsTheOneProcessImageForEverySamplerBackendAndRankCount) {
+  TempDir tmp;
+  // 70x50: 5x4 tiles, the last column and row partial.
+  const std::string common = "render --resolution 70x50 --spp 2 --seed 5 -q";
+  for (const std::string backend : {"embree", "simd"})
+    for (const std::string sampler : {"stratified", "random"}) {
+      const std::string args = common + " --backend " + backend + " --sampler " + sampler;
+      const std::string want = tmp / "one.exr";
+      Result r = one(args + " -o " + want);
+      ASSERT_EQ(r.status, 0) << args << ": " << r.output;
+      const bool both = (backend == "embree") == (sampler == "stratified");  // 3 ranks for two of the four
+      for (int n : both ? std::vector<int>{2, 3} : std::vector<int>{2}) {
+        const std::string got = tmp / ("ranks" + std::to_string(n) + ".exr");
+        r = ranks(n, args + " -o " + got);
+        ASSERT_EQ(r.status, 0) << n << " ranks, " << args << ": " << r.output;
+        EXPECT_EQ(r.output, "") << args;
+        EXPECT_EQ(bytes(got), bytes(want)) << n << " ranks, " << args;
+      }
+    }
+  // Other cameras and the adaptive sampler, one tile per request (every tile a message).
+  for (const std::string args :
+       {"--backend simd --sampler adaptive --camera thin-lens --aperture 0.2 --focus-distance 8 --tiles-per-request 1",
+        "--backend embree --camera fisheye --fisheye-fov 200 --spp 3 --sampler random"}) {
+    const std::string want = tmp / "one.exr", got = tmp / "three.exr";
+    ASSERT_EQ(one("render --resolution 50x34 -q " + args + " -o " + want).status, 0) << args;
+    const Result r = ranks(3, "render --resolution 50x34 -q " + args + " -o " + got);
+    ASSERT_EQ(r.status, 0) << args << ": " << r.output;
+    EXPECT_EQ(bytes(got), bytes(want)) << args;
+  }
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, RenderStatisticsCountEveryRank) {
+  TempDir tmp;
+  const std::string args = "render --resolution 64x48 --spp 1 --backend embree -o " + tmp / "x.png";
+  const Result want = one(args), got = ranks(2, args);
+  ASSERT_EQ(want.status, 0) << want.output;
+  ASSERT_EQ(got.status, 0) << got.output;
+  // The same rays, summed over the ranks; a line per rank with its tiles (12 in all).
+  const auto line = [](const std::string& text, const std::string& start) {
+    const size_t at = text.find(start);
+    return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+  };
+  EXPECT_NE(got.output.find(" with embree/default on 2 ranks\n"), std::string::npos) << got.output;
+  const std::string counts = line(want.output, " primary, ");
+  EXPECT_FALSE(counts.empty()) << want.output;
+  EXPECT_NE(got.output.find(counts), std::string::npos) << got.output;
+  uint64_t tiles = 0;
+  for (int k = 0; k < 2; ++k) {
+    const std::string start = "raypack: rank " + std::to_string(k) + ": ";
+    const std::string rank = line(got.output, start);
+    ASSERT_FALSE(rank.empty()) << got.output;
+    tiles += std::stoull(rank.substr(start.size()));
+    EXPECT_NE(rank.find(" tiles in "), std::string::npos) << rank;
+    if (k == 1) {
+      EXPECT_NE(rank.find(" requests, waited "), std::string::npos) << rank;
+    }
+  }
+  EXPECT_EQ(tiles, 12u) << got.output;
+}
+
+/// Rays at the default scene: hits, misses, rays outside the valid-ray rule.
+std::vector<rp::Ray> test_rays(size_t n) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<rp::Ray> rays(n);
+  for (size_t i = 0; i < n; ++i) {
+    rays[i] = {{8 * u(rng), 4 + 4 * u(rng), 8 * u(rng)}, 0.0f, {u(rng), u(rng) - 0.4f, u(rng)},
+               std::numeric_limits<float>::infinity()};
+    if (i % 97 == 0) rays[i].dir = {0, 0, 0};  // invalid: a miss everywhere
+  }
+  return rays;
+}
+
+TEST(Mpi, TraceWritesTheOneProcessHitFileInEveryFormat) {
+  TempDir tmp;
+  const std::vector<rp::Ray> rays = test_rays(3001);  // shares of 1000 and 1001 rays: not whole packets
+  rp::write_rays(tmp / "rays.bin", rays);
+  rp::write_rays(tmp / "rays.csv", rays);
+  struct Case {
+    std::string in, out, coherence;
+    std::vector<int> ranks;
+  };
+  for (const Case& c : {Case{"rays.bin", "hits.hits", "incoherent", {2, 3}}, Case{"rays.csv", "hits.csv", "incoherent", {2, 3}},
+                        Case{"rays.bin", "hits.csv", "incoherent", {3}}, Case{"rays.csv", "hits.hits", "incoherent", {3}},
+                        Case{"rays.bin", "hits.hits", "coherent", {3}}}) {
+    const std::string args = "trace -q --backend simd --coherence " + c.coherence + " --rays " + tmp / c.in + " -o ";
+    const Result want = one(args + tmp / ("one-" + c.out));
+    ASSERT_EQ(want.status, 0) << want.output;
+    for (int n : c.ranks) {
+      const Result got = ranks(n, args + tmp / c.out);
+      ASSERT_EQ(got.status, 0) << n << " ranks: " << got.output;
+      EXPECT_EQ(got.output, "");
+      EXPECT_EQ(bytes(tmp / c.out), bytes(tmp / ("one-" + c.out))) << c.in << " -> " << c.out << " " << c.coherence << ", " << n;
+    }
+  }
+  // Standard input (read by rank 0, shared out) into standard output (written by rank 0).
+  const Result want = run_shell("cat " + tmp / "rays.bin" + " | " + kRaypack + " trace -q --rays - -o /dev/stdout");
+  const Result got = run_shell("cat " + tmp / "rays.bin" + " | " + mpirun() + " -n 3 " + kRaypack + " trace -q --rays - -o /dev/stdout");
+  ASSERT_EQ(got.status, 0) << got.output.substr(0, 500);
+  EXPECT_EQ(got.output.size(), 16 + 28 * rays.size());
+  EXPECT_EQ(got.output, want.output);
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, ABadRayFileGetsTheOneProcessMessageAndNoOutput) {
+  TempDir tmp;
+  std::string text = "ox,oy,oz,dx,dy,dz\n";
+  for (int i = 0; i < 300; ++i) text += "1,2,3,0,-1,0\n";
+  const std::string bad_late = text + "1,2,3,0,-1\n", blank_inside = text + "\n" + text.substr(18);
+  for (const std::string& file : {bad_late, blank_inside}) {
+    std::ofstream(tmp / "bad.csv") << file;
+    const std::string args = "trace --rays " + tmp / "bad.csv" + " -o " + tmp / "h.csv";
+    const Result want = one(args);
+    ASSERT_EQ(want.status, 1) << want.output;
+    // The same line, led by the rank whose share holds the bad line (not rank 0: the errors
+    // are past the first share).
+    const std::string message = want.output.substr(std::string("raypack: ").size());
+    for (int n : {file == bad_late ? 3 : 2}) {
+      const Result got = ranks(n, args);
+      EXPECT_EQ(got.status, 1) << got.output;
+      const std::string lead = "raypack: rank ";
+      ASSERT_EQ(got.output.rfind(lead, 0), 0u) << got.output;
+      const int rank = std::atoi(got.output.c_str() + lead.size());
+      EXPECT_TRUE(rank >= 1 && rank < n) << got.output;
+      EXPECT_EQ(got.output, lead + std::to_string(rank) + ": " + message);
+    }
+    EXPECT_FALSE(fs::exists(tmp / "h.csv"));
+  }
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, DiffGivesTheOneProcessJsonImageAndStatus) {
+  TempDir tmp;
+  rp::write_rays(tmp / "rays.bin", test_rays(2500));
+  // A tight t tolerance, so that every class and both sides' error statistics have rays.
+  const std::string common = "diff -q -a embree --t-tolerance 1e-7 --count 3000 ";
+  const std::string b = "-b simd --variant-b watertight ";
+  const std::vector<std::pair<std::string, std::vector<int>>> cases = {
+      {b + "--kind primary --image IMAGE", {2, 3}}, {b + "--kind diffuse --image IMAGE", {3}}, {b + "--kind random", {2}},
+      {b + "--rays " + tmp / "rays.bin", {3}}, {"--kind random -b reference --no-reference", {2}}};
+  for (const auto& [rays, rank_counts] : cases) {
+    const auto args = [&](const std::string& name) {
+      std::string a = common + rays + " --json " + tmp / (name + ".json") + " --min-agreement 99.9";
+      const size_t at = a.find("IMAGE");
+      if (at != std::string::npos) a.replace(at, 5, tmp / (name + ".png"));
+      return a;
+    };
+    const Result want = one(args("one"));
+    ASSERT_TRUE(want.status == 0 || want.status == 3) << rays << ": " << want.output;
+    for (int n : rank_counts) {
+      const std::string name = "ranks" + std::to_string(n);
+      const Result got = ranks(n, args(name));
+      EXPECT_EQ(got.status, want.status) << n << " ranks, " << rays << ": " << got.output;
+      EXPECT_EQ(got.output, want.output) << rays;
+      EXPECT_EQ(bytes(tmp / (name + ".json")), bytes(tmp / "one.json")) << n << " ranks, " << rays;
+      if (rays.find("IMAGE") != std::string::npos) {
+        EXPECT_EQ(bytes(tmp / (name + ".png")), bytes(tmp / "one.png")) << n << " ranks, " << rays;
+      }
+    }
+  }
+  // What the ranks combined is not trivial: disagreements, and percentiles of many rays.
+  ASSERT_EQ(one(common + b + "--kind primary --json " + tmp / "p.json").status, 0);
+  const nlohmann::json j = nlohmann::json::parse(bytes(tmp / "p.json"));
+  EXPECT_GT(j["classes"]["t error"]["count"].get<int>(), 0) << j.dump();
+  EXPECT_GT(j["b_vs_reference"]["rays"].get<int>(), 1000) << j.dump();
+  EXPECT_GT(j["b_vs_reference"]["t_rel_error_p99"].get<double>(), 0.0) << j.dump();
+}
+
+TEST(Mpi, ARankThatCannotReadTheSceneEndsTheRunWithOneLineAndNoOutput) {
+  TempDir tmp;
+  fs::create_directories(tmp / "here");
+  fs::create_directories(tmp / "empty");
+  std::ofstream(tmp / "here/scene.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  // The same command line on both ranks; rank 1 starts where there is no scene.obj.
+  const std::string args = " render --scene scene.obj --resolution 32x32 -o " + tmp / "out.png";
+  const Result r = run_shell(mpirun() + " -n 1 -wdir " + tmp / "here" + " " + kRaypack + args + " : -n 1 -wdir " +
+                         tmp / "empty" + " " + kRaypack + args);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 1: scene.obj: cannot open: No such file or directory\n");
+  EXPECT_FALSE(fs::exists(tmp / "out.png"));
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, ARankThatDiesEndsTheRunWithNoOutput) {
+  TempDir tmp;
+  // Rank 1 is killed (SIGKILL) 4 s in, long before the render would end; mpirun then ends
+  // rank 0, which says why and removes what it had not finished.
+  const std::string args = " render --resolution 1024x768 --spp 64 -t 1 -q -o " + tmp / "out.png";
+  const Result r =
+      run_shell(mpirun() + " -n 1 " + kRaypack + args + " : -n 1 timeout -s KILL 4 " + kRaypack + args);
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("raypack: rank 0 stopped by SIGTERM: under mpirun, another rank died"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(tmp / "out.png"));
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, RanksStartedWithOtherArgumentsAreRefused) {
+  TempDir tmp;
+  const Result r = run_shell(mpirun() + " -n 2 " + kRaypack + " render --spp 1 -o " + tmp / "x.png" + " : -n 1 " + kRaypack +
+                         " render --spp 2 -o " + tmp / "x.png");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 2: started with other arguments than rank 0 (argument 3: '2' where rank 0 has '1'); "
+                      "every rank must run the same raypack command\n");
+  EXPECT_FALSE(fs::exists(tmp / "x.png"));
+}
+
+TEST(Mpi, CommandsThatRunInOneProcessAreRefusedAcrossRanksAndFlagErrorsPrintedOnce) {
+  Result r = ranks(2, "bench --size 8");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: bench runs in one process: start it without mpirun (render, trace and diff run across ranks)\n");
+  r = ranks(3, "render --spp 0");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, one("render --spp 0").output);
+  r = ranks(2, "render --measure-traces");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: --measure-traces: times the traces of one process; start it without mpirun\n");
+  r = ranks(2, "--version");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output, one("--version").output);
+}
+
+}  // namespace
