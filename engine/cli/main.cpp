@@ -14,6 +14,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/bench_cmd.h"
 #include "engine/cli/diff_cmd.h"
+#include "engine/cli/domains_cmd.h"
 #include "engine/cli/info_cmd.h"
 #include "engine/cli/plot.h"
 #include "engine/cli/ranks.h"
@@ -48,6 +49,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
   ChartArgs chart_args;
   InfoArgs info_args;
   StabilityArgs stability_args;
+  DomainsArgs domains_args;
   CLI::App* render = render_args.add_to(app);
   CLI::App* trace = trace_args.add_to(app);
   CLI::App* diff = diff_args.add_to(app);
@@ -56,6 +58,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
   CLI::App* info = info_args.add_to(app);
   add_backends_command(app);
   CLI::App* stability = stability_args.add_to(app);
+  CLI::App* domains = domains_args.add_to(app);
 
   try {
     check_same_command_line(comm, argc, argv);
@@ -94,6 +97,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
     if (*bench) return run_bench(bench_args);
     if (*stability) return run_stability(stability_args);
     if (*chart) return run_chart(chart_args);
+    if (*domains) return run_domains(domains_args);
     return run_backends();
   } catch (...) {
     const rp::dist::Failure f = describe_failure(std::current_exception());
