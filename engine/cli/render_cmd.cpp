@@ -274,8 +274,9 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
                  info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
     for (size_t k = 0; k < ranks.size(); ++k) {
       const dist::RankRender& rr = ranks[k];
-      std::fprintf(stderr, "raypack: rank %zu: %llu tiles in %.3f s (%d threads; load %.3f s, build %.3f s", k,
-                   (unsigned long long)rr.tiles, rr.seconds, rr.threads, setups[k].load, setups[k].build);
+      std::fprintf(stderr, "raypack: rank %zu: %llu tiles in %.3f s (%d thread%s; load %.3f s, build %.3f s", k,
+                   (unsigned long long)rr.tiles, rr.seconds, rr.threads, rr.threads == 1 ? "" : "s", setups[k].load,
+                   setups[k].build);
       if (k > 0)
         std::fprintf(stderr, "; %llu requests, waited %.3f s", (unsigned long long)rr.handout.requests,
                      rr.handout.wait_seconds);

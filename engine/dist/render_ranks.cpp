@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstring>
 #include <mutex>
+#include <numeric>
 #include <utility>
 
 #include "engine/error.h"
@@ -27,6 +28,23 @@ struct Part {
   RankRender rank;
 };
 
+/// The order in which the hand-out's numbers visit the tiles: number k is tile k * stride mod
+/// count, with stride coprime to count near count / golden ratio, so consecutive numbers land
+/// far apart. Tiles differ in cost by region (a sky row against a row of mirrors); a range of
+/// the hand-out then costs about the same as any other range of its size, as guided
+/// self-scheduling assumes.
+class Scattered {
+ public:
+  explicit Scattered(int count) : count_(count) {
+    stride_ = std::max<int64_t>(1, int64_t(double(count) * 0.6180339887498949));
+    while (std::gcd(stride_, int64_t(count)) != 1) ++stride_;
+  }
+  int operator()(int k) const { return int(int64_t(k) * stride_ % count_); }
+
+ private:
+  int64_t count_, stride_;
+};
+
 Part render_part(const Comm& comm, const TileRenderer& tiles, int per_request, const ProgressFn& progress) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -34,6 +52,7 @@ Part render_part(const Comm& comm, const TileRenderer& tiles, int per_request, c
   part.rank.threads = int(std::min<size_t>(size_t(tbb::this_task_arena::max_concurrency()),
                                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
   const std::unique_ptr<TileSource> source = comm.hand_out({tiles.tile_count(), per_request});
+  const Scattered order(tiles.tile_count());
   std::mutex mutex;
   try {
     tbb::parallel_for(
@@ -42,7 +61,8 @@ Part render_part(const Comm& comm, const TileRenderer& tiles, int per_request, c
           std::array<Vec3f, kTilePixels> pixels;
           TileCounts counts;
           char record[kTileRecord];
-          for (int t; (t = source->next()) >= 0;) {
+          for (int k; (k = source->next()) >= 0;) {
+            const int t = order(k);
             try {
               tiles.render(t, pixels, counts);
             } catch (...) {
