@@ -46,12 +46,12 @@ int run_domains(const DomainsArgs& a) {
               "bounce from each hit; %s/%s in every domain; a forwarded ray is %d bytes\n",
               a.scene.c_str(), scene.triangle_count(), scene.bytes(), a.size, a.size, a.backend.c_str(),
               a.variant.c_str(), kRayMessageBytes);
-  std::printf("%7s %12s %-8s %9s %9s %9s %10s %10s %12s %5s %10s %6s\n", "domains", "bytes/domain", "kind", "rays",
-              "hits", "no domain", "one domain", "visits/ray", "forwards/ray", "max", "bytes/ray", "check");
+  std::printf("%7s %11s %12s %-8s %9s %9s %9s %10s %10s %12s %5s %10s %6s\n", "domains", "replicated", "bytes/domain",
+              "kind", "rays", "hits", "no domain", "one domain", "visits/ray", "forwards/ray", "max", "bytes/ray", "check");
   for (const int count : a.domains) {
     const Domains d = split_domains(scene, count);
     std::vector<std::unique_ptr<Backend>> backends;
-    size_t bytes = 0;
+    size_t bytes = 0;  // the largest domain's scene and structure
     for (const Scene& part : d.parts) {
       backends.push_back(build_backend(a.backend, a.variant, part, a.scene));
       bytes = std::max(bytes, part.bytes() + backends.back()->info().bytes);
@@ -60,7 +60,8 @@ int run_domains(const DomainsArgs& a) {
                                           std::tuple{"diffuse", &diffuse, false}}) {
       const Traffic t = follow_rays(d, backends, *whole, rays->rays, any);
       const double n = std::max<double>(1.0, double(t.rays));
-      std::printf("%7d %12zu %-8s %9llu %9llu %8.1f%% %9.1f%% %10.3f %12.3f %5llu %10.1f %6s\n", count, bytes, kind,
+      std::printf("%7d %10.1f%% %12zu %-8s %9llu %9llu %8.1f%% %9.1f%% %10.3f %12.3f %5llu %10.1f %6s\n", count,
+                  100.0 * (double(d.triangles) / double(scene.triangle_count()) - 1.0), bytes, kind,
                   (unsigned long long)t.rays, (unsigned long long)t.hits, 100.0 * double(t.no_domain) / n,
                   100.0 * double(t.one_domain) / n, double(t.visits) / n, double(t.forwards) / n,
                   (unsigned long long)t.max_visits, kRayMessageBytes * double(t.forwards) / n,
