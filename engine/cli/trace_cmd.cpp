@@ -7,6 +7,7 @@
 
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
+#include "engine/invalid_rays.h"
 #include "engine/rayfile.h"
 #include "engine/analysis/raygen.h"
 #include "engine/text.h"
@@ -62,9 +63,7 @@ int run_trace(const TraceArgs& a) {
                  rays.size(), n_hit, a.backend.c_str(), a.variant.c_str(), seconds,
                  seconds > 0 ? double(rays.size()) / seconds * 1e-6 : 0.0, a.output.c_str());
     if (invalid > 0)
-      warn(cat(a.rays, ": ", invalid, " of ", rays.size(), " rays are outside the valid-ray rule (finite, origin "
-               "|x| <= 2^30, largest direction component in [2^-26, 2^31], 0 <= tnear <= tfar) and were "
-               "reported as misses"));
+      warn(invalid_rays_message(a.rays, invalid, rays.size()));
   }
   return 0;
 }
