@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Runs the whole test suite under AddressSanitizer (with LeakSanitizer) and UBSan: configures
 # ./build-asan (the default compiler, RelWithDebInfo, every file built with the sanitizers),
-# builds only the GoogleTest binaries (every rp_test(...) of tests/) and the raypack CLI that
-# rp_test_cli runs (not the benchmark rp_bench), and runs ctest. Any sanitizer report aborts
-# its test, so ctest fails.
+# builds only the GoogleTest binaries (every rp_test(...) of tests/) and what the other tests
+# run (rp_test_prerequisites: the raypack CLI and libraypack.so; not the benchmark rp_bench),
+# and runs ctest. Any sanitizer report aborts its test, so ctest fails.
 # Usage: .ci/sanitize.sh    (from anywhere; RAYPACK_JOBS build jobs, default 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,8 +24,8 @@ if ((${#targets[@]} == 0)); then
   echo "sanitize: no rp_test(...) targets found under tests/" >&2
   exit 1
 fi
-echo "sanitize: building ${targets[*]} raypack in $build"
-cmake --build "$build" -j"$jobs" --target "${targets[@]}" raypack
+echo "sanitize: building ${targets[*]} rp_test_prerequisites in $build"
+cmake --build "$build" -j"$jobs" --target "${targets[@]}" rp_test_prerequisites
 
 # gtest_discover_tests registers "<binary>_NOT_BUILT" for a test binary that was not built:
 # every test ctest knows must have its binary.
