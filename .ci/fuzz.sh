@@ -29,7 +29,7 @@ declare -A dictionary=([fuzz_obj]=obj.dict [fuzz_ply]=ply.dict [fuzz_json]=json.
 # input. _GLIBCXX_ASSERTIONS: operator[] past size() inside a vector's capacity is caught too.
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAYPACK_FUZZ=ON \
-  -DRAYPACK_BUILD_BENCH=OFF -DCMAKE_CXX_FLAGS="$sanitize -D_GLIBCXX_ASSERTIONS" \
+  -DRAYPACK_BUILD_BENCH=OFF -DRAYPACK_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS="$sanitize -D_GLIBCXX_ASSERTIONS" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" >/dev/null
 cmake --build "$build" -j"$jobs" --target "${targets[@]}"
 

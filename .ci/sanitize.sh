@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Runs the whole test suite under AddressSanitizer (with LeakSanitizer) and UBSan: configures
 # ./build-asan (the default compiler, RelWithDebInfo, every file built with the sanitizers),
-# builds only the GoogleTest binaries (every rp_test(...) of tests/) and the raypack CLI that
-# rp_test_cli runs (not the benchmark rp_bench), and runs ctest. Any sanitizer report aborts
-# its test, so ctest fails.
+# builds only the GoogleTest binaries (every rp_test(...) of tests/) and what the other tests
+# run (rp_test_prerequisites: the raypack CLI, libraypack.so and the Python module; not the
+# benchmark rp_bench), and runs ctest. Any sanitizer report aborts its test, so ctest fails.
+# The Python tests load the instrumented module into Debian's python3 with the sanitizer's
+# runtime preloaded (tests/python/CMakeLists.txt).
 # Usage: .ci/sanitize.sh    (from anywhere; RAYPACK_JOBS build jobs, default 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +14,8 @@ jobs=${RAYPACK_JOBS:-2}
 build=build-asan
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAYPACK_MPI=ON -DCMAKE_CXX_FLAGS="$sanitize" \
-  -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" >/dev/null
+  -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
+  -DCMAKE_MODULE_LINKER_FLAGS="$sanitize" -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
 
 # The options apply to the test discovery that runs each binary after it is linked, too.
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
@@ -24,8 +27,8 @@ if ((${#targets[@]} == 0)); then
   echo "sanitize: no rp_test(...) targets found under tests/" >&2
   exit 1
 fi
-echo "sanitize: building ${targets[*]} raypack in $build"
-cmake --build "$build" -j"$jobs" --target "${targets[@]}" raypack
+echo "sanitize: building ${targets[*]} rp_test_prerequisites in $build"
+cmake --build "$build" -j"$jobs" --target "${targets[@]}" rp_test_prerequisites
 
 # gtest_discover_tests registers "<binary>_NOT_BUILT" for a test binary that was not built:
 # every test ctest knows must have its binary.

@@ -15,6 +15,26 @@ bool cpu_has_avx2_fma() {
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 
+/// A backend that shares ownership of the scene it was built over; every call goes to the
+/// backend built over that scene. The scene is declared first so that it is destroyed last.
+class SceneSharingBackend final : public Backend {
+ public:
+  SceneSharingBackend(std::shared_ptr<const Scene> scene, std::unique_ptr<Backend> backend)
+      : scene_(std::move(scene)), backend_(std::move(backend)) {}
+
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
+    backend_->intersect(rays, hits, coherence);
+  }
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const noexcept override {
+    backend_->occluded(rays, occluded, coherence);
+  }
+  const BackendInfo& info() const noexcept override { return backend_->info(); }
+
+ private:
+  std::shared_ptr<const Scene> scene_;
+  std::unique_ptr<Backend> backend_;
+};
+
 }  // namespace
 
 std::vector<BackendEntry> list_backends() {
@@ -58,6 +78,13 @@ std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene,
   if (const std::optional<MethodProblem> p = check_method(name, options.variant)) throw Error(p->message);
   if (name == "embree") return embree::make_backend(scene, options);
   return bvh8::make_backend(scene, options);
+}
+
+std::unique_ptr<Backend> make_backend(std::string_view name, std::shared_ptr<const Scene> scene,
+                                      const BackendOptions& options) {
+  RP_CHECK(scene != nullptr, "make_backend: no scene (a null shared_ptr)");
+  std::unique_ptr<Backend> backend = make_backend(name, *scene, options);
+  return std::make_unique<SceneSharingBackend>(std::move(scene), std::move(backend));
 }
 
 }  // namespace rp

@@ -45,6 +45,24 @@ std::optional<MethodProblem> check_method(std::string_view name, std::string_vie
 
 /// Builds `name` over `scene`. Throws rp::Error with check_method's message for an unknown or
 /// unavailable backend or an unknown variant.
+///
+/// Ownership: the backend keeps a reference to `scene` (the triangles some kernels read, the
+/// analytic primitives and planes every backend tests beside its structure): the caller owns
+/// the scene, must keep it alive and unchanged for as long as the backend lives, and destroys
+/// the backend first. A temporary scene would die at the end of the call, so passing one is a
+/// compile error (the deleted overload below); to hand the scene's lifetime to the backend,
+/// use the shared_ptr overload.
 std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options = {});
+
+/// Refused at compile time: the backend would keep a reference to a scene that is destroyed
+/// at the end of the full expression (`make_backend("simd", load_scene(path))`).
+std::unique_ptr<Backend> make_backend(std::string_view name, const Scene&& scene, const BackendOptions& options = {}) = delete;
+
+/// Builds `name` over a scene the backend shares: the backend holds `scene` (which must not be
+/// null) until it is destroyed, so the scene outlives it whoever else lets go of it. The scene
+/// is const through this pointer; nobody may change it through another while the backend
+/// lives. Throws as the overload above, and rp::Error for a null scene.
+std::unique_ptr<Backend> make_backend(std::string_view name, std::shared_ptr<const Scene> scene,
+                                      const BackendOptions& options = {});
 
 }  // namespace rp

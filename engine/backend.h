@@ -10,6 +10,7 @@
 /// renderer share. Any other ray is reported as a miss (and as not occluded) by every backend.
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -57,8 +58,14 @@ class Backend {
 /// pay for the scheduling.
 inline constexpr size_t kParallelChunk = 4096;
 
-/// Traces a batch with all threads (TBB) in chunks of kParallelChunk rays, each chunk one call
-/// of backend.intersect (so a coherent span stays whole within a chunk).
+/// Calls body(begin, count) once for each chunk [begin, begin + count) of a batch of n rays:
+/// consecutive chunks of kParallelChunk rays (the last one shorter), in parallel over TBB's
+/// threads (the current task arena's). Every parallel trace cuts its batch this way, so the
+/// same rays make the same backend calls whichever caller cuts them.
+void for_each_chunk(size_t n, const std::function<void(size_t begin, size_t count)>& body);
+
+/// Traces a batch with all threads (TBB) in chunks of kParallelChunk rays (for_each_chunk),
+/// each chunk one call of backend.intersect (so a coherent span stays whole within a chunk).
 void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence);
 
 /// The same for any hits.

@@ -8,6 +8,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
 #include "engine/dist/ray_parts.h"
+#include "engine/invalid_rays.h"
 #include "engine/rayfile.h"
 #include "engine/analysis/raygen.h"
 #include "engine/text.h"
@@ -81,9 +82,7 @@ int run_trace(const TraceArgs& a, const dist::Comm& comm) {
                  s > 0 ? double(n) / s * 1e-6 : 0.0, across ? cat(" on ", comm.size(), " ranks").c_str() : "",
                  a.output.c_str());
     if (invalid > 0)
-      warn(cat(a.rays, ": ", invalid, " of ", n, " rays are outside the valid-ray rule (finite, origin "
-               "|x| <= 2^30, largest direction component in [2^-26, 2^31], 0 <= tnear <= tfar) and were "
-               "reported as misses"));
+      warn(invalid_rays_message(a.rays, invalid, n));
   }
   return 0;
 }

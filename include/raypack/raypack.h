@@ -1,0 +1,62 @@
+#pragma once
+/// raypack's public C++ API: the one header a program includes (`#include <raypack/raypack.h>`)
+/// after `find_package(raypack CONFIG REQUIRED)` and `target_link_libraries(x raypack::raypack)`,
+/// or with `pkg-config --cflags --libs raypack`. C++20. Everything is in namespace rp.
+///
+/// What it offers, and the header that documents each part (installed beside this one):
+/// - scenes: rp::load_scene(path) for .obj, .ply and .json files or "default"
+///   (engine/loaders/load.h); rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
+///   .positions, .indices}), add_sphere, add_quadric, add_polygon, add_plane, lights,
+///   materials and a camera (engine/scene.h);
+/// - backends: rp::list_backends() (names, variants, coherent and incoherent methods, whether
+///   this machine runs them), rp::check_method, rp::make_backend(name, scene, options)
+///   (backends/registry.h);
+/// - tracing: Backend::intersect (closest hit) and Backend::occluded (any hit) over spans of
+///   rp::Ray with an rp::Coherence hint, rp::intersect_parallel / occluded_parallel over all
+///   cores (engine/backend.h); rays, hits, the valid-ray rule and the hit convention
+///   (engine/ray.h); ray and hit files (engine/rayfile.h);
+/// - judging: the double-precision rp::Reference (engine/analysis/reference.h), rp::diff_hits
+///   and its summary as a table or as the JSON of `raypack diff --json`
+///   (engine/analysis/diff.h), ray sets (engine/analysis/raygen.h);
+/// - images: rp::render with a Camera (engine/render/render.h, engine/render/camera.h),
+///   rp::write_image (engine/render/image_io.h);
+/// - rp::version() (raypack/version.h).
+///
+/// Hit convention: a hit counts only for tnear <= t <= tfar (both ends closed); directions
+/// are never normalized (t is in units of the direction's length); a miss is Hit{}:
+/// prim_id == rp::kInvalidId (0xffffffff), t == +inf, u == v == 0; prim_id numbers the
+/// triangles of every mesh in order, then spheres, quadrics, polygons and planes; for
+/// triangles p = (1-u-v) v0 + u v1 + v v2. A ray outside rp::valid_ray (NaN, infinite, beyond
+/// the coordinate range, tnear > tfar) is a miss and never occluded, on every backend.
+///
+/// Ownership:
+/// - a Scene owns all its data (add_* copy or move it in); load_scene returns one by value;
+/// - a Backend reads the Scene it was built over for as long as it lives. Either the caller
+///   keeps the scene alive and unchanged until the backend is destroyed
+///   (make_backend(name, scene), scene an lvalue; a temporary scene does not compile), or the
+///   backend shares it (make_backend(name, std::shared_ptr<const Scene>)), and the scene
+///   lives until its last owner lets go;
+/// - a Reference copies what it needs: the scene may go away once it is built;
+/// - render, diff_hits, primary_rays and the other functions read their arguments during the
+///   call only and return values the caller owns.
+///
+/// Errors: setup calls (loading, building, file I/O, bad settings) throw rp::Error, whose
+/// what() is one line naming the file, value or name at fault; tracing calls are noexcept.
+/// Threads: a built backend and a Reference are immutable and may be queried from many
+/// threads at once; the *_parallel functions, render and Reference::intersect over spans use
+/// TBB's threads (limit them with a tbb::task_arena or tbb::global_control).
+
+#include "backends/registry.h"
+#include "engine/analysis/diff.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
+#include "engine/backend.h"
+#include "engine/error.h"
+#include "engine/loaders/load.h"
+#include "engine/ray.h"
+#include "engine/rayfile.h"
+#include "engine/render/camera.h"
+#include "engine/render/image_io.h"
+#include "engine/render/render.h"
+#include "engine/scene.h"
+#include "raypack/version.h"

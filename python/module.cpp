@@ -1,0 +1,431 @@
+// The compiled part of the Python package `raypack` (python/raypack/__init__.py re-exports it):
+// scenes, backends by name, closest and any hits over numpy arrays, the renderer, the diff and
+// ray and hit files. The numpy side of tracing is ray_arrays.{h,cpp}.
+//
+// Ownership: a Python Scene holds its rp::Scene through a shared_ptr<const Scene> and never
+// changes it; a Backend is built by make_backend's shared_ptr overload, so it keeps its scene
+// alive on its own, whatever Python does with the Scene object.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <array>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+
+#include "backends/registry.h"
+#include "engine/analysis/diff.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
+#include "engine/error.h"
+#include "engine/invalid_rays.h"
+#include "engine/loaders/load.h"
+#include "engine/rayfile.h"
+#include "engine/render/camera.h"
+#include "engine/render/image_io.h"
+#include "engine/render/render.h"
+#include "python/ray_arrays.h"
+
+namespace rp::python {
+namespace {
+
+using namespace pybind11::literals;
+
+/// raypack.Scene: an immutable scene and the name it is known by in messages and diff
+/// summaries (the path it was loaded from, "default", or "arrays").
+struct SceneHandle {
+  std::shared_ptr<const Scene> scene;
+  std::string name;
+};
+
+/// raypack.Backend: a backend and the scene it was built over (which the backend shares too).
+struct BackendHandle {
+  SceneHandle scene;
+  std::unique_ptr<Backend> backend;
+};
+
+SceneHandle load(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  py::gil_scoped_release release;
+  return {std::make_shared<const Scene>(load_scene(name)), name};
+}
+
+/// A C-order (rows, columns) array of `what` as T (converted when it is another dtype: the scene
+/// copies it anyway). Throws rp::Error for another shape, naming `shape`, the one expected.
+template <typename T>
+py::array_t<T, py::array::c_style | py::array::forcecast> table(const char* what, const py::handle& object,
+                                                                py::ssize_t columns, const char* shape) {
+  auto a = numbers<T, py::array::c_style | py::array::forcecast>(what, object);
+  if (a.ndim() != 2 || a.shape(1) != columns) throw Error(cat(what, ": shape ", shape_text(a), " is not ", shape));
+  return a;
+}
+
+SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, const py::handle& spheres,
+                        const py::handle& planes) {
+  const auto positions = table<float>("vertices", vertices, 3, "(V, 3)");  // held while v reads it
+  const auto v = positions.unchecked<2>();
+  const auto idx = table<int64_t>("indices", indices, 3, "(T, 3)");
+  TriangleMesh mesh;
+  mesh.name = "arrays";
+  mesh.positions.resize(size_t(v.shape(0)));
+  for (py::ssize_t i = 0; i < v.shape(0); ++i) mesh.positions[size_t(i)] = {v(i, 0), v(i, 1), v(i, 2)};
+  mesh.indices.resize(size_t(idx.size()));
+  const int64_t* in = idx.data();
+  for (size_t i = 0; i < mesh.indices.size(); ++i) {
+    RP_CHECK(in[i] >= 0 && in[i] < int64_t(kInvalidId), "indices: ", in[i], " (triangle ", i / 3,
+             ") is not a vertex index");
+    mesh.indices[i] = uint32_t(in[i]);
+  }
+  Scene scene;
+  scene.add_mesh(std::move(mesh));
+  if (!spheres.is_none()) {
+    const auto array = table<float>("spheres", spheres, 4, "(S, 4): centre x, y, z and radius");
+    const auto s = array.unchecked<2>();
+    for (py::ssize_t i = 0; i < s.shape(0); ++i)
+      scene.add_sphere(Sphere{.center = {s(i, 0), s(i, 1), s(i, 2)}, .radius = s(i, 3), .material = 0});
+  }
+  if (!planes.is_none()) {
+    const auto array = table<float>("planes", planes, 4, "(P, 4): normal x, y, z and d of n.P + d = 0");
+    const auto p = array.unchecked<2>();
+    for (py::ssize_t i = 0; i < p.shape(0); ++i)
+      scene.add_plane(Plane{.normal = {p(i, 0), p(i, 1), p(i, 2)}, .d = p(i, 3), .material = 0});
+  }
+  return {std::make_shared<const Scene>(std::move(scene)), "arrays"};
+}
+
+BackendHandle build(const std::string& name, const SceneHandle& scene, const std::string& variant,
+                    const std::string& coherent_method, const std::string& incoherent_method) {
+  const BackendOptions options{.variant = variant, .device_config = {}, .coherent_method = coherent_method,
+                               .incoherent_method = incoherent_method};
+  py::gil_scoped_release release;
+  return {scene, make_backend(name, scene.scene, options)};
+}
+
+/// What a call does with rays outside the valid-ray rule, which every backend reports as
+/// misses (the `invalid` argument): warn (a RuntimeWarning naming how many: the line `raypack
+/// trace` prints), raise (raypack.Error with that line) or miss (nothing more).
+enum class InvalidRays : uint8_t { warn, raise, miss };
+
+InvalidRays parse_invalid(const std::string& policy) {
+  if (policy == "warn") return InvalidRays::warn;
+  if (policy == "raise") return InvalidRays::raise;
+  RP_CHECK(policy == "miss", "invalid: '", policy, "' is not warn, raise or miss");
+  return InvalidRays::miss;
+}
+
+void report_invalid(const char* call, InvalidRays policy, size_t invalid, size_t total) {
+  if (invalid == 0 || policy == InvalidRays::miss) return;
+  const std::string message = invalid_rays_message(call, invalid, total);
+  if (policy == InvalidRays::raise) throw Error(message);
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+}
+
+py::dict intersect(const BackendHandle& b, const py::handle& origins, const py::handle& directions,
+                   const py::handle& tnear, const py::handle& tfar, bool coherent, const std::string& invalid,
+                   bool normals, int threads) {
+  const InvalidRays policy = parse_invalid(invalid);
+  const RayArrays rays(origins, directions, tnear, tfar);
+  size_t bad = 0;
+  const HitArrays hits = trace_closest(*b.backend, *b.scene.scene, rays,
+                                       coherent ? Coherence::coherent : Coherence::incoherent, normals, threads, bad);
+  report_invalid("intersect", policy, bad, rays.size());
+  return hits.to_dict();
+}
+
+py::array_t<bool> occluded(const BackendHandle& b, const py::handle& origins, const py::handle& directions,
+                           const py::handle& tnear, const py::handle& tfar, bool coherent, const std::string& invalid,
+                           int threads) {
+  const InvalidRays policy = parse_invalid(invalid);
+  const RayArrays rays(origins, directions, tnear, tfar);
+  size_t bad = 0;
+  py::array_t<bool> out = trace_any(*b.backend, rays, coherent ? Coherence::coherent : Coherence::incoherent,
+                                    threads, bad);
+  report_invalid("occluded", policy, bad, rays.size());
+  return out;
+}
+
+/// Rays as the dict every ray function returns and intersect(**rays) takes: origins and
+/// directions (N, 3), tnear and tfar (N,), float32.
+py::dict ray_dict(std::span<const Ray> rays) {
+  const py::ssize_t n = py::ssize_t(rays.size());
+  py::array_t<float> org({n, py::ssize_t(3)}), dir({n, py::ssize_t(3)}), tnear(n), tfar(n);
+  float *o = org.mutable_data(), *d = dir.mutable_data(), *tn = tnear.mutable_data(), *tf = tfar.mutable_data();
+  for (size_t i = 0; i < rays.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      o[3 * i + size_t(a)] = rays[i].org[a];
+      d[3 * i + size_t(a)] = rays[i].dir[a];
+    }
+    tn[i] = rays[i].tnear;
+    tf[i] = rays[i].tfar;
+  }
+  return py::dict("origins"_a = org, "directions"_a = dir, "tnear"_a = tnear, "tfar"_a = tfar);
+}
+
+py::dict hit_dict(std::span<const HitRecord> records) {
+  HitArrays hits(records.size(), true);
+  float *t = hits.t.mutable_data(), *u = hits.u.mutable_data(), *v = hits.v.mutable_data();
+  float* ng = hits.ng.mutable_data();
+  uint32_t* prim = hits.prim_id.mutable_data();
+  for (size_t i = 0; i < records.size(); ++i) {
+    t[i] = records[i].t;
+    prim[i] = records[i].prim_id;
+    u[i] = records[i].u;
+    v[i] = records[i].v;
+    for (int a = 0; a < 3; ++a) ng[3 * i + size_t(a)] = records[i].ng[a];
+  }
+  return hits.to_dict();
+}
+
+void save_rays(const std::filesystem::path& path, const py::handle& origins, const py::handle& directions,
+               const py::handle& tnear, const py::handle& tfar) {
+  const RayArrays rays(origins, directions, tnear, tfar);
+  py::gil_scoped_release release;
+  size_t invalid = 0;  // a ray file may hold any ray: the tracer decides what is valid
+  write_rays(path.string(), rays.records(invalid));
+}
+
+/// A backend given as a name (with its variant) or as a raypack.Backend already built, which
+/// must have been built over `scene`.
+using BackendArg = std::variant<std::string, const BackendHandle*>;
+
+/// The backend of `arg` over `scene`: the one given, or one built now (kept in `built`).
+const Backend& backend_of(const BackendArg& arg, const std::string& variant, const SceneHandle& scene,
+                          const char* what, std::optional<BackendHandle>& built) {
+  if (const auto* given = std::get_if<const BackendHandle*>(&arg)) {
+    RP_CHECK(*given != nullptr, what, ": None is not a backend name or a Backend");
+    RP_CHECK((*given)->scene.scene == scene.scene, what, ": the backend was built over another scene (",
+             (*given)->scene.name, ", not ", scene.name, ")");
+    return *(*given)->backend;
+  }
+  built = build(std::get<std::string>(arg), scene, variant, "", "");
+  return *built->backend;
+}
+
+/// An image as the (height, width, 3) float32 array render returns; its buffer becomes the array's.
+py::array_t<float> image_array(Image image) {
+  auto rgb = std::make_unique<std::vector<float>>(std::move(image.rgb));
+  std::vector<float>* data = rgb.get();
+  const py::capsule owner(rgb.release(), [](void* p) { delete static_cast<std::vector<float>*>(p); });
+  return py::array_t<float>({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)}, data->data(), owner);
+}
+
+py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& backend, const std::string& variant,
+                                int width, int height, int spp, const std::string& sampler, uint64_t seed,
+                                int max_depth, std::optional<std::array<float, 3>> eye,
+                                std::optional<std::array<float, 3>> look_at, std::optional<std::array<float, 3>> up,
+                                std::optional<float> fov, int threads) {
+  RenderSettings settings{.width = width, .height = height, .spp = spp, .sampler = Sampler::stratified, .seed = seed,
+                          .max_depth = max_depth, .adaptive_threshold = 0.05f, .adaptive_depth = 3};
+  if (sampler == "uniform") settings.sampler = Sampler::uniform;
+  else if (sampler == "random") settings.sampler = Sampler::random;
+  else if (sampler == "adaptive") settings.sampler = Sampler::adaptive;
+  else RP_CHECK(sampler == "stratified", "sampler: '", sampler, "' is not uniform, random, stratified or adaptive");
+  RP_CHECK(width >= 1 && height >= 1 && width <= 32768 && height <= 32768 && int64_t(width) * height <= (int64_t(1) << 28),
+           "resolution: ", width, "x", height, " is out of range (each side 1..32768, at most 2^28 pixels)");
+  RP_CHECK(max_depth >= 0 && max_depth <= 64, "max_depth: ", max_depth, " is out of range (0..64)");
+  CameraDesc desc = scene.scene->camera().value_or(frame_bounds(scene.scene->bounds()));
+  const auto vec = [](const std::array<float, 3>& a) { return Vec3f(a[0], a[1], a[2]); };
+  if (eye) desc.eye = vec(*eye);
+  if (look_at) desc.look_at = vec(*look_at);
+  if (up) desc.up = vec(*up);
+  if (fov) desc.vfov_degrees = *fov;
+  const Camera camera(desc, width, height);
+  std::optional<BackendHandle> built;
+  const Backend& b = backend_of(backend, variant, scene, "render", built);
+  Image image;
+  {
+    py::gil_scoped_release release;
+    with_threads(threads, [&] { image = render(*scene.scene, b, camera, settings).image; });
+  }
+  return image_array(std::move(image));
+}
+
+void save_image(const std::filesystem::path& path, const py::handle& pixels) {
+  const auto a = numbers<float, py::array::c_style | py::array::forcecast>("image", pixels);
+  if (a.ndim() != 3 || a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1 || a.shape(0) > 32768 || a.shape(1) > 32768)
+    throw Error(cat("image: shape ", shape_text(a), " is not (height, width, 3) with sides 1..32768"));
+  Image image{.width = int(a.shape(1)), .height = int(a.shape(0)), .rgb = {a.data(), a.data() + a.size()}};
+  py::gil_scoped_release release;
+  write_image(path.string(), image);
+}
+
+py::object diff(const SceneHandle& scene, const py::handle& origins, const py::handle& directions,
+                const py::handle& tnear, const py::handle& tfar, const BackendArg& a, const BackendArg& b,
+                const std::string& variant_a, const std::string& variant_b, bool coherent, bool reference,
+                double tie_tolerance, double t_tolerance, const std::string& rays_label, int threads) {
+  RP_CHECK(tie_tolerance >= 0 && tie_tolerance <= 1, "tie_tolerance: ", tie_tolerance, " is outside [0, 1]");
+  RP_CHECK(t_tolerance >= 0 && t_tolerance <= 1, "t_tolerance: ", t_tolerance, " is outside [0, 1]");
+  const RayArrays rays(origins, directions, tnear, tfar);
+  const auto is_reference = [](const BackendArg& s) {
+    const auto* name = std::get_if<std::string>(&s);
+    return name && *name == "reference";
+  };
+  // The sides' labels as `raypack diff` writes them: backend/variant, or reference.
+  const auto label = [&](const BackendArg& s, const std::string& variant) -> std::string {
+    if (is_reference(s)) return "reference";
+    if (const auto* given = std::get_if<const BackendHandle*>(&s))
+      return (*given)->backend->info().name + "/" + (*given)->backend->info().variant;
+    return std::get<std::string>(s) + "/" + variant;
+  };
+  std::optional<BackendHandle> built_a, built_b;
+  const Backend* backend_a = is_reference(a) ? nullptr : &backend_of(a, variant_a, scene, "a", built_a);
+  const Backend* backend_b = is_reference(b) ? nullptr : &backend_of(b, variant_b, scene, "b", built_b);
+  const DiffOptions options{tie_tolerance, t_tolerance};
+  std::string json;
+  {
+    py::gil_scoped_release release;
+    with_threads(threads, [&] {
+      size_t invalid = 0;  // diffed as every side traces them: misses
+      const std::vector<Ray> records = rays.records(invalid);
+      std::vector<ReferenceHit> ref;
+      if (reference || !backend_a || !backend_b) {
+        ref.resize(records.size());
+        Reference(*scene.scene).intersect(records, ref);
+      }
+      const auto hits = [&](const Backend* backend) {
+        std::vector<Hit> h(records.size());
+        if (backend) {
+          intersect_parallel(*backend, records, h, coherent ? Coherence::coherent : Coherence::incoherent);
+        } else {
+          for (size_t i = 0; i < ref.size(); ++i)
+            if (ref[i].hit()) h[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
+        }
+        return h;
+      };
+      const std::vector<Hit> hits_a = hits(backend_a), hits_b = hits(backend_b);
+      const DiffResult d = diff_hits(*scene.scene, records, hits_a, hits_b,
+                                     reference ? std::span<const ReferenceHit>(ref) : std::span<const ReferenceHit>(),
+                                     options);
+      json = to_json(d, scene.name, rays_label, label(a, variant_a), label(b, variant_b), options);
+    });
+  }
+  return py::module_::import("json").attr("loads")(json);
+}
+
+py::list backend_list() {
+  py::list out;
+  for (const BackendEntry& e : list_backends()) {
+    py::dict facts;
+    for (const auto& [k, v] : e.facts) facts[py::str(k)] = v;
+    out.append(py::dict("name"_a = e.name, "description"_a = e.description, "variants"_a = e.variants,
+                        "coherent_methods"_a = e.coherent_methods, "incoherent_methods"_a = e.incoherent_methods,
+                        "facts"_a = facts, "available"_a = e.available, "unavailable_reason"_a = e.unavailable_reason));
+  }
+  return out;
+}
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+}  // namespace
+}  // namespace rp::python
+
+PYBIND11_MODULE(_raypack, m) {
+  using namespace rp;
+  using namespace rp::python;
+  namespace py = pybind11;
+  m.doc() = "raypack: ray casting over numpy arrays through the simd and embree backends (see README.md)";
+  m.attr("__version__") = RAYPACK_VERSION;
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+
+  py::class_<SceneHandle>(m, "Scene",
+                          "An immutable scene: triangle meshes, analytic primitives, materials, lights and a camera.\n"
+                          "Made by load_scene() or Scene.from_arrays(); it owns copies of its data.")
+      .def_static("from_arrays", &from_arrays, "vertices"_a, "indices"_a, py::kw_only(), "spheres"_a = py::none(),
+                  "planes"_a = py::none(),
+                  "A scene of one triangle mesh: vertices (V, 3) floats, indices (T, 3) integers (vertex numbers);\n"
+                  "optionally spheres (S, 4): centre and radius, and planes (P, 4): normal and d of n.P + d = 0.\n"
+                  "prim_id numbers the triangles, then the spheres, then the planes. The data is copied.")
+      .def_property_readonly("name", [](const SceneHandle& s) { return s.name; },
+                             "The path it was loaded from, 'default', or 'arrays'")
+      .def_property_readonly("prim_count", [](const SceneHandle& s) { return s.scene->prim_count(); })
+      .def_property_readonly("triangle_count", [](const SceneHandle& s) { return s.scene->triangle_count(); })
+      .def_property_readonly(
+          "bounds",
+          [](const SceneHandle& s) {
+            const Box3f b = s.scene->bounds();
+            return std::pair{std::array<float, 3>{b.lo.x, b.lo.y, b.lo.z}, std::array<float, 3>{b.hi.x, b.hi.y, b.hi.z}};
+          },
+          "(lo, hi) corners of the bounded primitives' box (planes left out)")
+      .def("__repr__", [](const SceneHandle& s) {
+        return cat("<raypack.Scene '", s.name, "': ", s.scene->prim_count(), " primitives, ", s.scene->triangle_count(),
+                   " triangles>");
+      });
+
+  py::class_<BackendHandle>(m, "Backend",
+                            "A backend built over a scene, immutable and safe to call from many threads at once.\n"
+                            "It keeps its scene alive for as long as it lives.")
+      .def(py::init(&build), "name"_a, "scene"_a, "variant"_a = "default", py::kw_only(), "coherent_method"_a = "",
+           "incoherent_method"_a = "",
+           "Builds backend `name` (see backends()) over `scene`; raises raypack.Error for an unknown or\n"
+           "unavailable backend or variant, with the message of `raypack --backend`.")
+      .def("intersect", &intersect, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
+           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
+           "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v and ng (N, 3),\n"
+           "the unit geometric normal (left out with normals=False, which saves working it out).\n"
+           "origins, directions: (N, 3) or (3,); tnear, tfar: (N,) or scalars. float32 input is read in place.\n"
+           "Rays outside the valid-ray rule are misses; invalid='warn' (RuntimeWarning), 'raise' or 'miss'.\n"
+           "threads: 0 uses every core. The GIL is released while tracing.")
+      .def("occluded", &occluded, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
+           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
+           "Any hit within [tnear, tfar]: a bool array, True where the ray is occluded. Arguments as intersect.")
+      .def_property_readonly("name", [](const BackendHandle& b) { return b.backend->info().name; })
+      .def_property_readonly("variant", [](const BackendHandle& b) { return b.backend->info().variant; })
+      .def_property_readonly("scene", [](const BackendHandle& b) { return b.scene; })
+      .def_property_readonly("build_seconds", [](const BackendHandle& b) { return b.backend->info().build_seconds; })
+      .def_property_readonly("bytes", [](const BackendHandle& b) { return b.backend->info().bytes; },
+                             "Bytes of the acceleration structure")
+      .def_property_readonly("stats", [](const BackendHandle& b) {
+        py::dict d;
+        for (const auto& [k, v] : b.backend->info().stats) d[py::str(k)] = v;
+        return d;
+      })
+      .def("__repr__", [](const BackendHandle& b) {
+        return cat("<raypack.Backend ", b.backend->info().name, "/", b.backend->info().variant, " over '",
+                   b.scene.name, "'>");
+      });
+
+  m.def("load_scene", &load, "path"_a,
+        "Loads an .obj, .ply or .json scene file, or the embedded scene for 'default'; raises raypack.Error\n"
+        "naming the file and line of the first problem.");
+  m.def("backends", &backend_list,
+        "Every backend: name, description, variants, coherent and incoherent methods, facts, and whether\n"
+        "this machine runs it (available, unavailable_reason).");
+  m.def("render", &render_image, "scene"_a, "backend"_a = std::string(kDefaultBackend), "variant"_a = "default",
+        py::kw_only(), "width"_a = 1024, "height"_a = 768, "spp"_a = 1, "sampler"_a = "stratified", "seed"_a = 0,
+        "max_depth"_a = 3, "eye"_a = py::none(), "look_at"_a = py::none(), "up"_a = py::none(), "fov"_a = py::none(),
+        "threads"_a = 0,
+        "Renders as `raypack render` does: an (height, width, 3) float32 array of linear RGB, top row first.\n"
+        "backend: a name or a Backend built over `scene`; the camera is the scene's (or one framing it),\n"
+        "with eye, look_at, up (x, y, z) and fov (vertical, degrees) replacing its own when given.");
+  m.def("diff", &diff, "scene"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf, py::kw_only(),
+        "a"_a = std::string(kDefaultBackend), "b"_a = "simd", "variant_a"_a = "default", "variant_b"_a = "default",
+        "coherent"_a = false, "reference"_a = true, "tie_tolerance"_a = 1e-6, "t_tolerance"_a = 1e-4,
+        "rays_label"_a = "numpy", "threads"_a = 0,
+        "The same rays through sides a and b (backend names, Backends, or 'reference') and the double-\n"
+        "precision reference: the summary `raypack diff --json` writes, as a dict.");
+  m.def("primary_rays", [](const SceneHandle& s, int w, int h) { return ray_dict(primary_rays(*s.scene, w, h).rays); },
+        "scene"_a, "width"_a, "height"_a,
+        "Pinhole rays through the pixel centres of the scene's camera in the renderer's order (16x16 tiles\n"
+        "of 4x2-pixel packets: trace them with coherent=True). A dict: origins, directions, tnear, tfar.");
+  m.def("random_rays",
+        [](const SceneHandle& s, size_t count, uint64_t seed) { return ray_dict(random_rays(*s.scene, count, seed).rays); },
+        "scene"_a, "count"_a, "seed"_a = 1,
+        "`count` seeded rays from the sphere around the scene into its bounds (incoherent), as primary_rays.");
+  m.def("write_rays", &save_rays, "path"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
+        "Writes a ray file (.csv, or binary: .bin, .rays) that `raypack trace --rays` reads.");
+  m.def("read_rays", [](const std::filesystem::path& path) { return ray_dict(read_rays(path.string())); }, "path"_a,
+        "Reads a ray file, as the dict primary_rays returns.");
+  m.def("write_image", &save_image, "path"_a, "image"_a,
+        "Writes an (height, width, 3) array of linear RGB as `raypack render -o` does: the format by the\n"
+        "extension, 8-bit formats (.png, .jpg) with the sRGB curve, .exr as float.");
+  m.def("read_image", [](const std::filesystem::path& path) { return image_array(read_image(path.string())); }, "path"_a,
+        "Reads an image file as an (height, width, 3) float32 array, as stored (EXR: linear).");
+  m.def("read_hits", [](const std::filesystem::path& path) { return hit_dict(read_hits(path.string())); }, "path"_a,
+        "Reads a hit file (`raypack trace -o`), as the dict Backend.intersect returns.");
+}

@@ -1,0 +1,25 @@
+# Package.InstallsIntoTheBuildTree: a fresh `cmake --install BUILD_DIR --prefix PREFIX`, then
+# the files the README's install tree lists. Run with cmake -P and -DBUILD_DIR, -DPREFIX,
+# -DBINDIR, -DLIBDIR, -DINCLUDEDIR.
+file(REMOVE_RECURSE "${PREFIX}")
+execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${PREFIX}" RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "cmake --install failed (${status})")
+endif()
+foreach(file ${BINDIR}/raypack ${LIBDIR}/libraypack.so ${INCLUDEDIR}/raypack/raypack.h
+        ${INCLUDEDIR}/raypack/engine/scene.h ${INCLUDEDIR}/raypack/backends/registry.h
+        ${LIBDIR}/cmake/raypack/raypackConfig.cmake ${LIBDIR}/cmake/raypack/raypackConfigVersion.cmake
+        ${LIBDIR}/cmake/raypack/raypackTargets.cmake ${LIBDIR}/pkgconfig/raypack.pc)
+  if(NOT EXISTS "${PREFIX}/${file}")
+    message(FATAL_ERROR "the install has no ${file}")
+  endif()
+endforeach()
+# Only the public headers: nothing of the backends' internals or of the SIMD vocabulary.
+file(GLOB_RECURSE headers RELATIVE "${PREFIX}/${INCLUDEDIR}" "${PREFIX}/${INCLUDEDIR}/*")
+foreach(header IN LISTS headers)
+  if(header MATCHES "^raypack/(simd|backends/simd|backends/embree|engine/cli)/")
+    message(FATAL_ERROR "a private header was installed: ${header}")
+  endif()
+endforeach()
+list(LENGTH headers count)
+message(STATUS "installed into ${PREFIX}: ${count} headers")
