@@ -113,10 +113,7 @@ class LargePacketTraversal {
       q.live = q.active;
       q.octant = -1;
       q.has_setup = false;
-      if (closest) {
-        std::fill_n(q.h.prim, 8, kInvalidId);
-        q.h.u = q.h.v = float8(0.0f);
-      }
+      if (closest) q.h.clear();
       if (!q.active) continue;
       q.kp = typename Kernel::Packet(q.p, r);
       // One octant: every active lane has the same sign pattern and no zero component.

@@ -345,8 +345,7 @@ class Traversal {
     RayPacket p;
     PacketHits h;
     const uint32_t active = load_packet(rays, p, h.tfar);
-    std::fill_n(h.prim, 8, kInvalidId);
-    h.u = h.v = float8(0.0f);
+    h.clear();
     if (active && !bvh_.empty()) closest_packet(0, active, p, PacketSetup<Kernel>(p, rays, active), rays, h);
     store_hits(rays, active, h, hits);
   }
@@ -378,6 +377,7 @@ class Traversal {
       out.prim_id = h.prim[i];
       out.u = hit ? uu[i] : 0.0f;
       out.v = hit ? vv[i] : 0.0f;
+      out.instance_id = h.inst[i];
       if (active >> i & 1u) scene_.intersect_planes(rays[i], out);
     }
   }

@@ -59,6 +59,11 @@ struct ReferenceHit {
   constexpr bool hit() const { return prim_id != kInvalidId; }
 };
 
+/// `h` as a float Hit (t, u, v rounded to float; a miss stays Hit{}).
+inline Hit to_hit(const ReferenceHit& h) {
+  return h.hit() ? Hit{float(h.t), h.prim_id, float(h.u), float(h.v)} : Hit{};
+}
+
 /// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
 /// immutable and safe to query from many threads at once.
 class Reference {

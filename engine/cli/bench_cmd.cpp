@@ -193,9 +193,7 @@ std::vector<Kind> ray_kinds(const Scene& scene, const Reference& reference, cons
     std::vector<ReferenceHit> ref_primary(primary.rays.size());
     reference.intersect(primary.rays, ref_primary);
     std::vector<Hit> primary_hits(primary.rays.size());
-    for (size_t i = 0; i < ref_primary.size(); ++i)
-      if (ref_primary[i].hit())
-        primary_hits[i] = {float(ref_primary[i].t), ref_primary[i].prim_id, float(ref_primary[i].u), float(ref_primary[i].v)};
+    for (size_t i = 0; i < ref_primary.size(); ++i) primary_hits[i] = to_hit(ref_primary[i]);
     const auto want = [&](const char* k) { return a.kinds.empty() || std::ranges::count(a.kinds, k) > 0; };
     if (want("primary")) kinds.push_back({"primary", primary.rays, false, ref_primary});
     if (want("shadow")) kinds.push_back({"shadow", shadow_rays(scene, primary, primary_hits).rays, true, {}});
@@ -397,7 +395,7 @@ int run_bench(const BenchArgs& a) {
         } else {
           std::vector<Hit> ref_hits(rays.size());
           for (size_t i = 0; i < rays.size(); ++i)
-            if (k.ref[i].hit()) ref_hits[i] = {float(k.ref[i].t), k.ref[i].prim_id, float(k.ref[i].u), float(k.ref[i].v)};
+            ref_hits[i] = to_hit(k.ref[i]);
           const DiffResult d = diff_hits(scene, rays, hits, ref_hits, {}, {});
           count = d.count;
         }

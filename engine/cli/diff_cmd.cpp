@@ -97,7 +97,7 @@ int run_diff(const DiffArgs& a) {
       size_t n_hit = 0;
       for (size_t i = 0; i < rh.size(); ++i)
         if (rh[i].hit()) {
-          hits[i] = {float(rh[i].t), rh[i].prim_id, float(rh[i].u), float(rh[i].v)};
+          hits[i] = to_hit(rh[i]);
           ++n_hit;
         }
       if (n_hit == 0) throw Error(cat(a.scene, ": no camera ray hits the scene, so there are no diffuse rays"));
@@ -129,8 +129,7 @@ int run_diff(const DiffArgs& a) {
   auto side = [&](const std::string& name, const std::string& variant) {
     DiffSide s{name == "reference" ? name : name + "/" + variant, std::vector<Hit>(set.rays.size())};
     if (name == "reference") {
-      for (size_t i = 0; i < ref.size(); ++i)
-        if (ref[i].hit()) s.hits[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
+      for (size_t i = 0; i < ref.size(); ++i) s.hits[i] = to_hit(ref[i]);
     } else {
       const auto backend = build_backend(name, variant, scene, a.scene);
       with_memory_context(cat("tracing ", set.rays.size(), " rays"),

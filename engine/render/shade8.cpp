@@ -255,12 +255,12 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
 
 void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits,
                   std::span<const PathState> paths, bool bounce, ShadeOut& out) {
-  static_assert(sizeof(Hit) == 16 && sizeof(PathState) == 16);
+  static_assert(sizeof(Hit) == 20 && offsetof(Hit, prim_id) == 4 && offsetof(Hit, v) == 12 && sizeof(PathState) == 16);
   const size_t n = rays.size();
   size_t base = 0;
   for (; base + 8 <= n; base += 8) {
     float8 hit_rows[4], path_rows[4];  // t, prim, u, v; slot, weight
-    simd::load_records4(&hits[base].t, hit_rows);
+    simd::load_records4(&hits[base].t, hit_rows, sizeof(Hit) / sizeof(float));
     simd::load_records4(reinterpret_cast<const float*>(&paths[base]), path_rows);
     const uint32_t live = ~simd::movemask(simd::bits_equal(path_rows[0], kInvalidId)) & 0xffu;
     const uint32_t hit = ~simd::movemask(simd::bits_equal(hit_rows[1], kInvalidId)) & live;
