@@ -132,6 +132,38 @@ TEST(Diff, RaysThroughASharedEdgeAreTies) {
   EXPECT_EQ(s.a + s.b + s.both, rays.size());
 }
 
+TEST(Diff, OnePrimitiveThroughTwoInstancesIsTwoPrimitives) {
+  // A triangle placed twice: the same prim_id in another instance is another primitive of the
+  // world, a tie at the same t and a wrong primitive farther away; instanced hits of every
+  // backend agree with each other and with the reference, instance included.
+  Scene scene;
+  TriangleMesh tri;
+  tri.name = "tri";
+  tri.positions = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+  tri.indices = {0, 1, 2};
+  const uint32_t m = scene.add_instanced_mesh(tri);
+  Affine3f at;
+  scene.add_instance(m, at);
+  at.m[2][3] = -1.0f;
+  scene.add_instance(m, at);
+  const std::vector<Ray> rays(8, Ray{{0.1f, -0.2f, 2.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, 10.0f});
+  const std::vector<ReferenceHit> ref = reference_hits(scene, rays);
+  ASSERT_EQ(ref[0].instance_id, 0u);
+  std::vector<Hit> a(rays.size(), Hit{2.0f, 0, 0.3f, 0.35f, 0}), b = a;
+  b[1].instance_id = 1;              // the same t: a tie
+  b[2] = Hit{3.0f, 0, 0.3f, 0.35f, 1};  // the second placement, behind: a wrong primitive
+  const DiffResult d = diff_hits(scene, rays, a, b, ref, {});
+  EXPECT_EQ(d.per_ray[0], DiffClass::agree);
+  EXPECT_EQ(d.per_ray[1], DiffClass::tie);
+  EXPECT_EQ(d.per_ray[2], DiffClass::wrong_prim);
+  EXPECT_EQ(d.support[size_t(DiffClass::wrong_prim)].a, 1u);  // the reference hits instance 0 at t = 2
+  for (const std::string& name : available_backends()) {
+    const std::vector<Hit> h = trace(*make_backend(name, scene), rays, Coherence::coherent);
+    const DiffResult self = diff_hits(scene, rays, h, a, ref, {});
+    EXPECT_EQ(self.count[size_t(DiffClass::agree)], rays.size()) << name;
+  }
+}
+
 TEST(Diff, TableAndJsonNameEveryClass) {
   const Scene scene = make_default_scene();
   const RaySet set = primary_rays(scene, 16, 16);

@@ -197,13 +197,13 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
   std::getline(in, header);
   std::getline(in, first);
   std::getline(in, second);
-  EXPECT_EQ(header, "t,prim_id,u,v,ng_x,ng_y,ng_z");
+  EXPECT_EQ(header, "t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id");
   EXPECT_EQ(first.rfind("10,", 0), 0u) << first;  // t = 10 on the plane
-  EXPECT_EQ(first.substr(first.size() - 6), ",0,1,0") << first;  // normal +y
-  EXPECT_EQ(second, "inf,-1,0,0,0,0,0");
+  EXPECT_EQ(first.substr(first.size() - 9), ",0,1,0,-1") << first;  // normal +y, no instance
+  EXPECT_EQ(second, "inf,-1,0,0,0,0,0,-1");
   r = run("trace --rays " + rays.string() + " -o " + bin.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_EQ(fs::file_size(bin), 16u + 2u * 28u);
+  EXPECT_EQ(fs::file_size(bin), 16u + 2u * 32u);
 }
 
 TEST_F(Cli, AFileNameWithAnUnknownExtensionIsABadFlagFoundBeforeAnyWork) {
@@ -483,7 +483,7 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
   // Standard output on a pipe: the bytes arrive there.
   r = run("trace --rays " + rays.string() + " -o /dev/stdout -q");
   EXPECT_EQ(r.status, 0);
-  EXPECT_EQ(r.output.size(), 16u + 28u);
+  EXPECT_EQ(r.output.size(), 16u + 32u);
   EXPECT_EQ(r.output.substr(0, 4), "RPHT");
   // A symlink stays a link; the file it names gets the image.
   fs::create_directory(dir_ / "store");
