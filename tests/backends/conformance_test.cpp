@@ -358,6 +358,13 @@ TEST_P(Conformance, ExtremeScalesWithinTheRangeGiveTheOraclesHits) {
   EXPECT_GE(checked, 2 * 70);
 }
 
+/// The image of `scene` rendered with at most `threads` worker threads.
+std::vector<float> render_with_threads(const Scene& scene, const Backend& backend, const Camera& cam,
+                                       const RenderSettings& st, int threads) {
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  return render(scene, backend, cam, st).image.rgb;
+}
+
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
   auto backend = make_param_backend(GetParam(), scene);
@@ -374,19 +381,28 @@ TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
     st.spp = spp;
     st.sampler = sampler;
     st.seed = 1234;
-    std::vector<float> one, two;
-    {
-      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-      one = render(scene, *backend, cam, st).image.rgb;
-    }
-    {
-      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-      two = render(scene, *backend, cam, st).image.rgb;
-    }
+    const std::vector<float> one = render_with_threads(scene, *backend, cam, st, 1),
+                             two = render_with_threads(scene, *backend, cam, st, 2);
     ASSERT_EQ(one.size(), two.size());
     EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float))) << int(sampler);
     EXPECT_EQ(one, render(scene, *backend, cam, st).image.rgb) << int(sampler);  // and across runs
   }
+}
+
+TEST_P(Conformance, InstancedRenderIsBitIdenticalForOneAndTwoThreads) {
+  Scene scene = test::instanced_scene();
+  scene.add_light(PointLight{{2.0f, 3.0f, 2.5f}, {12.0f, 12.0f, 12.0f}});
+  auto backend = make_param_backend(GetParam(), scene);
+  const Camera cam(frame_bounds(scene.bounds()), 53, 37);
+  RenderSettings st;
+  st.width = 53;
+  st.height = 37;
+  st.spp = 2;
+  st.seed = 99;
+  const std::vector<float> one = render_with_threads(scene, *backend, cam, st, 1),
+                           two = render_with_threads(scene, *backend, cam, st, 2);
+  ASSERT_EQ(one.size(), two.size());
+  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(backend_variants()), [](const auto& info) {

@@ -214,9 +214,14 @@ inline Scene instanced_scene() {
 
 /// `scene` with every instance baked into a world mesh (its mesh's positions mapped by the
 /// instance's transform in double, normals dropped), instanced meshes left out: the same
-/// triangles, flat. Prim ids differ (the baked copies come after the world meshes).
+/// triangles, flat, with the same materials, lights and camera. Prim ids differ (the baked
+/// copies come after the world meshes).
 inline Scene flattened(const Scene& scene) {
   Scene out;
+  for (size_t i = 1; i < scene.materials().size(); ++i) out.add_material(scene.materials()[i]);
+  for (const PointLight& l : scene.point_lights()) out.add_light(l);
+  for (const DirectionalLight& l : scene.directional_lights()) out.add_light(l);
+  if (scene.camera()) out.set_camera(*scene.camera());
   for (size_t i = 0; i < scene.meshes().size(); ++i)
     if (!scene.is_instanced(i)) out.add_mesh(scene.meshes()[i]);
   for (const Instance& in : scene.instances()) {
