@@ -12,7 +12,7 @@ packages=(
   libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
-  libtinyobjloader-dev gnuplot-nox
+  libtinyobjloader-dev libtinygltf-dev gnuplot-nox
 )
 
 .ci/apt-install.sh setup "${packages[@]}"

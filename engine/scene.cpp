@@ -21,6 +21,19 @@ const char* to_string(PrimKind k) {
   return "?";
 }
 
+UpFrame up_frame(int axis) {
+  switch (axis) {
+    case 0: return {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};
+    case 2: return {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}};
+    default: return {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  }
+}
+
+void Scene::set_up_axis(int axis) {
+  RP_CHECK(axis >= 0 && axis <= 2, "up axis ", axis, " is not 0 (x), 1 (y) or 2 (z)");
+  up_axis_ = axis;
+}
+
 uint32_t Scene::add_material(Material m) {
   RP_CHECK(m.ior >= 1.0f && std::isfinite(m.ior), "material '", m.name, "': ior ", m.ior, " must be >= 1");
   RP_CHECK(m.shininess >= 0.0f && std::isfinite(m.shininess), "material '", m.name, "': shininess ",

@@ -147,6 +147,16 @@ struct PrimLocation {
   uint32_t local;
 };
 
+/// A scene's orientation: which world axis points up, which way the model faces (`front`,
+/// where a camera that frames it stands) and `right` = up x front, as unit axis vectors.
+/// Y up faces +Z (the Stanford models, glTF's convention); Z up faces -Y (as Blender's and
+/// most CAD and scanning tools' front views look along +Y); X up faces +Z.
+struct UpFrame {
+  Vec3f right, up, front;
+};
+/// The frame of up axis `axis` (0 x, 1 y, 2 z).
+UpFrame up_frame(int axis);
+
 /// Geometric data of a hit that the renderer and diff need beyond t/u/v/prim_id.
 struct SurfacePoint {
   Vec3f position;
@@ -189,6 +199,11 @@ class Scene {
   /// Throws rp::Error for a direction that is not finite and non-zero.
   void add_light(const DirectionalLight& l);
   void set_camera(const CameraDesc& c) { camera_ = c; }
+  /// The axis that points up in the scene's world (0 x, 1 y, 2 z): where a camera that frames
+  /// a scene without one stands and where default lights go (up_frame). Y unless a file or
+  /// `--up-axis` says otherwise (a glTF is Y up by definition). Throws rp::Error outside 0..2.
+  void set_up_axis(int axis);
+  int up_axis() const { return up_axis_; }
 
   const std::vector<Material>& materials() const { return materials_; }
   const std::vector<TriangleMesh>& meshes() const { return meshes_; }
@@ -268,6 +283,7 @@ class Scene {
   std::vector<PointLight> point_lights_;
   std::vector<DirectionalLight> directional_lights_;
   std::optional<CameraDesc> camera_;
+  int up_axis_ = 1;
   uint32_t triangle_count_ = 0;
 };
 
