@@ -10,6 +10,7 @@
 #include <fstream>
 #include <regex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -262,6 +263,7 @@ void print_best(std::FILE* out, const Json& js, const std::vector<Kind>& kinds) 
 CLI::App* BenchArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("bench", "Every backend method on identical rays: speed beside accuracy");
   c->add_option("--scene", scenes, "Scene: 'default' or a file (repeatable)")->capture_default_str();
+  add_up_axis_option(c, up_axis);
   c->add_option("--size", size, "Primary rays: SIZE x SIZE pixels")->check(CLI::Range(8, 8192))->capture_default_str();
   c->add_option("--min-runs", min_runs, "Runs over which the spread is judged")
       ->check(CLI::Range(1, 1000))
@@ -318,6 +320,7 @@ int run_bench(const BenchArgs& a) {
         a.scenes.size());
   usage(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
   if (!a.ray_file.empty()) check_file_name("--rays", a.ray_file, check_ray_file_name);
+  const std::optional<int> up = parse_up_axis(a.up_axis);
   for (const std::string& k : a.kinds)
     usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
   const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
@@ -346,7 +349,7 @@ int run_bench(const BenchArgs& a) {
   const std::vector<Ray> file_rays = a.ray_file.empty() ? std::vector<Ray>{} : read_rays(a.ray_file);
   out["scenes"] = Json::array();
   for (const std::string& path : a.scenes) {
-    const Scene scene = load_scene(path);
+    const Scene scene = load_scene(path, up);
     const std::string name = path == "default" ? "default" : std::filesystem::path(path).filename().string();
     const Reference reference(scene);
     std::vector<Kind> kinds = ray_kinds(scene, reference, a, file_rays);

@@ -31,6 +31,7 @@ struct DiffSide {
 CLI::App* DiffArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
   add_scene_option(c, scene);
+  add_up_axis_option(c, up_axis);
   CLI::Option* k = c->add_option("--kind", kind, "Generated rays: primary, diffuse or random")->capture_default_str();
   c->add_option("--rays", rays, "A ray file (.csv, or binary: .bin, .rays) instead of generated rays")->excludes(k);
   c->add_option("--count", count, "Generated rays (primary: the first COUNT of the smallest packet-aligned image)")
@@ -69,7 +70,7 @@ int run_diff(const DiffArgs& a) {
   if ((a.rays == "primary" || a.rays == "diffuse" || a.rays == "random") && !std::filesystem::exists(a.rays))
     throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
   if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
-  const Scene scene = load_scene_or_default(a.scene);
+  const Scene scene = load_scene_or_default(a.scene, a.up_axis);
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
