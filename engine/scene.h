@@ -264,6 +264,7 @@ class Scene {
   size_t bytes() const;
 
  private:
+  SurfacePoint instance_surface(const Ray& ray, const Hit& hit) const;  ///< surface of an instance's hit
   void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
   bool occluded_by_any_plane(const Ray& ray) const;
   uint32_t append_mesh(TriangleMesh mesh, bool instanced);
