@@ -108,14 +108,59 @@ inline std::optional<Affine3d> inverse(const Affine3d& a) {
   return r;
 }
 
+/// The inverse of a float map the way Embree 3 computes an instance's world-to-local map
+/// (Instance::commit: rcp of its AffineSpace3fa, in Embree's baseline-ISA code, no fused
+/// operations), every operation rounded to float in this order: with columns x, y, z of the
+/// linear part and p its translation, the rows of the inverse are y×z, z×x, x×y over
+/// det = (x.x c.x + x.y c.y) + x.z c.z (c = y×z, each cross component a.i b.j - a.j b.i of
+/// rounded products), and its translation is -(q.x w0 + (q.y w1 + q.z w2)) per row.
+/// Instance::world_to_object is this, not the correctly rounded inverse, because Embree's is
+/// fixed: an instance traced by both backends must reach its mesh as the same float ray, or
+/// a ray through a silhouette or a crevice, one ulp apart, finds different triangles.
+/// Nothing when the determinant is zero or the result is not finite.
+inline std::optional<Affine3f> float_inverse(const Affine3f& a) {
+  const auto& m = a.m;
+  const Vec3f x{m[0][0], m[1][0], m[2][0]}, y{m[0][1], m[1][1], m[2][1]}, z{m[0][2], m[1][2], m[2][2]};
+  const auto cross = [](const Vec3f& u, const Vec3f& v) {
+    return Vec3f{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+  };
+  const Vec3f rows[3] = {cross(y, z), cross(z, x), cross(x, y)};
+  const float det = (x.x * rows[0].x + x.y * rows[0].y) + x.z * rows[0].z;
+  if (!(det != 0.0f) || !std::isfinite(det)) return std::nullopt;
+  Affine3f r;
+  for (int i = 0; i < 3; ++i) {
+    r.m[i][0] = rows[i].x / det;
+    r.m[i][1] = rows[i].y / det;
+    r.m[i][2] = rows[i].z / det;
+  }
+  for (int i = 0; i < 3; ++i) r.m[i][3] = -(m[0][3] * r.m[i][0] + (m[1][3] * r.m[i][1] + m[2][3] * r.m[i][2]));
+  if (!r.is_finite()) return std::nullopt;
+  return r;
+}
+
 /// The ray `r` in the object space of an instance whose world-to-object map is `w`: origin
 /// w(o), direction w_L(d), not renormalised, tnear and tfar unchanged, so its hits keep the
 /// world ray's t (see the top of this file). Every backend path and the reference's choice of
 /// which rays to trace through an instance call this one function, so they see the same
-/// object-space ray, bit for bit.
+/// object-space ray, bit for bit. In float it is Embree's own ray transform in its AVX2 and
+/// AVX-512 kernels (xfmPoint, xfmVector: fused multiply-adds, z first), so the simd backend's
+/// object rays are the bits Embree's instances trace.
 template <typename T>
 constexpr RayT<T> object_ray(const RayT<T>& r, const Affine3<T>& w) {
   return {w.point(r.org), r.tnear, w.vector(r.dir), r.tfar};
+}
+inline Ray object_ray(const Ray& r, const Affine3f& w) {
+  const auto& m = w.m;
+  const Vec3f& o = r.org;
+  const Vec3f& d = r.dir;
+  Vec3f po, pd;
+  float* out_o[3] = {&po.x, &po.y, &po.z};
+  float* out_d[3] = {&pd.x, &pd.y, &pd.z};
+  for (int i = 0; i < 3; ++i) {
+    *out_o[i] = std::fma(o.x, m[i][0], std::fma(o.y, m[i][1], std::fma(o.z, m[i][2], m[i][3])));
+    *out_d[i] = std::fma(d.x, m[i][0], std::fma(d.y, m[i][1], d.z * m[i][2]));
+  }
+  return {po, r.tnear, pd, r.tfar};
 }
 
 }  // namespace rp

@@ -97,9 +97,9 @@ uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
   RP_CHECK(mesh < meshes_.size(), what, ": mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
   RP_CHECK(instanced_[mesh], what, ": mesh '", meshes_[mesh].name, "' is a world mesh, not an instanced one");
   RP_CHECK(object_to_world.is_finite(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not finite");
-  const std::optional<Affine3d> inv = inverse(Affine3d(object_to_world));
+  const std::optional<Affine3f> inv = float_inverse(object_to_world);
   RP_CHECK(inv.has_value(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not invertible");
-  const Affine3f world_to_object(*inv);
+  const Affine3f& world_to_object = *inv;
   const float stretch = std::max(object_to_world.linear_norm(), world_to_object.linear_norm());
   RP_CHECK(world_to_object.is_finite() && stretch <= kMaxInstanceScale, what, ": the transform of mesh '",
            meshes_[mesh].name, "' stretches by ", stretch, ", beyond ", kMaxInstanceScale,

@@ -99,7 +99,7 @@ struct PolygonShape {
 struct Instance {
   uint32_t mesh = 0;         ///< index into Scene::meshes(), an instanced mesh
   Affine3f object_to_world;  ///< as given
-  /// Its inverse, computed in double from object_to_world and rounded to float: what every
+  /// Its inverse, computed in float as Embree computes it (rp::float_inverse): what every
   /// backend applies to a world ray (rp::object_ray) to trace it through the mesh.
   Affine3f world_to_object;
   /// +1, or -1 when object_to_world mirrors (negative determinant): the geometric normal of

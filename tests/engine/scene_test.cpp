@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <random>
 
 #include "engine/error.h"
 #include "engine/scene.h"
 #include "tests/support/error_of.h"
+#include "tests/support/scenes.h"
 
 namespace rp {
 namespace {
@@ -214,6 +217,34 @@ TEST(SceneInstances, SurfaceIsTheObjectSpacePointMappedWithNormalsByTheInverseTr
   EXPECT_FLOAT_EQ(sp.position.z, 3.0f);
   EXPECT_EQ(sp.geometric_normal, Vec3f(0.0f, 0.0f, 1.0f));
   EXPECT_EQ(sp.shading_normal, Vec3f(0.0f, 0.0f, 1.0f));
+}
+
+TEST(SceneInstances, TheFloatInverseIsTheInverseToAFewUlpsAndRefusesSingularMaps) {
+  // Against the double inverse of the same float map (an independent computation): random
+  // rotations, uneven scales and far translations, each entry within a few float ulps of the
+  // map's size; the float inverse composed with the map is the identity as closely.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int k = 0; k < 1000; ++k) {
+    const Affine3f a = test::placement({0.2f + std::abs(u(rng)) * 3.0f, 0.2f + std::abs(u(rng)), -0.5f + u(rng) * 0.2f},
+                                       {u(rng), u(rng), 1.0f}, 180.0f * u(rng), {100 * u(rng), 100 * u(rng), 100 * u(rng)});
+    const std::optional<Affine3f> f = float_inverse(a);
+    const std::optional<Affine3d> d = inverse(Affine3d(a));
+    ASSERT_TRUE(f && d);
+    const double size = std::max({Affine3d(*f).linear_norm(), 1.0});
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j)
+        EXPECT_NEAR(f->m[i][j], d->m[i][j], (j == 3 ? 200.0 : 1.0) * size * 8e-7) << k << " [" << i << "][" << j << "]";
+    const Affine3d id = compose(Affine3d(*f), Affine3d(a));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) EXPECT_NEAR(id.m[i][j], i == j ? 1.0 : 0.0, j == 3 ? 2e-4 : 2e-6) << k;
+  }
+  Affine3f flat;
+  flat.m[2][2] = 0.0f;
+  EXPECT_FALSE(float_inverse(flat).has_value());
+  Affine3f tiny;
+  for (int i = 0; i < 3; ++i) tiny.m[i][i] = 1e-20f;  // det 1e-60 underflows to 0 in float
+  EXPECT_FALSE(float_inverse(tiny).has_value());
 }
 
 TEST(DefaultScene, HasEveryPrimitiveKindAndAFiftyThousandTriangleMesh) {
