@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fuzzes raypack's file readers with libFuzzer under AddressSanitizer and UBSan: installs clang
-# and its runtime libraries when missing (as .ci/setup.sh does), builds the four targets of
+# and its runtime libraries when missing (as .ci/setup.sh does), builds the five targets of
 # tests/fuzz/ in ./build-fuzz (clang, RAYPACK_FUZZ=ON, RelWithDebInfo, sanitizers on every
 # file so the readers in rp_engine are checked too), then runs each for a bounded time on a
 # copy of its seed corpus (tests/fuzz/corpus/<target>/ plus tests/fuzz/regression/<target>/),
@@ -22,8 +22,9 @@ cd "$(dirname "$0")/.."
 jobs=${RAYPACK_JOBS:-2}
 seconds=${RAYPACK_FUZZ_SECONDS:-30}
 build=build-fuzz
-targets=(fuzz_obj fuzz_ply fuzz_json fuzz_rayfile)
-declare -A dictionary=([fuzz_obj]=obj.dict [fuzz_ply]=ply.dict [fuzz_json]=json.dict [fuzz_rayfile]=rayfile.dict)
+targets=(fuzz_obj fuzz_ply fuzz_json fuzz_rayfile fuzz_gltf)
+declare -A dictionary=([fuzz_obj]=obj.dict [fuzz_ply]=ply.dict [fuzz_json]=json.dict [fuzz_rayfile]=rayfile.dict
+                       [fuzz_gltf]=gltf.dict)
 
 # -fno-sanitize-recover: a UBSan report stops the run like an ASan one, so libFuzzer keeps the
 # input. _GLIBCXX_ASSERTIONS: operator[] past size() inside a vector's capacity is caught too.

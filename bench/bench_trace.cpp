@@ -3,7 +3,8 @@
 // ("embree-avx2": equal SIMD width with the simd backend), on identical rays, traced by all
 // threads (TBB; --threads=N or the core count); primary and shadow rays as coherent spans,
 // diffuse rays as single rays. Scenes: the embedded default and, when ../shared/scenes is
-// present, bunny.obj, dragon.ply and Sponza from inside (bench/scenes/sponza-inside.json).
+// present, bunny.obj, dragon.ply, Sponza from inside (bench/scenes/sponza-inside.json) and 16
+// bunnies placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json).
 // Rays from engine/analysis/raygen.h.
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
@@ -244,6 +245,12 @@ int main(int argc, char** argv) {
     scene_files()["sponza-inside"] = RP_SOURCE_DIR "/bench/scenes/sponza-inside.json";
   else
     std::fprintf(stderr, "rp_bench: %s/sponza.obj is absent: the sponza-inside benchmarks are not run\n", RP_SHARED_SCENES);
+  // Sixteen bunnies: one mesh placed by 16 instances, and the same placements baked into
+  // 16 world meshes (bench/scenes/bunnies-*.json), so the two structures meet the same rays.
+  if (std::filesystem::exists(std::filesystem::path(RP_SHARED_SCENES) / "bunny.obj")) {
+    scene_files()["bunnies-instanced"] = RP_SOURCE_DIR "/bench/scenes/bunnies-instanced.json";
+    scene_files()["bunnies-flat"] = RP_SOURCE_DIR "/bench/scenes/bunnies-flat.json";
+  }
   for (const auto& [scene, path] : scene_files()) {
     (void)path;
     for (const Method& m : methods()) {

@@ -20,12 +20,22 @@
 
 namespace rp {
 
+/// The bytes of a two-level structure by level (BackendInfo::levels).
+struct LevelBytes {
+  /// The top level: the world's own structure (world meshes, analytic primitives) and the one
+  /// over the instances (simd: two trees; Embree: one scene holding both).
+  size_t top = 0;
+  /// The instanced meshes' structures, each built once however many instances place it.
+  size_t meshes = 0;
+};
+
 /// What a built backend reports about itself.
 struct BackendInfo {
   std::string name;      ///< registry name, e.g. "embree"
   std::string variant;   ///< e.g. "default", "robust"
   double build_seconds = 0;
-  size_t bytes = 0;      ///< bytes of the acceleration structure (scene arrays excluded)
+  size_t bytes = 0;      ///< bytes of the acceleration structure (scene arrays excluded): levels.top + levels.meshes
+  LevelBytes levels;
   std::vector<std::pair<std::string, double>> stats;  ///< backend-specific figures (nodes, depth, ...)
 };
 

@@ -1,6 +1,7 @@
 #pragma once
 /// Axis-aligned bounding boxes.
 
+#include <cmath>
 #include <limits>
 
 #include "engine/math.h"
@@ -36,5 +37,29 @@ struct Box3 {
 
 using Box3f = Box3<float>;
 using Box3d = Box3<double>;
+
+/// Largest float <= x (x not NaN).
+inline float round_down(double x) {
+  float f = float(x);
+  if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// Smallest float >= x (x not NaN).
+inline float round_up(double x) {
+  float f = float(x);
+  if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+/// The smallest float box containing the double box b grown by pad on every side.
+inline Box3f outward(const Box3d& b, double pad = 0.0) {
+  Box3f f;
+  for (int k = 0; k < 3; ++k) {
+    f.lo[k] = round_down(b.lo[k] - pad);
+    f.hi[k] = round_up(b.hi[k] + pad);
+  }
+  return f;
+}
 
 }  // namespace rp

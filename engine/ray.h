@@ -74,17 +74,28 @@ constexpr bool valid_ray(const RayT<T>& r) {
 /// prim_id of a miss.
 inline constexpr uint32_t kInvalidId = 0xffffffffu;
 
-/// Closest (or any) hit of one ray. 16 bytes.
-/// On a miss: prim_id == kInvalidId, t == +inf, u == v == 0.
+/// instance_id of a hit on a primitive that no instance places: a world-space triangle of a
+/// mesh placed as it is, an analytic primitive, a plane, and a miss.
+inline constexpr uint32_t kNoInstance = 0xffffffffu;
+
+/// Closest (or any) hit of one ray. 20 bytes: today's 16 (t, prim_id, u, v), which the
+/// renderer's 8-wide shading reads as 4-float records (at a 20-byte stride), then the instance.
+/// On a miss: prim_id == kInvalidId, t == +inf, u == v == 0, instance_id == kNoInstance.
+/// prim_id is the scene's flat numbering (engine/scene.h); a triangle of an instanced mesh
+/// keeps its mesh's prim_id in every placement, and instance_id (an index into
+/// Scene::instances()) says which placement was hit. (u, v) and t are the same in the
+/// instance's object space and in the world: an affine map keeps both (see Scene::instances).
 /// For triangles (u, v) are Embree's barycentrics: p = (1-u-v)*v0 + u*v1 + v*v2. For analytic
 /// primitives they are the primitive's surface parameters in [0, 1] (see engine/geometry).
 struct Hit {
   float t = std::numeric_limits<float>::infinity();
   uint32_t prim_id = kInvalidId;
   float u = 0, v = 0;
+  uint32_t instance_id = kNoInstance;
 
   constexpr bool hit() const { return prim_id != kInvalidId; }
 };
+static_assert(sizeof(Hit) == 20);
 
 /// The caller's promise about a batch, used by backends to pick packet (coherent) or
 /// single-ray (incoherent) traversal. Primary rays from 4x2 pixel blocks are coherent;

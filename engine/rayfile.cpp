@@ -27,22 +27,25 @@ namespace {
 // The binary formats are little-endian IEEE-754; this build stores floats as they are in memory.
 static_assert(std::endian::native == std::endian::little, "rayfile.cpp assumes a little-endian machine");
 static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == 4, "float must be IEEE-754 binary32");
-static_assert(sizeof(HitRecord) == 28, "HitRecord is 28 bytes");
+static_assert(sizeof(HitRecord) == 32, "HitRecord is 32 bytes");
 
-constexpr uint32_t kVersion = 1;
 constexpr size_t kHeaderBytes = 16;
 constexpr size_t kChunkRecords = 4096;  // records decoded or encoded per read / write call
 
-/// What tells the two binary formats apart.
+/// What tells the binary formats apart: the magic, and the version (with its record size).
 struct BinaryFormat {
   const char* magic;      // 4 ASCII bytes
   const char* kind;       // "ray" / "hit" in "not a raypack ray file"
   const char* one;        // noun for a count of 1
   const char* many;       // noun for other counts
-  size_t record_bytes;
+  uint32_t version;       // the version this writer writes
+  size_t record_bytes;    // of that version
+  uint32_t old_version;   // an older version still read (0: none)
+  size_t old_record_bytes;
 };
-constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 32};
-constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 28};
+constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 1, 32, 0, 0};
+/// Version 2 added instance_id to each record; version 1's 28-byte records are still read.
+constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 2, 32, 1, 28};
 
 /// The columns of a CSV file of one kind, in the order the writer writes them (line 1 of a
 /// written file is these names joined by commas); the first `required` must be in every file,
@@ -54,7 +57,8 @@ struct CsvColumns {
 };
 constexpr CsvColumns kRayColumns{{"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"}, 8, 6,
                                  {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "0", "inf"}};
-constexpr CsvColumns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z"}, 7, 7, {}};
+constexpr CsvColumns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z", "instance_id"}, 8, 7,
+                                 {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "-1"}};
 
 std::string errno_message(int e) { return std::generic_category().message(e); }
 
@@ -237,8 +241,8 @@ uint64_t load_u64(const unsigned char* p) {
   return v;
 }
 
-/// Reads the records of `part` of a binary file of `fmt`, decoding each with
-/// decode(bytes, Record&).
+/// Reads the records of `part` of a binary file of `fmt` (its version or the old one it still
+/// reads), decoding each record with decode(bytes, version, Record&).
 template <typename Record, typename Decode>
 std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode decode, FilePart part) {
   const std::string& path = in.path();
@@ -252,29 +256,32 @@ std::vector<Record> read_binary(InputFile& in, const BinaryFormat& fmt, Decode d
   if (size < kHeaderBytes)
     throw Error(cat(path, ": truncated: ", size, " bytes, the header needs ", kHeaderBytes));
   const uint32_t version = load_u32(header + 4);
-  if (version != kVersion) throw Error(cat(path, ": unsupported version ", version, " (", kVersion, ")"));
+  if (version != fmt.version && (fmt.old_version == 0 || version != fmt.old_version))
+    throw Error(cat(path, ": unsupported version ", version, " (",
+                    fmt.old_version ? cat(fmt.old_version, " or ", fmt.version) : cat(fmt.version), ")"));
+  const size_t record_bytes = version == fmt.version ? fmt.record_bytes : fmt.old_record_bytes;
   const uint64_t count = load_u64(header + 8);
   const uint64_t follow = size - kHeaderBytes;
   // Checked before anything is allocated: a corrupt count must not reserve memory.
-  if (count > follow / fmt.record_bytes || count * fmt.record_bytes != follow)
+  if (count > follow / record_bytes || count * record_bytes != follow)
     throw Error(cat(path, ": the header declares ", count, " ", count == 1 ? fmt.one : fmt.many, " (",
-                    times(count, fmt.record_bytes), " bytes) but ", follow, " bytes follow it"));
+                    times(count, record_bytes), " bytes) but ", follow, " bytes follow it"));
 
   const RecordRange range = part_records(count, part);
-  src.skip(range.first * fmt.record_bytes);
+  src.skip(range.first * record_bytes);
   std::vector<Record> out(static_cast<size_t>(range.last - range.first));
-  std::vector<unsigned char> chunk(kChunkRecords * fmt.record_bytes);
+  std::vector<unsigned char> chunk(kChunkRecords * record_bytes);
   for (size_t first = 0; first < out.size(); first += kChunkRecords) {
     const size_t n = std::min(kChunkRecords, out.size() - first);
-    src.read(chunk.data(), n * fmt.record_bytes);
-    for (size_t i = 0; i < n; ++i) decode(chunk.data() + i * fmt.record_bytes, out[first + i]);
+    src.read(chunk.data(), n * record_bytes);
+    for (size_t i = 0; i < n; ++i) decode(chunk.data() + i * record_bytes, version, out[first + i]);
   }
   return out;
 }
 
 // Records are copied field by field with memcpy so every bit pattern (signalling NaNs
 // included) is kept.
-void decode_ray(const unsigned char* p, Ray& r) {
+void decode_ray(const unsigned char* p, uint32_t, Ray& r) {
   std::memcpy(&r.org.x, p + 0, 4);
   std::memcpy(&r.org.y, p + 4, 4);
   std::memcpy(&r.org.z, p + 8, 4);
@@ -294,7 +301,7 @@ void encode_ray(const Ray& r, unsigned char* p) {
   std::memcpy(p + 24, &r.tnear, 4);
   std::memcpy(p + 28, &r.tfar, 4);
 }
-void decode_hit(const unsigned char* p, HitRecord& h) {
+void decode_hit(const unsigned char* p, uint32_t version, HitRecord& h) {
   std::memcpy(&h.t, p + 0, 4);
   std::memcpy(&h.prim_id, p + 4, 4);
   std::memcpy(&h.u, p + 8, 4);
@@ -302,6 +309,8 @@ void decode_hit(const unsigned char* p, HitRecord& h) {
   std::memcpy(&h.ng.x, p + 16, 4);
   std::memcpy(&h.ng.y, p + 20, 4);
   std::memcpy(&h.ng.z, p + 24, 4);
+  h.instance_id = kNoInstance;
+  if (version >= 2) std::memcpy(&h.instance_id, p + 28, 4);
 }
 void encode_hit(const HitRecord& h, unsigned char* p) {
   std::memcpy(p + 0, &h.t, 4);
@@ -311,13 +320,14 @@ void encode_hit(const HitRecord& h, unsigned char* p) {
   std::memcpy(p + 16, &h.ng.x, 4);
   std::memcpy(p + 20, &h.ng.y, 4);
   std::memcpy(p + 24, &h.ng.z, 4);
+  std::memcpy(p + 28, &h.instance_id, 4);
 }
 
 /// The 16-byte header of a binary file of `fmt` with `count` records.
 std::string binary_head(const BinaryFormat& fmt, uint64_t count) {
   unsigned char header[kHeaderBytes];
   std::memcpy(header, fmt.magic, 4);
-  std::memcpy(header + 4, &kVersion, 4);
+  std::memcpy(header + 4, &fmt.version, 4);
   std::memcpy(header + 8, &count, 8);
   return {reinterpret_cast<const char*>(header), kHeaderBytes};
 }
@@ -397,11 +407,13 @@ float parse_float(const CsvPlace& at, std::string_view s) {
   return v;
 }
 
-uint32_t parse_prim_id(const CsvPlace& at, std::string_view s) {
+/// A prim_id or instance_id (`what`): a decimal integer in [-1, 0xfffffffe], -1 for
+/// 0xffffffff (kInvalidId, kNoInstance).
+uint32_t parse_id(const CsvPlace& at, std::string_view s, const char* what) {
   int64_t v = 0;
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || end != s.data() + s.size() || ec != std::errc() || v < -1 || v >= int64_t(kInvalidId))
-    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is not a primitive id"));
+    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is not ", what));
   return v == -1 ? kInvalidId : uint32_t(v);
 }
 
@@ -478,13 +490,14 @@ void ray_line(const Ray& r, std::string& s) {
 }
 
 void hit_line(const HitRecord& h, std::string& s) {
+  const auto id = [](uint32_t v) { return v == kInvalidId ? std::string("-1") : std::to_string(v); };
   append_float(s, h.t);
-  s += ',';
-  s += h.prim_id == kInvalidId ? std::string("-1") : std::to_string(h.prim_id);
+  s += ',' + id(h.prim_id);
   for (float x : {h.u, h.v, h.ng.x, h.ng.y, h.ng.z}) {
     s += ',';
     append_float(s, x);
   }
+  s += ',' + id(h.instance_id);
 }
 
 }  // namespace
@@ -539,10 +552,11 @@ std::vector<HitRecord> read_hits(const std::string& path) {
       [](const CsvPlace& at, const std::string_view* s) {
         HitRecord h;
         h.t = parse_float(at, s[0]);
-        h.prim_id = parse_prim_id(at, s[1]);
+        h.prim_id = parse_id(at, s[1], "a primitive id");
         h.u = parse_float(at, s[2]);
         h.v = parse_float(at, s[3]);
         h.ng = {parse_float(at, s[4]), parse_float(at, s[5]), parse_float(at, s[6])};
+        h.instance_id = parse_id(at, s[7], "an instance id");
         return h;
       },
       FilePart{});

@@ -27,12 +27,14 @@
 /// order (org, dir, tnear, tfar) differs from the in-memory Ray (org, tnear, dir, tfar).
 ///
 /// Binary hit file: the same 16-byte header with magic 'R' 'P' 'H' 'T' (0x52 0x50 0x48 0x54),
-/// version 1, count = number of hits, then `count` 28-byte records, record i at 16 + 28*i:
+/// version 2, count = number of hits, then `count` 32-byte records, record i at 16 + 32*i:
 /// ```
 ///   +0 t: float32   +4 prim_id: uint32   +8 u: float32   +12 v: float32
-///   +16 ng.x  +20 ng.y  +24 ng.z: float32
+///   +16 ng.x  +20 ng.y  +24 ng.z: float32   +28 instance_id: uint32 (0xffffffff: none)
 /// ```
-/// The file is exactly 16 + 28 * count bytes.
+/// The file is exactly 16 + 32 * count bytes. Version 1 files (before instances: 28-byte
+/// records, the same fields without instance_id) are still read, every instance_id then
+/// kNoInstance; they are no longer written.
 ///
 /// CSV ray file: UTF-8/ASCII text, lines end in "\n" or "\r\n". Line 1 names the columns,
 /// comma-separated, in any order: `ox,oy,oz,dx,dy,dz` are needed, `tnear` and `tfar` are
@@ -49,9 +51,11 @@
 /// A numpy array `a` of shape (n, 8) is written so with
 /// `numpy.savetxt("rays.csv", a, delimiter=",", header="ox,oy,oz,dx,dy,dz,tnear,tfar")`.
 ///
-/// CSV hit file: the same rules with the columns `t,prim_id,u,v,ng_x,ng_y,ng_z`, all needed.
-/// prim_id is a decimal integer in [-1, 4294967294]; -1 stands for kInvalidId (a miss), so a
-/// default HitRecord (a miss) is written `inf,-1,0,0,0,0,0`.
+/// CSV hit file: the same rules with the columns `t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id`,
+/// all needed but instance_id (-1 when absent: files written before instances still read).
+/// prim_id and instance_id are decimal integers in [-1, 4294967294]; -1 stands for kInvalidId
+/// (a miss) and kNoInstance (no instance), so a default HitRecord (a miss) is written
+/// `inf,-1,0,0,0,0,0,-1`.
 ///
 /// Every failure throws rp::Error with a one-line message that starts with the path and
 /// names the line (CSV) or the counts and byte sizes (binary), e.g.
@@ -71,13 +75,15 @@
 namespace rp {
 
 /// One traced hit as stored in hit files: t (+inf on a miss), prim_id (kInvalidId on a miss),
-/// barycentrics u, v, and the unit geometric normal ng (0,0,0 on a miss). 28 bytes in memory
-/// and on disk. t is in units of the ray direction's length (see engine/ray.h).
+/// barycentrics u, v, the unit geometric normal ng (0,0,0 on a miss) and the instance
+/// (kNoInstance for none). 32 bytes in memory and on disk (version 2). t is in units of the
+/// ray direction's length (see engine/ray.h).
 struct HitRecord {
   float t = std::numeric_limits<float>::infinity();  ///< ray parameter of the hit; +inf on a miss
   uint32_t prim_id = kInvalidId;                      ///< primitive index; kInvalidId on a miss
   float u = 0, v = 0;                                 ///< barycentrics as in Hit; 0 on a miss
-  Vec3f ng{};                                         ///< unit geometric normal; (0,0,0) on a miss
+  Vec3f ng{};                                         ///< unit geometric normal, world space; (0,0,0) on a miss
+  uint32_t instance_id = kNoInstance;                 ///< as in Hit
 };
 
 /// One of `count` consecutive shares of a file's rays, for processes that read one file
@@ -124,16 +130,17 @@ void write_rays(const std::string& path, std::span<const Ray> rays);
 /// Reads hits from `path` in the format its extension names. Reads only; errors as read_rays (a ray file is rejected by its magic 'RPRY').
 std::vector<HitRecord> read_hits(const std::string& path);
 
-/// Writes `hits` to `path` in the format the extension selects, by rp::OutputFile exactly as
-/// write_rays; prim_id kInvalidId is written -1 in CSV. The file's bytes are
-/// hit_file_head(path, hits.size()) followed by append_hit_records(path, hits).
+/// Writes `hits` to `path` in the format the extension selects (binary version 2), by
+/// rp::OutputFile exactly as write_rays; prim_id kInvalidId and instance_id kNoInstance are
+/// written -1 in CSV. The file's bytes are hit_file_head(path, hits.size()) followed by
+/// append_hit_records(path, hits).
 void write_hits(const std::string& path, std::span<const HitRecord> hits);
 
 /// The bytes of a hit file at `path` (its format by the extension, as write_hits) before its
 /// records: the 16-byte header declaring `count` hits, or the CSV column line.
 std::string hit_file_head(const std::string& path, uint64_t count);
 
-/// Appends `hits` to `out` as consecutive records of a hit file at `path`: 28 bytes each, or
+/// Appends `hits` to `out` as consecutive records of a hit file at `path`: 32 bytes each, or
 /// one line each. Records of consecutive batches follow each other, so processes can write
 /// their batches' records at offsets that add up (raypack trace across MPI ranks).
 void append_hit_records(const std::string& path, std::span<const HitRecord> hits, std::string& out);

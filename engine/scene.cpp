@@ -21,6 +21,19 @@ const char* to_string(PrimKind k) {
   return "?";
 }
 
+UpFrame up_frame(int axis) {
+  switch (axis) {
+    case 0: return {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};
+    case 2: return {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}};
+    default: return {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  }
+}
+
+void Scene::set_up_axis(int axis) {
+  RP_CHECK(axis >= 0 && axis <= 2, "up axis ", axis, " is not 0 (x), 1 (y) or 2 (z)");
+  up_axis_ = axis;
+}
+
 uint32_t Scene::add_material(Material m) {
   RP_CHECK(m.ior >= 1.0f && std::isfinite(m.ior), "material '", m.name, "': ior ", m.ior, " must be >= 1");
   RP_CHECK(m.shininess >= 0.0f && std::isfinite(m.shininess), "material '", m.name, "': shininess ",
@@ -45,7 +58,11 @@ static void check_material(const std::vector<Material>& materials, uint32_t id, 
            " materials)");
 }
 
-void Scene::add_mesh(TriangleMesh mesh) {
+uint32_t Scene::add_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), false); }
+
+uint32_t Scene::add_instanced_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), true); }
+
+uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
   const std::string what = "mesh '" + mesh.name + "'";
   RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
   const size_t nv = mesh.positions.size();
@@ -65,9 +82,49 @@ void Scene::add_mesh(TriangleMesh mesh) {
   for (uint32_t m : mesh.face_materials) check_material(materials_, m, what);
   RP_CHECK(uint64_t(triangle_count_) + mesh.triangle_count() < uint64_t(kInvalidId) / 2, what,
            ": scene exceeds ", kInvalidId / 2, " triangles");
+  Box3f box;
+  for (uint32_t i : mesh.indices) box.extend(mesh.positions[i]);
   mesh_base_.push_back(triangle_count_);
+  instanced_.push_back(uint8_t(instanced));
+  mesh_bounds_.push_back(box);
   triangle_count_ += mesh.triangle_count();
   meshes_.push_back(std::move(mesh));
+  return uint32_t(meshes_.size() - 1);
+}
+
+uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
+  const std::string what = cat("instance ", instances_.size());
+  RP_CHECK(mesh < meshes_.size(), what, ": mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  RP_CHECK(instanced_[mesh], what, ": mesh '", meshes_[mesh].name, "' is a world mesh, not an instanced one");
+  RP_CHECK(object_to_world.is_finite(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not finite");
+  const std::optional<Affine3f> inv = float_inverse(object_to_world);
+  RP_CHECK(inv.has_value(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not invertible");
+  const Affine3f& world_to_object = *inv;
+  const float stretch = std::max(object_to_world.linear_norm(), world_to_object.linear_norm());
+  RP_CHECK(world_to_object.is_finite() && stretch <= kMaxInstanceScale, what, ": the transform of mesh '",
+           meshes_[mesh].name, "' stretches by ", stretch, ", beyond ", kMaxInstanceScale,
+           " (2^20) either way");
+  RP_CHECK(instances_.size() + 1 < size_t(kNoInstance), what, ": too many instances");
+  Instance in;
+  in.mesh = mesh;
+  in.object_to_world = object_to_world;
+  in.world_to_object = world_to_object;
+  in.orientation = object_to_world.determinant() < 0.0f ? -1.0f : 1.0f;
+  const Box3f& box = mesh_bounds_[mesh];
+  if (!box.empty()) {
+    const Affine3d m(object_to_world);
+    Box3d image;
+    for (int c = 0; c < 8; ++c)
+      image.extend(m.point(Vec3d((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,
+                                 (c & 4) ? box.hi.z : box.lo.z)));
+    in.bounds = outward(image);
+    RP_CHECK(in_coordinate_range(in.bounds.lo) && in_coordinate_range(in.bounds.hi), what, ": mesh '",
+             meshes_[mesh].name, "' placed at ", show(in.bounds.lo), " - ", show(in.bounds.hi), " is outside ",
+             kRangeText);
+  }
+  instances_.push_back(in);
+  instanced_triangle_count_ += meshes_[mesh].triangle_count();
+  return uint32_t(instances_.size() - 1);
 }
 
 void Scene::add_sphere(const Sphere& s) {
@@ -151,8 +208,9 @@ PrimLocation Scene::locate(uint32_t id) const {
 
 Box3f Scene::bounds() const {
   Box3f b;
-  for (const TriangleMesh& m : meshes_)
-    for (uint32_t i : m.indices) b.extend(m.positions[i]);
+  for (size_t m = 0; m < meshes_.size(); ++m)
+    if (!instanced_[m]) b.extend(mesh_bounds_[m]);
+  for (const Instance& in : instances_) b.extend(in.bounds);
   for (const Sphere& s : spheres_) b.extend(Box3f(s.center - Vec3f(s.radius), s.center + Vec3f(s.radius)));
   for (const QuadricShape& q : quadrics_) b.extend(q.quadric.clip);
   for (const Vec3f& v : polygon_vertices_) b.extend(v);
@@ -209,7 +267,21 @@ bool Scene::occluded_by_any_plane(const Ray& ray) const {
   return false;
 }
 
+// Kept out of line: inside surface, its calls made GCC stop inlining fix_degenerate_normal
+// and normalize into the world primitives' path (10-15% of the default scene's shading).
+[[gnu::noinline]] SurfacePoint Scene::instance_surface(const Ray& ray, const Hit& hit) const {
+  // The point and normals in the instance's object space, from the object ray, then mapped.
+  const Instance& in = instances_[hit.instance_id];
+  const SurfacePoint local = surface(object_ray(ray, in.world_to_object), {hit.t, hit.prim_id, hit.u, hit.v});
+  const auto normal = [&](const Vec3f& n) { return normalize(in.world_to_object.transpose_vector(n)) * in.orientation; };
+  PointLanes<float> p{in.object_to_world.point(local.position), normal(local.geometric_normal),
+                      normal(local.shading_normal)};
+  fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
+  return {p.position, p.geometric_normal, p.shading_normal, local.material};
+}
+
 SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
+  if (hit.instance_id != kNoInstance) return instance_surface(ray, hit);
   SurfacePoint sp;
   const PrimLocation ref = locate(hit.prim_id);
   switch (ref.kind) {
@@ -283,7 +355,7 @@ size_t Scene::degenerate_triangle_count() const {
 }
 
 size_t Scene::bytes() const {
-  size_t b = 0;
+  size_t b = instances_.size() * sizeof(Instance) + mesh_bounds_.size() * sizeof(Box3f) + instanced_.size();
   for (const TriangleMesh& m : meshes_)
     b += m.positions.size() * sizeof(Vec3f) + m.indices.size() * sizeof(uint32_t) +
          m.normals.size() * sizeof(Vec3f) + m.uvs.size() * sizeof(Vec2f) +

@@ -5,6 +5,13 @@
 /// Primitive numbering (prim_id): the triangles of every mesh in mesh order, then spheres,
 /// quadrics, polygons and planes, each kind in insertion order. Scene::locate() maps an id
 /// back to its kind and index.
+///
+/// Instancing: a mesh is either a world mesh (add_mesh: its positions are world coordinates)
+/// or an instanced mesh (add_instanced_mesh: its positions are in its own object space, and
+/// it is in the world only where an Instance places it). An instanced mesh is stored once
+/// however many instances place it, and its triangles keep their prim_ids in every placement;
+/// a hit names the placement by Hit::instance_id, the index of the instance in instances()
+/// (kNoInstance for every other primitive). Analytic primitives and planes are world-space only.
 
 #include <cstdint>
 #include <optional>
@@ -12,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/affine.h"
 #include "engine/bbox.h"
 #include "engine/geometry/polygon.h"
 #include "engine/geometry/quadric.h"
@@ -87,6 +95,21 @@ struct PolygonShape {
   uint32_t material = 0;
 };
 
+/// A placement of an instanced mesh (Scene::add_instance). 128 bytes.
+struct Instance {
+  uint32_t mesh = 0;         ///< index into Scene::meshes(), an instanced mesh
+  Affine3f object_to_world;  ///< as given
+  /// Its inverse, computed in float as Embree computes it (rp::float_inverse): what every
+  /// backend applies to a world ray (rp::object_ray) to trace it through the mesh.
+  Affine3f world_to_object;
+  /// +1, or -1 when object_to_world mirrors (negative determinant): the geometric normal of
+  /// a hit is sign * normalize(world_to_object_L^T n), which points where the normal of the
+  /// same triangle baked into world space (its corners mapped) would.
+  float orientation = 1.0f;
+  /// The image of the mesh's box (its 8 corners mapped in double, rounded outward).
+  Box3f bounds;
+};
+
 /// How a camera maps image positions to rays (engine/render/camera.h).
 enum class CameraModel : uint8_t {
   pinhole,    ///< the lecture notes' planar projection
@@ -111,6 +134,11 @@ struct CameraDesc {
 enum class PrimKind : uint8_t { triangle, sphere, quadric, polygon, plane };
 const char* to_string(PrimKind k);
 
+/// The most an instance's transform, or its inverse, may stretch (largest row sum of |L|):
+/// 2^20, so that an instance's object space and the world stay within a factor of 2^20 of
+/// each other.
+inline constexpr float kMaxInstanceScale = 0x1p20f;
+
 /// Where a prim_id lives: its kind, the index of the shape of that kind (mesh index for
 /// triangles) and, for triangles, the triangle index within the mesh.
 struct PrimLocation {
@@ -118,6 +146,16 @@ struct PrimLocation {
   uint32_t shape;
   uint32_t local;
 };
+
+/// A scene's orientation: which world axis points up, which way the model faces (`front`,
+/// where a camera that frames it stands) and `right` = up x front, as unit axis vectors.
+/// Y up faces +Z (the Stanford models, glTF's convention); Z up faces -Y (as Blender's and
+/// most CAD and scanning tools' front views look along +Y); X up faces +Z.
+struct UpFrame {
+  Vec3f right, up, front;
+};
+/// The frame of up axis `axis` (0 x, 1 y, 2 z).
+UpFrame up_frame(int axis);
 
 /// Geometric data of a hit that the renderer and diff need beyond t/u/v/prim_id.
 struct SurfacePoint {
@@ -134,10 +172,19 @@ class Scene {
   /// Adds a material and returns its index.
   uint32_t add_material(Material m);
   /// Validates (indices in range, positions within the coordinate range of engine/ray.h,
-  /// matching attribute sizes, material ids) and appends; throws rp::Error naming the mesh on
-  /// bad data. Every add_* refuses geometry outside the coordinate range, where the float
-  /// kernels could overflow.
-  void add_mesh(TriangleMesh mesh);
+  /// matching attribute sizes, material ids) and appends a world mesh; returns its index.
+  /// Throws rp::Error naming the mesh on bad data. Every add_* refuses geometry outside the
+  /// coordinate range, where the float kernels could overflow.
+  uint32_t add_mesh(TriangleMesh mesh);
+  /// The same checks, for a mesh in its own object space that only instances place
+  /// (add_instance); returns its index. Its triangles take prim_ids as a world mesh's do.
+  uint32_t add_instanced_mesh(TriangleMesh mesh);
+  /// Places instanced mesh `mesh` by `object_to_world`; returns the instance's id (its index
+  /// in instances()). Throws rp::Error for a mesh that is not instanced, a transform that is
+  /// not finite or not invertible, whose linear part or its inverse stretches by more than
+  /// kMaxInstanceScale (largest row sum of |L|), or that puts the mesh's box outside the
+  /// coordinate range.
+  uint32_t add_instance(uint32_t mesh, const Affine3f& object_to_world);
   void add_sphere(const Sphere& s);
   /// The coefficients are stored scaled by a power of two so that the largest |A..J| lies in
   /// [1, 2): the same surface, every computed value scaled exactly, and no overflow for any
@@ -152,6 +199,11 @@ class Scene {
   /// Throws rp::Error for a direction that is not finite and non-zero.
   void add_light(const DirectionalLight& l);
   void set_camera(const CameraDesc& c) { camera_ = c; }
+  /// The axis that points up in the scene's world (0 x, 1 y, 2 z): where a camera that frames
+  /// a scene without one stands and where default lights go (up_frame). Y unless a file or
+  /// `--up-axis` says otherwise (a glTF is Y up by definition). Throws rp::Error outside 0..2.
+  void set_up_axis(int axis);
+  int up_axis() const { return up_axis_; }
 
   const std::vector<Material>& materials() const { return materials_; }
   const std::vector<TriangleMesh>& meshes() const { return meshes_; }
@@ -163,8 +215,16 @@ class Scene {
   const std::vector<PointLight>& point_lights() const { return point_lights_; }
   const std::vector<DirectionalLight>& directional_lights() const { return directional_lights_; }
   const std::optional<CameraDesc>& camera() const { return camera_; }
+  const std::vector<Instance>& instances() const { return instances_; }
+  /// True when mesh i is an instanced mesh (add_instanced_mesh).
+  bool is_instanced(size_t i) const { return instanced_[i] != 0; }
+  /// Bounds of mesh i's vertices in its own coordinates (world coordinates for a world mesh).
+  const Box3f& mesh_bounds(size_t i) const { return mesh_bounds_[i]; }
 
+  /// Triangles stored, each once (world and instanced meshes): the flat numbering's share.
   uint32_t triangle_count() const { return triangle_count_; }
+  /// Triangles the instances place, counting each placement (0 without instances).
+  uint64_t instanced_triangle_count() const { return instanced_triangle_count_; }
   /// First prim_id of mesh i's triangles.
   uint32_t mesh_base(size_t i) const { return mesh_base_[i]; }
   uint32_t sphere_base() const { return triangle_count_; }
@@ -175,7 +235,8 @@ class Scene {
 
   /// Kind and index of prim_id (< prim_count()).
   PrimLocation locate(uint32_t prim_id) const;
-  /// Bounds of every bounded primitive (planes excluded); empty box for an empty scene.
+  /// Bounds of every bounded primitive in the world (world meshes, instances' boxes, analytic
+  /// primitives; planes excluded); empty box for an empty scene.
   Box3f bounds() const;
   /// Bounds of a sphere, quadric (its clip box) or polygon; prim_id in [sphere_base(), plane_base()).
   Box3f prim_bounds(uint32_t prim_id) const;
@@ -190,9 +251,12 @@ class Scene {
   }
   /// True when any plane is hit within [tnear, tfar].
   bool occluded_by_planes(const Ray& ray) const { return !planes_.empty() && occluded_by_any_plane(ray); }
-  /// Position, normals and material of a hit of `ray` (hit.hit() must be true). The geometric
-  /// normal is always unit length: where rounding leaves no direction (a point computed at a
-  /// tiny shape's centre from far away), it is -normalize(ray.dir).
+  /// Position, normals and material of a hit of `ray` (hit.hit() must be true), in world
+  /// space: an instance's hit is found in object space (the object ray's barycentric point,
+  /// the normals there) and mapped by the instance (normals by the inverse transpose, times
+  /// Instance::orientation). The geometric normal is always unit length: where rounding leaves
+  /// no direction (a point computed at a tiny shape's centre from far away), it is
+  /// -normalize(ray.dir).
   SurfacePoint surface(const Ray& ray, const Hit& hit) const;
   /// Number of triangles with zero area (kept: they never produce hits).
   size_t degenerate_triangle_count() const;
@@ -200,12 +264,18 @@ class Scene {
   size_t bytes() const;
 
  private:
+  SurfacePoint instance_surface(const Ray& ray, const Hit& hit) const;  ///< surface of an instance's hit
   void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
   bool occluded_by_any_plane(const Ray& ray) const;
+  uint32_t append_mesh(TriangleMesh mesh, bool instanced);
 
   std::vector<Material> materials_;
   std::vector<TriangleMesh> meshes_;
   std::vector<uint32_t> mesh_base_;
+  std::vector<uint8_t> instanced_;  ///< per mesh: placed only by instances
+  std::vector<Box3f> mesh_bounds_;  ///< per mesh, in its own coordinates
+  std::vector<Instance> instances_;
+  uint64_t instanced_triangle_count_ = 0;
   std::vector<Sphere> spheres_;
   std::vector<QuadricShape> quadrics_;
   std::vector<PolygonShape> polygons_;
@@ -214,6 +284,7 @@ class Scene {
   std::vector<PointLight> point_lights_;
   std::vector<DirectionalLight> directional_lights_;
   std::optional<CameraDesc> camera_;
+  int up_axis_ = 1;
   uint32_t triangle_count_ = 0;
 };
 

@@ -13,9 +13,22 @@ Scene transformed(const Scene& s, double scale, const Vec3d& off) {
   auto P = [&](const Vec3f& p) { return Vec3f(Vec3d(p) * scale + off); };
   Scene out;
   for (size_t i = 1; i < s.materials().size(); ++i) out.add_material(s.materials()[i]);
-  for (TriangleMesh m : s.meshes()) {
+  for (size_t i = 0; i < s.meshes().size(); ++i) {
+    TriangleMesh m = s.meshes()[i];
+    if (s.is_instanced(i)) {  // stays in its object space; its instances move
+      out.add_instanced_mesh(std::move(m));
+      continue;
+    }
     for (Vec3f& p : m.positions) p = P(p);
     out.add_mesh(std::move(m));
+  }
+  for (const Instance& in : s.instances()) {
+    Affine3d m(in.object_to_world);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c) m.m[r][c] *= scale;
+      m.m[r][3] += off[r];
+    }
+    out.add_instance(in.mesh, Affine3f(m));
   }
   for (Sphere sp : s.spheres()) {
     sp.center = P(sp.center);

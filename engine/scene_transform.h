@@ -8,8 +8,9 @@
 namespace rp {
 
 /// A copy of `scene` with every position p replaced by round(scale * p + offset) (computed in
-/// double): meshes, spheres, quadrics (coefficients rescaled), polygons, planes, lights and
-/// camera. The geometry the methods see is then the float rounding of the moved scene. Throws
+/// double): world meshes, spheres, quadrics (coefficients rescaled), polygons, planes, lights
+/// and camera; instanced meshes stay in their object space and each instance's transform is
+/// composed with the move (in double, rounded to float). The geometry the methods see is then the float rounding of the moved scene. Throws
 /// rp::Error unless scale is finite and > 0.
 Scene transformed(const Scene& scene, double scale, const Vec3d& offset);
 

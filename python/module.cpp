@@ -171,10 +171,11 @@ py::dict hit_dict(std::span<const HitRecord> records) {
   HitArrays hits(records.size(), true);
   float *t = hits.t.mutable_data(), *u = hits.u.mutable_data(), *v = hits.v.mutable_data();
   float* ng = hits.ng.mutable_data();
-  uint32_t* prim = hits.prim_id.mutable_data();
+  uint32_t *prim = hits.prim_id.mutable_data(), *inst = hits.instance_id.mutable_data();
   for (size_t i = 0; i < records.size(); ++i) {
     t[i] = records[i].t;
     prim[i] = records[i].prim_id;
+    inst[i] = records[i].instance_id;
     u[i] = records[i].u;
     v[i] = records[i].v;
     for (int a = 0; a < 3; ++a) ng[3 * i + size_t(a)] = records[i].ng[a];
@@ -229,7 +230,7 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
   RP_CHECK(width >= 1 && height >= 1 && width <= 32768 && height <= 32768 && int64_t(width) * height <= (int64_t(1) << 28),
            "resolution: ", width, "x", height, " is out of range (each side 1..32768, at most 2^28 pixels)");
   RP_CHECK(max_depth >= 0 && max_depth <= 64, "max_depth: ", max_depth, " is out of range (0..64)");
-  CameraDesc desc = scene.scene->camera().value_or(frame_bounds(scene.scene->bounds()));
+  CameraDesc desc = scene.scene->camera().value_or(frame_bounds(scene.scene->bounds(), scene.scene->up_axis()));
   const auto vec = [](const std::array<float, 3>& a) { return Vec3f(a[0], a[1], a[2]); };
   if (eye) desc.eye = vec(*eye);
   if (look_at) desc.look_at = vec(*look_at);
@@ -293,8 +294,7 @@ py::object diff(const SceneHandle& scene, const py::handle& origins, const py::h
         if (backend) {
           intersect_parallel(*backend, records, h, coherent ? Coherence::coherent : Coherence::incoherent);
         } else {
-          for (size_t i = 0; i < ref.size(); ++i)
-            if (ref[i].hit()) h[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
+          for (size_t i = 0; i < ref.size(); ++i) h[i] = to_hit(ref[i]);
         }
         return h;
       };
@@ -366,7 +366,8 @@ PYBIND11_MODULE(_raypack, m) {
            "unavailable backend or variant, with the message of `raypack --backend`.")
       .def("intersect", &intersect, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
            "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
-           "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v and ng (N, 3),\n"
+           "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v, instance_id\n"
+           "(uint32, 0xffffffff on a miss or outside any instance) and ng (N, 3),\n"
            "the unit geometric normal (left out with normals=False, which saves working it out).\n"
            "origins, directions: (N, 3) or (3,); tnear, tfar: (N,) or scalars. float32 input is read in place.\n"
            "Rays outside the valid-ray rule are misses; invalid='warn' (RuntimeWarning), 'raise' or 'miss'.\n"

@@ -125,14 +125,16 @@ std::vector<Ray> RayArrays::records(size_t& invalid) const {
 
 HitArrays::HitArrays(size_t n, bool normals)
     : t(py::ssize_t(n)), u(py::ssize_t(n)), v(py::ssize_t(n)), ng({py::ssize_t(normals ? n : 0), py::ssize_t(3)}),
-      prim_id(py::ssize_t(n)), t_(t.mutable_data()), u_(u.mutable_data()), v_(v.mutable_data()),
-      ng_(normals ? ng.mutable_data() : nullptr), prim_id_(prim_id.mutable_data()), normals_(normals) {}
+      prim_id(py::ssize_t(n)), instance_id(py::ssize_t(n)), t_(t.mutable_data()), u_(u.mutable_data()),
+      v_(v.mutable_data()), ng_(normals ? ng.mutable_data() : nullptr), prim_id_(prim_id.mutable_data()),
+      instance_id_(instance_id.mutable_data()), normals_(normals) {}
 
 void HitArrays::store(const Scene& scene, size_t begin, std::span<const Ray> rays, std::span<const Hit> hits) noexcept {
   for (size_t k = 0; k < hits.size(); ++k) {
     const size_t i = begin + k;
     t_[i] = hits[k].t;
     prim_id_[i] = hits[k].prim_id;
+    instance_id_[i] = hits[k].instance_id;
     u_[i] = hits[k].u;
     v_[i] = hits[k].v;
   }
@@ -164,6 +166,7 @@ py::dict HitArrays::to_dict() const {
   d["prim_id"] = prim_id;
   d["u"] = u;
   d["v"] = v;
+  d["instance_id"] = instance_id;
   if (normals_) d["ng"] = ng;
   return d;
 }

@@ -82,7 +82,8 @@ class RayArrays {
 };
 
 /// Closest hits as numpy arrays, one element per ray: t (float32, +inf on a miss), prim_id
-/// (uint32, 0xffffffff on a miss), u, v (float32, 0 on a miss) and, unless left out, ng
+/// (uint32, 0xffffffff on a miss), u, v (float32, 0 on a miss), instance_id (uint32,
+/// 0xffffffff on a miss and for a primitive placed by no instance) and, unless left out, ng
 /// (float32 (N, 3), the unit geometric normal as Scene::surface gives it, 0 on a miss): what
 /// `raypack trace` writes to a hit file, field for field.
 struct HitArrays {
@@ -93,13 +94,12 @@ struct HitArrays {
   /// the arrays' memory: callable from any thread without the GIL, each on its own range.
   void store(const Scene& scene, size_t begin, std::span<const Ray> rays, std::span<const Hit> hits) noexcept;
 
-  /// The arrays as the dict the Python module returns: keys t, prim_id, u, v and, unless left
-  /// out, ng. Where scenes gain instances, an instance_id array (uint32, 0xffffffff on a miss)
-  /// joins them here, allocated beside prim_id and written by store().
+  /// The arrays as the dict the Python module returns: keys t, prim_id, u, v, instance_id and,
+  /// unless left out, ng.
   py::dict to_dict() const;
 
   py::array_t<float> t, u, v, ng;
-  py::array_t<uint32_t> prim_id;
+  py::array_t<uint32_t> prim_id, instance_id;
 
  private:
   /// ng of every hit of store(), its reads asked for ahead (see ray_arrays.cpp).
@@ -108,7 +108,7 @@ struct HitArrays {
   /// The arrays' memory, taken while the GIL is held (store runs without it); ng_ is null
   /// when the normals are left out (normals_ false).
   float *t_, *u_, *v_, *ng_;
-  uint32_t* prim_id_;
+  uint32_t *prim_id_, *instance_id_;
   bool normals_;
 };
 

@@ -260,12 +260,13 @@ inline mask8 bits_below(const float8& v, uint32_t bound) {
 inline float8 gather(const float* base, const int8& index) { return _mm256_i32gather_ps(base, index, 4); }
 inline int8 gather(const int32_t* base, const int8& index) { return _mm256_i32gather_epi32(base, index, 4); }
 
-/// Eight consecutive 16-byte records (4 floats each, unaligned) as 4 rows: lane i of out[k] is
-/// float k of record i. Bits move unchanged.
-inline void load_records4(const float* records, float8 out[4]) {
+/// The first 4 floats of eight records `stride` floats apart (>= 4; unaligned) as 4 rows: lane
+/// i of out[k] is float k of record i. Bits move unchanged. (Stride 5: rp::Hit, whose first
+/// 16 bytes are t, prim_id, u, v.)
+inline void load_records4(const float* records, float8 out[4], size_t stride = 4) {
   __m256 r[4];  // r[j] holds records j and j + 4
-  for (int j = 0; j < 4; ++j)
-    r[j] = _mm256_set_m128(_mm_loadu_ps(records + 4 * (j + 4)), _mm_loadu_ps(records + 4 * j));
+  for (size_t j = 0; j < 4; ++j)
+    r[j] = _mm256_set_m128(_mm_loadu_ps(records + stride * (j + 4)), _mm_loadu_ps(records + stride * j));
   const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
   const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
   out[0] = _mm256_shuffle_ps(t0, t2, 0x44);

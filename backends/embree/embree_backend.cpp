@@ -166,23 +166,58 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   }
 }
 
-/// What a triangle geometry's occlusion filter needs: the scene and the mesh's first prim_id.
+/// What a triangle geometry's filters need: the scene, the mesh's first prim_id, and, for an
+/// instanced mesh's geometry, the top scene's geometry id of instance 0 (instances are
+/// attached at consecutive ids from there; kNoInstance for a world mesh's geometry).
 struct TriangleData {
   const Scene* scene;
   uint32_t prim_base;
+  uint32_t first_instance_geom = kNoInstance;
 };
 
+/// The instance whose child scene Embree is in (instID[0] of the context), or kNoInstance.
+inline uint32_t current_instance(const TriangleData& d, const RTCIntersectContext* ctx) {
+  return d.first_instance_geom == kNoInstance ? kNoInstance : ctx->instID[0] - d.first_instance_geom;
+}
+
+/// The caller's ray i as the triangle test sees it: the world ray, or its object-space image
+/// (rp::object_ray, the simd backend's bits) in an instance's child scene; false when that
+/// image is outside the valid-ray rule, where no instance is traced (README, Hit convention).
+inline bool test_ray(const TriangleData& d, const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i,
+                     Ray& out) {
+  const Ray& r = caller_ray(ctx, rays, n, i);
+  const uint32_t inst = current_instance(d, ctx);
+  if (inst == kNoInstance) {
+    out = r;
+    return true;
+  }
+  out = object_ray(r, d.scene->instances()[inst].world_to_object);
+  return valid_ray(out);
+}
+
 /// Occlusion filter on triangle geometry: a candidate within kBand of an end of the caller's
-/// interval counts only when the scalar test hits it too (see kBand). Embree sets the ray's
-/// tfar to the candidate's distance before calling a filter.
+/// interval counts only when the scalar test hits it too (see kBand); in an instance, only for
+/// a ray whose object-space image is valid. Embree sets the ray's tfar to the candidate's
+/// distance before calling a filter.
 void occlusion_band_filter(const RTCFilterFunctionNArguments* a) {
   const TriangleData& d = *static_cast<const TriangleData*>(a->geometryUserPtr);
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    const Ray& r = caller_ray(a->context, a->ray, a->N, i);
-    if (in_band(r, RTCRayN_tfar(a->ray, a->N, i)) &&
-        !scalar_triangle(*d.scene, d.prim_base + RTCHitN_primID(a->hit, a->N, i), r).hit)
+    Ray r;
+    if (!test_ray(d, a->context, a->ray, a->N, i, r) ||
+        (in_band(r, RTCRayN_tfar(a->ray, a->N, i)) &&
+         !scalar_triangle(*d.scene, d.prim_base + RTCHitN_primID(a->hit, a->N, i), r).hit))
       a->valid[i] = 0;
+  }
+}
+
+/// Intersection filter on an instanced mesh's triangle geometry: a candidate counts only for a
+/// ray whose object-space image is valid (test_ray); EmbreeBackend::settle decides the band.
+void instance_valid_filter(const RTCFilterFunctionNArguments* a) {
+  const TriangleData& d = *static_cast<const TriangleData*>(a->geometryUserPtr);
+  for (unsigned i = 0; i < a->N; ++i) {
+    Ray r;
+    if (a->valid[i] != 0 && !test_ray(d, a->context, a->ray, a->N, i, r)) a->valid[i] = 0;
   }
 }
 
@@ -227,44 +262,75 @@ class EmbreeBackend final : public Backend {
     rtcSetSceneBuildQuality(scene_handle_, quality);
 
     triangle_data_.reserve(scene.meshes().size());  // never reallocated: Embree keeps pointers
+    // The instanced meshes first, each a child scene of its own, built once (the mesh level).
+    std::vector<RTCScene> child(scene.meshes().size(), nullptr);
+    for (const Instance& in : scene.instances()) {
+      if (child[in.mesh] || scene.meshes()[in.mesh].triangle_count() == 0) continue;
+      RTCScene c = rtcNewScene(dev);
+      check(dev, "embree: rtcNewScene");
+      children_.push_back(c);
+      rtcSetSceneFlags(c, flags);
+      rtcSetSceneBuildQuality(c, quality);
+      RTCGeometry g = triangle_geometry(dev, quality, in.mesh, buffer_bytes);
+      rtcCommitGeometry(g);
+      rtcAttachGeometry(c, g);
+      rtcReleaseGeometry(g);
+      check(dev, "embree: attach geometry");
+      child[in.mesh] = c;
+    }
+    for (RTCScene c : children_) rtcCommitScene(c);
+    check(dev, "embree: rtcCommitScene (an instanced mesh)");
+    const int64_t mesh_delta = device_->bytes.load() - bytes_before;
+    info_.levels.meshes = mesh_delta > int64_t(buffer_bytes) ? size_t(mesh_delta) - buffer_bytes : 0;
+    const int64_t top_before = device_->bytes.load();
+    const size_t mesh_buffers = buffer_bytes;
+
     for (size_t m = 0; m < scene.meshes().size(); ++m) {
-      const TriangleMesh& mesh = scene.meshes()[m];
-      if (mesh.triangle_count() == 0) continue;
-      RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-      rtcSetGeometryBuildQuality(g, quality);
-      triangle_data_.push_back({&scene, scene.mesh_base(m)});
-      rtcSetGeometryUserData(g, &triangle_data_.back());
-      rtcSetGeometryOccludedFilterFunction(g, occlusion_band_filter);
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                             3 * sizeof(float), mesh.positions.size()));
-      auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                  3 * sizeof(uint32_t), mesh.triangle_count()));
-      check(dev, "embree: triangle buffers");
-      std::copy_n(&mesh.positions[0].x, 3 * mesh.positions.size(), v);
-      std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
-      buffer_bytes += mesh.positions.size() * 12 + mesh.indices.size() * 4;
-      attach(g, scene.mesh_base(m));
+      if (scene.is_instanced(m) || scene.meshes()[m].triangle_count() == 0) continue;
+      attach(triangle_geometry(dev, quality, uint32_t(m), buffer_bytes), scene.mesh_base(m));
     }
     add_user<SphereKind>(dev);
     add_user<QuadricKind>(dev);
     add_user<PolygonKind>(dev);
+    // Then one instance geometry per instance, at consecutive ids from first_instance_geom_.
+    first_instance_geom_ = uint32_t(geom_base_.size());
+    for (TriangleData& d : triangle_data_)
+      if (d.first_instance_geom != kNoInstance) d.first_instance_geom = first_instance_geom_;
+    for (uint32_t i = 0; i < scene.instances().size(); ++i) {
+      const Instance& in = scene.instances()[i];
+      if (!child[in.mesh]) continue;  // a mesh without triangles
+      RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, child[in.mesh]);
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, &in.object_to_world.m[0][0]);
+      rtcCommitGeometry(g);
+      rtcAttachGeometryByID(scene_handle_, g, first_instance_geom_ + i);
+      rtcReleaseGeometry(g);
+      check(dev, "embree: instance geometry");
+    }
 
     rtcCommitScene(scene_handle_);
     check(dev, "embree: rtcCommitScene");
-    const int64_t delta = device_->bytes.load() - bytes_before;
-    info_.bytes = delta > int64_t(buffer_bytes) ? size_t(delta) - buffer_bytes : 0;
+    coherent_occlusion_ = scene.instances().empty() || scene.plane_base() == scene.sphere_base();
+    const int64_t top_delta = device_->bytes.load() - top_before;
+    const int64_t top_buffers = int64_t(buffer_bytes - mesh_buffers);
+    info_.levels.top = top_delta > top_buffers ? size_t(top_delta - top_buffers) : 0;
+    info_.bytes = info_.levels.top + info_.levels.meshes;
     info_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
   ~EmbreeBackend() override {
     if (scene_handle_) rtcReleaseScene(scene_handle_);
+    for (RTCScene c : children_) rtcReleaseScene(c);
   }
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
     if (coherence == Coherence::incoherent) {
-      for (size_t i = 0; i < rays.size(); ++i) hits[i] = valid_ray(rays[i]) ? intersect1(q, i) : Hit{};
+      for (size_t i = 0; i < rays.size(); ++i) {
+        if (valid_ray(rays[i])) intersect1(q, i, hits[i]);
+        else put_miss(hits[i]);
+      }
       return;
     }
     switch (method_) {
@@ -276,7 +342,12 @@ class EmbreeBackend final : public Backend {
 
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
-    QueryContext q = context(rays, coherence);
+    // Embree 3.13.5's coherent any-hit traversal (rtcOccluded16, and rtcOccluded1M, which
+    // uses it) never returns on some rays of a scene with an instance and two user
+    // geometries (reproduced with Embree alone: one instance of a triangle mesh, two
+    // one-primitive user geometries, 16 rays); such scenes' occlusion rays go without the
+    // coherent flag.
+    QueryContext q = context(rays, coherent_occlusion_ ? coherence : Coherence::incoherent);
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
@@ -338,9 +409,9 @@ class EmbreeBackend final : public Backend {
       }
       trace_packet(valid, &q.embree, &rh);
       for (size_t i = 0; i < n; ++i)
-        hits[base + i] = valid[i] ? settle(q, base + i, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i],
-                                           rh.hit.u[i], rh.hit.v[i])
-                                  : Hit{};
+        if (valid[i]) settle(q, base + i, rh.hit.geomID[i], rh.hit.instID[0][i], rh.hit.primID[i], rh.ray.tfar[i],
+                             rh.hit.u[i], rh.hit.v[i], hits[base + i]);
+        else put_miss(hits[base + i]);
     }
   }
 
@@ -381,7 +452,8 @@ class EmbreeBackend final : public Backend {
     rtcIntersect1M(scene_handle_, &q.embree, stream.data(), unsigned(hits.size()), sizeof(RTCRayHit));
     for (size_t i = 0; i < hits.size(); ++i) {
       const RTCRayHit& rh = stream[i];
-      hits[i] = active(q, i) ? settle(q, i, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v) : Hit{};
+      if (active(q, i)) settle(q, i, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v, hits[i]);
+      else put_miss(hits[i]);
     }
   }
 
@@ -424,44 +496,99 @@ class EmbreeBackend final : public Backend {
     p.time[i] = e.time; p.mask[i] = e.mask; p.id[i] = e.id; p.flags[i] = e.flags;
   }
 
-  /// Ray `index` of the query through rtcIntersect1, Embree's tnear raised to `tnear_embree`
-  /// when given (a retrace past a rejected hit, see settle).
-  Hit intersect1(QueryContext& q, size_t index, float tnear_embree = -1.0f) const noexcept {
+  /// Ray `index` of the query through rtcIntersect1 into `out`, Embree's tnear raised to
+  /// `tnear_embree` when given (a retrace past a rejected hit, see settle).
+  void intersect1(QueryContext& q, size_t index, Hit& out, float tnear_embree = -1.0f) const noexcept {
     RTCRayHit rh;
     rh.ray = to_embree(q.rays[index], index);
     if (tnear_embree >= 0.0f) rh.ray.tnear = tnear_embree;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene_handle_, &q.embree, &rh);
-    return settle(q, index, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v, tnear_embree >= 0.0f);
+    settle(q, index, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v, out,
+           tnear_embree >= 0.0f);
   }
 
+  /// `out` = {t, prim, u, v, inst}, member by member. A Hit assembled whole on the stack and
+  /// copied is read back by a 16-byte load that its smaller stores cannot forward to: a
+  /// store-forwarding stall per ray, which cost 10-15% of the primary rays' speed on the bunny.
+  static void put(Hit& out, float t, uint32_t prim, float u, float v, uint32_t inst) noexcept {
+    out.t = t;
+    out.prim_id = prim;
+    out.u = u;
+    out.v = v;
+    out.instance_id = inst;
+  }
+  static void put_miss(Hit& out) noexcept { put(out, std::numeric_limits<float>::infinity(), kInvalidId, 0, 0, kNoInstance); }
+
   /// The closest hit Embree returned for ray `index`, in the scene numbering and the caller's
-  /// interval (see kBand). A triangle hit within kBand of an end is decided by the scalar test
-  /// (its t, u, v are reported). When that test misses a hit near tnear, a closer-than-true t
-  /// hid the ray's real first hit beyond: the ray is traced again from Embree's t, raised a
-  /// step, once; a hit near tfar that the test misses means nothing lies in the interval. The
-  /// unbounded planes, which live beside the Embree scene, then take the hit when closer.
-  Hit settle(QueryContext& q, size_t index, unsigned geom, unsigned prim, float t, float u, float v,
-             bool retraced = false) const noexcept {
+  /// interval (see kBand), into `out`. A triangle hit within kBand of an end is decided by the
+  /// scalar test (its t, u, v are reported). When that test misses a hit near tnear, a
+  /// closer-than-true t hid the ray's real first hit beyond: the ray is traced again from
+  /// Embree's t, raised a step, once; a hit near tfar that the test misses means nothing lies
+  /// in the interval. The unbounded planes, which live beside the Embree scene, then take the
+  /// hit when closer.
+  void settle(QueryContext& q, size_t index, unsigned geom, unsigned inst_geom, unsigned prim, float t, float u,
+              float v, Hit& out, bool retraced = false) const noexcept {
     const Ray& r = q.rays[index];
-    Hit h;
-    if (geom != RTC_INVALID_GEOMETRY_ID) {
-      h = {t, geom_base_[geom] + prim, u, v};
-      if (in_band(r, t) && scene_.locate(h.prim_id).kind == PrimKind::triangle) {
-        if (const Intersection<float> s = scalar_triangle(scene_, h.prim_id, r); s.hit) {
-          h = {s.t, h.prim_id, s.u, s.v};
-        } else if (t < r.tnear * (1.0f + kBand) && !retraced) {
-          return intersect1(q, index, std::nextafter(std::max(t, r.tnear), std::numeric_limits<float>::infinity()));
-        } else {
-          h = Hit{};
-        }
-      } else if (!(t >= r.tnear && t <= r.tfar)) {
-        h = Hit{};  // outside the interval and not a triangle's: never reported
-      }
+    if (geom == RTC_INVALID_GEOMETRY_ID) {
+      put_miss(out);
+    } else {
+      // In an instance, geom is the child scene's geometry (0), not the top scene's.
+      const uint32_t inst = inst_geom == RTC_INVALID_GEOMETRY_ID ? kNoInstance : inst_geom - first_instance_geom_;
+      const uint32_t prim_id =
+          prim + (inst == kNoInstance ? geom_base_[geom] : scene_.mesh_base(scene_.instances()[inst].mesh));
+      if (in_band(r, t)) [[unlikely]] return settle_band(q, index, t, prim_id, u, v, inst, out, retraced);
+      if (t >= r.tnear && t <= r.tfar) put(out, t, prim_id, u, v, inst);
+      else put_miss(out);  // outside the interval: never reported
     }
-    scene_.intersect_planes(r, h);
-    return h;
+    scene_.intersect_planes(r, out);
+  }
+
+  /// settle for Embree's hit (t, u, v) on `prim_id` (of instance `inst`) within kBand of an
+  /// end of ray `index`'s interval (rare, kept out of the common path): a triangle's hit
+  /// decided by its own scalar test, on the ray it saw (in an instance, the object-space image).
+  [[gnu::noinline]] void settle_band(QueryContext& q, size_t index, float t, uint32_t prim_id, float u, float v,
+                                     uint32_t inst, Hit& out, bool retraced) const noexcept {
+    const Ray& r = q.rays[index];
+    if (scene_.locate(prim_id).kind == PrimKind::triangle) {
+      const Ray tested = inst == kNoInstance ? r : object_ray(r, scene_.instances()[inst].world_to_object);
+      if (const Intersection<float> s = scalar_triangle(scene_, prim_id, tested); s.hit) {
+        put(out, s.t, prim_id, s.u, s.v, inst);
+      } else if (t < r.tnear * (1.0f + kBand) && !retraced) {
+        return intersect1(q, index, out, std::nextafter(std::max(t, r.tnear), std::numeric_limits<float>::infinity()));
+      } else {
+        put_miss(out);
+      }
+    } else if (t >= r.tnear && t <= r.tfar) {
+      put(out, t, prim_id, u, v, inst);
+    } else {
+      put_miss(out);  // outside the interval and not a triangle's: never reported
+    }
+    scene_.intersect_planes(r, out);
+  }
+
+  /// A triangle geometry over mesh m (to be committed and attached), its buffers' bytes added
+  /// to `buffer_bytes`. An instanced mesh's TriangleData gets its first_instance_geom once the
+  /// world's geometries are attached (the constructor).
+  RTCGeometry triangle_geometry(RTCDevice dev, RTCBuildQuality quality, uint32_t m, size_t& buffer_bytes) {
+    const TriangleMesh& mesh = scene_.meshes()[m];
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(g, quality);
+    const bool instanced = scene_.is_instanced(m);
+    triangle_data_.push_back({&scene_, scene_.mesh_base(m), instanced ? 0u : kNoInstance});
+    rtcSetGeometryUserData(g, &triangle_data_.back());
+    rtcSetGeometryOccludedFilterFunction(g, occlusion_band_filter);
+    if (instanced) rtcSetGeometryIntersectFilterFunction(g, instance_valid_filter);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                           3 * sizeof(float), mesh.positions.size()));
+    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                3 * sizeof(uint32_t), mesh.triangle_count()));
+    check(dev, "embree: triangle buffers");
+    std::copy_n(&mesh.positions[0].x, 3 * mesh.positions.size(), v);
+    std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
+    buffer_bytes += mesh.positions.size() * 12 + mesh.indices.size() * 4;
+    return g;
   }
 
   void attach(RTCGeometry g, uint32_t prim_base) {
@@ -495,6 +622,9 @@ class EmbreeBackend final : public Backend {
   Device* device_ = nullptr;
   RTCScene scene_handle_ = nullptr;
   std::vector<uint32_t> geom_base_;
+  std::vector<RTCScene> children_;   ///< an instanced mesh's child scene each
+  uint32_t first_instance_geom_ = 0;  ///< instance i is geometry first_instance_geom_ + i of the top scene
+  bool coherent_occlusion_ = true;    ///< occlusion queries may carry the coherent flag (see occluded)
   Method method_;
   BackendInfo info_;
 };

@@ -35,8 +35,12 @@ struct DeviceFacts {
 };
 DeviceFacts device_facts();
 
-/// Builds an Embree scene over `scene`: one triangle geometry per mesh; spheres, quadrics and
-/// polygons as user geometry whose callbacks call engine/geometry; unbounded planes tested
+/// Builds an Embree scene over `scene`: one triangle geometry per world mesh; spheres, quadrics
+/// and polygons as user geometry whose callbacks call engine/geometry (world space only);
+/// each instanced mesh a child scene of its own, built once, and each instance an
+/// RTC_GEOMETRY_TYPE_INSTANCE geometry over it with the instance's object_to_world (Embree
+/// inverts it itself, in float, to the bits of Instance::world_to_object: rp::float_inverse)
+/// whose instID[0] names the instance; unbounded planes tested
 /// beside the Embree scene. Throws rp::Error on an Embree error or an unknown variant.
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options);
 

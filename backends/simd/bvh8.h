@@ -164,9 +164,33 @@ struct Bvh8 {
   uint32_t prim_id(int32_t ref, uint32_t i) const { return leaf(ref).prim(i); }
 };
 
-/// Builds the tree over every non-degenerate triangle and every sphere, quadric and polygon
-/// of `scene` (unbounded planes stay outside it). Parallel (TBB) and deterministic: the same
-/// tree, bit for bit, whatever the thread count.
+/// Builds the world's tree: every non-degenerate triangle of every world mesh and every
+/// sphere, quadric and polygon of `scene` (unbounded planes stay outside it, instanced meshes
+/// are in trees of their own). Parallel (TBB) and deterministic: the same tree, bit for bit,
+/// whatever the thread count.
 Bvh8 build(const Scene& scene, const BuildOptions& options);
+
+/// Builds the tree of instanced mesh `mesh` alone, in its object space (its leaves hold the
+/// mesh's prim_ids): built once, traversed for every instance that places the mesh.
+Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options);
+
+/// The top level of a scene with instances: an 8-wide tree (Bvh8Node) over the instances'
+/// world boxes, by binned SAH, each instance a leaf of its own whose reference is ~instance
+/// (is_leaf, and leaf_offset gives the instance id; there are no leaf words). A box is the
+/// instance's (Instance::bounds) grown by 2^-16 of its size and distance from the origin,
+/// times the transform's condition number: the rounding of the object-space ray moves a hit
+/// point by far less, so no box culls a hit its instance would give for rays that start
+/// within about 2^6 times that distance (rays from much farther away may lose a hit within
+/// rounding of the box's faces, as the Embree adapter's instances may).
+struct InstanceTree {
+  std::vector<Bvh8Node, HugePageAllocator<Bvh8Node>> nodes;  ///< nodes[0] is the root when !empty()
+  Box3f bounds;
+  BuildStats stats;  ///< prims: instances in the tree; no sah_cost
+
+  bool empty() const { return nodes.empty(); }
+};
+
+/// Builds the instance tree of `scene` (empty without instances). Deterministic.
+InstanceTree build_instances(const Scene& scene);
 
 }  // namespace rp::bvh8

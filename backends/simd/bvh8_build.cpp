@@ -54,6 +54,13 @@ static_assert(std::is_trivially_default_constructible_v<PrimRef>);
 
 using RefArray = std::vector<PrimRef, HugePageAllocator<PrimRef>>;
 
+/// What a tree holds: the world (every world mesh's triangles and the analytic primitives),
+/// or one instanced mesh's triangles.
+struct Selection {
+  static constexpr uint32_t kWorld = kInvalidId;
+  uint32_t mesh = kWorld;
+};
+
 /// Where the build reads a primitive's three corners (NaN for an analytic primitive): the
 /// scene's meshes (an index and three scattered vertices), or, for spatial splits, which clip
 /// triangles many times, a copy made once in prim_id order (one record each). Measured on
@@ -61,12 +68,16 @@ using RefArray = std::vector<PrimRef, HugePageAllocator<PrimRef>>;
 /// one-pass reads save, and takes the spatial build from 1.14 to 0.81-1.07 s.
 class CornerSource {
  public:
-  CornerSource(const Scene& scene, bool copy) : scene_(scene) {
+  /// `copy`: of the primitives the tree holds, `what` (Selection).
+  CornerSource(const Scene& scene, bool copy, const Selection& what) : scene_(scene) {
     if (!copy) return;
-    copy_.resize(scene.plane_base());
+    const bool world = what.mesh == Selection::kWorld;
+    first_ = world ? 0 : scene.mesh_base(what.mesh);
+    copy_.resize(world ? scene.plane_base() : scene.meshes()[what.mesh].triangle_count());
     for (size_t m = 0; m < scene.meshes().size(); ++m) {
+      if (world ? scene.is_instanced(m) : m != what.mesh) continue;  // not in this tree: never read
       const TriangleMesh& mesh = scene.meshes()[m];
-      const uint32_t base = scene.mesh_base(m);
+      const uint32_t base = scene.mesh_base(m) - first_;
       tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096),
                         [&](const tbb::blocked_range<uint32_t>& r) {
                           for (uint32_t t = r.begin(); t < r.end(); ++t) {
@@ -75,13 +86,14 @@ class CornerSource {
                           }
                         });
     }
-    for (uint32_t id = scene.triangle_count(); id < scene.plane_base(); ++id)
-      std::fill_n(copy_[id].f, 9, std::numeric_limits<float>::quiet_NaN());
+    if (world)
+      for (uint32_t id = scene.triangle_count(); id < scene.plane_base(); ++id)
+        std::fill_n(copy_[id].f, 9, std::numeric_limits<float>::quiet_NaN());
   }
 
   std::array<Vec3f, 3> operator()(uint32_t prim) const {
     if (!copy_.empty()) {
-      const float* f = copy_[prim].f;
+      const float* f = copy_[prim - first_].f;
       return {Vec3f{f[0], f[1], f[2]}, Vec3f{f[3], f[4], f[5]}, Vec3f{f[6], f[7], f[8]}};
     }
     if (prim >= scene_.triangle_count()) {
@@ -102,7 +114,7 @@ class CornerSource {
     const size_t n = ids.size();
     if (!copy_.empty()) {
       for (size_t i = 0; i < n; ++i) {
-        const float* f = copy_[ids[i]].f;
+        const float* f = copy_[ids[i] - first_].f;
         for (int j = 0; j < 3; ++j) out[3 * i + j] = {f[3 * j], f[3 * j + 1], f[3 * j + 2]};
       }
       return;
@@ -145,6 +157,7 @@ class CornerSource {
     float f[9];
   };
   const Scene& scene_;
+  uint32_t first_ = 0;  ///< prim_id of copy_[0]
   std::vector<Record, HugePageAllocator<Record>> copy_;
 };
 
@@ -223,13 +236,26 @@ class Builder {
   /// `first_analytic`: prim_ids from here on are analytic primitives.
   Builder(const CornerSource& corners, RefArray& refs, const BuildOptions& o, uint32_t first_analytic)
       : corners_(corners), refs_(refs), opt_(o), first_analytic_(first_analytic) {
-    if (o.rule != SplitRule::median) return;
-    uint32_t prims = 0;
-    for (const PrimRef& r : refs) prims = std::max(prims, r.prim_id + 1);
-    mass_ = centers_of_mass(corners, std::min(prims, first_analytic));
-    mass_.resize(prims);
-    for (const PrimRef& r : refs)
-      if (r.prim_id >= first_analytic) mass_[r.prim_id] = {r.center(0), r.center(1), r.center(2)};
+    if (o.rule != SplitRule::median || refs.empty()) return;
+    uint32_t lo = kInvalidId, hi = 0;
+    for (const PrimRef& r : refs) {
+      lo = std::min(lo, r.prim_id);
+      hi = std::max(hi, r.prim_id);
+    }
+    mass_base_ = lo;
+    mass_.resize(size_t(hi - lo) + 1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, refs.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        const PrimRef& ref = refs[i];
+        Vec3f& c = mass_[ref.prim_id - lo];
+        if (ref.prim_id >= first_analytic) {
+          c = {ref.center(0), ref.center(1), ref.center(2)};
+        } else {
+          const std::array<Vec3f, 3> v = corners(ref.prim_id);
+          c = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+        }
+      }
+    });
   }
 
   /// The binary tree over every ref; its nodes live as long as the builder. With spatial
@@ -737,22 +763,10 @@ class Builder {
   /// primitive's box centre, on `axis`: from mass_ with the median rule, else (the SAH
   /// build's median splits past kMaxSahDepth, rare) from the corners.
   float mass_center(const PrimRef& r, int axis) const {
-    if (!mass_.empty()) return mass_[r.prim_id][axis];
+    if (!mass_.empty()) return mass_[r.prim_id - mass_base_][axis];
     if (r.prim_id >= first_analytic_) return r.center(axis);
     const std::array<Vec3f, 3> v = corners_(r.prim_id);
     return ((v[0] + v[1] + v[2]) * (1.0f / 3.0f))[axis];
-  }
-
-  /// mass_center of triangles [0, triangles), by prim_id, for the median rule.
-  static std::vector<Vec3f> centers_of_mass(const CornerSource& corners, uint32_t triangles) {
-    std::vector<Vec3f> c(triangles);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, triangles, 4096), [&](const tbb::blocked_range<uint32_t>& r) {
-      for (uint32_t id = r.begin(); id < r.end(); ++id) {
-        const std::array<Vec3f, 3> v = corners(id);
-        c[id] = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
-      }
-    });
-    return c;
   }
 
   static uint32_t object_median(uint32_t begin, uint32_t end) { return begin + (end - begin) / 2; }
@@ -823,7 +837,8 @@ class Builder {
   const BuildOptions& opt_;
   uint32_t first_analytic_;
   tbb::enumerable_thread_specific<NodeArena> arenas_;
-  std::vector<Vec3f> mass_;                     ///< median rule: mass_center by prim_id
+  std::vector<Vec3f> mass_;                     ///< median rule: mass_center by prim_id - mass_base_
+  uint32_t mass_base_ = 0;
   float root_area_ = 0.0f;                      ///< spatial splits: the root box's area
   tbb::concurrent_vector<RefArray> leaf_refs_;  ///< spatial splits: each leaf's refs until place()
 };
@@ -1086,6 +1101,18 @@ class Collapser {
     });
   }
 
+  /// For a tree whose leaves each hold one ref (an instance tree): points every leaf child
+  /// at its ref's id, ~id, instead of at leaf words (there are none).
+  void point_at_refs() {
+    for (Bvh8Node& n : out_.nodes)
+      for (int32_t& c : n.child)
+        if (is_leaf(c)) {
+          const Placed& leaf = leaves_[leaf_offset(c)];
+          RP_CHECK(leaf.count == 1, "bvh8: an instance leaf of ", leaf.count, " refs");
+          c = leaf_ref(refs_[leaf.ref].prim_id);
+        }
+  }
+
  private:
   /// Leaves made by one task (fill): about 17 KB of leaf words, whose corners (37 KB)
   /// stay in L1 and L2 between the gather and the writes.
@@ -1173,46 +1200,18 @@ uint32_t write_leaf(float* out, std::span<const Vec3f> corners, std::span<const 
   return index.v;
 }
 
-Bvh8 build(const Scene& scene, const BuildOptions& options) {
-  RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
-           " must be in 1..8");
-  const auto start = std::chrono::steady_clock::now();
-  // References in parallel (the array's pages first touched there), then the zero-area
-  // triangles, marked kInvalidId, dropped in order.
+namespace {
+
+/// The tree over `refs` (the primitives of `what`, ids in the scene's numbering), timed from
+/// `start`.
+Bvh8 build_refs(const Scene& scene, RefArray refs, const BuildOptions& options, const Selection& what,
+                std::chrono::steady_clock::time_point start) {
   const uint32_t first_analytic = scene.sphere_base();
-  RefArray refs(scene.plane_base());  // triangles, then spheres, quadrics and polygons
-  std::atomic<size_t> degenerate{0};
-  for (size_t m = 0; m < scene.meshes().size(); ++m) {
-    const TriangleMesh& mesh = scene.meshes()[m];
-    const uint32_t base = scene.mesh_base(m);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
-      size_t zero_area = 0;
-      for (uint32_t t = r.begin(); t < r.end(); ++t) {
-        const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
-        const Vec3f n = cross(b - a, c - a);
-        const bool keep = !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f);  // zero area: never hit
-        zero_area += !keep;
-        Box3f box;
-        box.extend(a);
-        box.extend(b);
-        box.extend(c);
-        refs[base + t] = PrimRef::make(box, keep ? base + t : kInvalidId);
-      }
-      degenerate += zero_area;
-    });
-  }
-  for (uint32_t id = first_analytic; id < scene.plane_base(); ++id) {
-    const Box3f box = scene.prim_bounds(id);
-    refs[id] = PrimRef::make(box, id);
-  }
-  if (degenerate > 0)
-    refs.erase(std::remove_if(refs.begin(), refs.end(), [](const PrimRef& r) { return r.prim_id == kInvalidId; }),
-               refs.end());
   Bvh8 out;
   out.stats.prims = uint32_t(refs.size());
   if (!refs.empty()) {
     const bool spatial = options.spatial_splits && options.rule == SplitRule::sah;
-    const CornerSource corners(scene, spatial);
+    const CornerSource corners(scene, spatial, what);
     Builder builder(corners, refs, options, first_analytic);
     const BuildNode& root = builder.build();
     out.bounds = root.box;
@@ -1221,10 +1220,112 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     collapser.fill();
   }
   out.first_analytic = first_analytic;
-  out.has_analytic = scene.plane_base() > scene.sphere_base();
+  out.has_analytic = what.mesh == Selection::kWorld && scene.plane_base() > scene.sphere_base();
   out.stats.nodes = uint32_t(out.nodes.size());
   out.stats.sah_cost = sah_cost(out);
   out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.leaf_data.size() * sizeof(float);
+  out.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+/// Refs for the triangles of mesh m at refs[at + t] (zero-area ones marked kInvalidId, to be
+/// dropped); returns how many were zero-area.
+size_t triangle_refs(const Scene& scene, size_t m, RefArray& refs, size_t at) {
+  const TriangleMesh& mesh = scene.meshes()[m];
+  const uint32_t base = scene.mesh_base(m);
+  std::atomic<size_t> degenerate{0};
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
+    size_t zero_area = 0;
+    for (uint32_t t = r.begin(); t < r.end(); ++t) {
+      const Vec3f a = mesh.vertex(t, 0), b = mesh.vertex(t, 1), c = mesh.vertex(t, 2);
+      const Vec3f n = cross(b - a, c - a);
+      const bool keep = !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f);  // zero area: never hit
+      zero_area += !keep;
+      Box3f box;
+      box.extend(a);
+      box.extend(b);
+      box.extend(c);
+      refs[at + t] = PrimRef::make(box, keep ? base + t : kInvalidId);
+    }
+    degenerate += zero_area;
+  });
+  return degenerate;
+}
+
+void drop_invalid(RefArray& refs) {
+  refs.erase(std::remove_if(refs.begin(), refs.end(), [](const PrimRef& r) { return r.prim_id == kInvalidId; }),
+             refs.end());
+}
+
+}  // namespace
+
+Bvh8 build(const Scene& scene, const BuildOptions& options) {
+  RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
+           " must be in 1..8");
+  const auto start = std::chrono::steady_clock::now();
+  // References in parallel (the array's pages first touched there), then the zero-area
+  // triangles and the instanced meshes' (which are not in the world), marked kInvalidId,
+  // dropped in order.
+  RefArray refs(scene.plane_base());  // triangles, then spheres, quadrics and polygons
+  size_t dropped = 0;
+  for (size_t m = 0; m < scene.meshes().size(); ++m) {
+    if (scene.is_instanced(m)) {
+      const uint32_t base = scene.mesh_base(m), n = scene.meshes()[m].triangle_count();
+      for (uint32_t t = 0; t < n; ++t) refs[base + t].prim_id = kInvalidId;
+      dropped += n;
+    } else {
+      dropped += triangle_refs(scene, m, refs, scene.mesh_base(m));
+    }
+  }
+  for (uint32_t id = scene.sphere_base(); id < scene.plane_base(); ++id) refs[id] = PrimRef::make(scene.prim_bounds(id), id);
+  if (dropped > 0) drop_invalid(refs);
+  return build_refs(scene, std::move(refs), options, Selection{}, start);
+}
+
+Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options) {
+  RP_CHECK(options.max_leaf >= 1 && options.max_leaf <= 8, "bvh8: max_leaf ", options.max_leaf,
+           " must be in 1..8");
+  RP_CHECK(mesh < scene.meshes().size(), "bvh8: mesh ", mesh, " out of range");
+  const auto start = std::chrono::steady_clock::now();
+  RefArray refs(scene.meshes()[mesh].triangle_count());
+  if (triangle_refs(scene, mesh, refs, 0) > 0) drop_invalid(refs);
+  return build_refs(scene, std::move(refs), options, Selection{mesh}, start);
+}
+
+InstanceTree build_instances(const Scene& scene) {
+  const auto start = std::chrono::steady_clock::now();
+  InstanceTree out;
+  RefArray refs;
+  for (uint32_t i = 0; i < scene.instances().size(); ++i) {
+    const Instance& in = scene.instances()[i];
+    if (in.bounds.empty()) continue;  // a mesh without triangles
+    // Grown by 2^-16 of the box's size and place, times the transform's condition: the
+    // object-space ray is rounded (rp::object_ray), and a hit it finds must not lie outside
+    // the box a traversal culls by (see InstanceTree).
+    const Affine3d w(in.world_to_object), m(in.object_to_world);
+    const double cond = m.linear_norm() * w.linear_norm();
+    const Box3d b(Vec3d(in.bounds.lo), Vec3d(in.bounds.hi));
+    const double size = max_component(b.extent()) + std::max(max_component(abs(b.lo)), max_component(abs(b.hi)));
+    refs.push_back(PrimRef::make(outward(b, 0x1p-16 * cond * size), i));
+  }
+  out.stats.prims = uint32_t(refs.size());
+  if (!refs.empty()) {
+    // Every instance a leaf of its own (all refs "analytic" to the builder), by SAH.
+    const BuildOptions one{.rule = SplitRule::sah, .max_leaf = 1, .spatial_splits = false};
+    const CornerSource corners(scene, false, Selection{});
+    Builder builder(corners, refs, one, 0);
+    const BuildNode& root = builder.build();
+    out.bounds = root.box;
+    Bvh8 tree;
+    Collapser collapser(corners, refs, tree, false);
+    collapser.root(root);
+    collapser.point_at_refs();
+    out.nodes = std::move(tree.nodes);
+    out.stats.depth = tree.stats.depth;
+    out.stats.leaves = tree.stats.leaves;
+  }
+  out.stats.nodes = uint32_t(out.nodes.size());
+  out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node);
   out.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

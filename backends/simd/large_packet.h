@@ -21,8 +21,9 @@
 /// 8-ray packets (Traversal::closest_packet), which in turn hand entries with few live lanes
 /// to single rays; packets whose rays do not share an octant, or have a zero direction
 /// component, and octants with fewer than kMinGroupPackets packets, are traced as 8-ray
-/// packets from the root. Hits are resolved by the same rule as the other paths (see
-/// Traversal), so every answer is theirs, bit for bit.
+/// packets from the root. In a scene with instances, each packet then goes through the
+/// instance level as an 8-ray packet (instances.h). Hits are resolved by the same rule as the
+/// other paths (see Traversal), so every answer is theirs, bit for bit.
 
 #include <algorithm>
 #include <array>
@@ -113,10 +114,7 @@ class LargePacketTraversal {
       q.live = q.active;
       q.octant = -1;
       q.has_setup = false;
-      if (closest) {
-        std::fill_n(q.h.prim, 8, kInvalidId);
-        q.h.u = q.h.v = float8(0.0f);
-      }
+      if (closest) q.h.clear();
       if (!q.active) continue;
       q.kp = typename Kernel::Packet(q.p, r);
       // One octant: every active lane has the same sign pattern and no zero component.
@@ -168,6 +166,12 @@ class LargePacketTraversal {
         t_.closest_packet(0, q.active, q.p, setup(w, g.single[k], r), r, q.h);
       }
     }
+    if (const InstanceQueries<Kernel>* in = t_.instances())  // then each packet through the instances
+      for (int i = 0; i < count; ++i) {
+        Packet& q = w.packets[size_t(i)];
+        const std::span<const Ray> r = packet_rays(rays, i);
+        if (q.active) in->closest_packet(q.active, q.p, setup(w, i, r), r, q.h);
+      }
     for (int i = 0; i < count; ++i) {
       const Packet& q = w.packets[size_t(i)];
       t_.store_hits(packet_rays(rays, i), q.active, q.h, hits.subspan(size_t(i) * 8));
@@ -197,6 +201,12 @@ class LargePacketTraversal {
         if (q.live) done[i] |= t_.any_packet(0, q.live, q.p, setup(w, i, r), r, q.h.tfar);
       }
     }
+    if (const InstanceQueries<Kernel>* in = t_.instances())
+      for (int i = 0; i < count; ++i) {
+        Packet& q = w.packets[size_t(i)];
+        const std::span<const Ray> r = packet_rays(rays, i);
+        if (const uint32_t live = q.active & ~done[i]) done[i] |= in->any_packet(live, q.p, setup(w, i, r), r, q.h.tfar);
+      }
     for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done[i / 8] >> (i % 8) & 1u);
   }
 

@@ -6,6 +6,7 @@
 /// one-time set-up (PacketSetup) and the near-first order of a node's children. AVX2+FMA
 /// translation units only.
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstddef>
@@ -168,11 +169,21 @@ inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfa
   return active;
 }
 
-/// The closest hits found so far for the 8 lanes of a packet: t (the lane's tfar), u, v and
-/// the primitive (kInvalidId for none).
+/// The closest hits found so far for the 8 lanes of a packet: t (the lane's tfar), u, v, the
+/// primitive (kInvalidId for none) and its instance (kNoInstance for none). The world's tree
+/// is traversed before the instances' (simd_backend.cpp), so only an instance's traversal
+/// writes `inst`.
 struct PacketHits {
   float8 tfar, u, v;
   alignas(32) uint32_t prim[8];
+  alignas(32) uint32_t inst[8];
+
+  /// No hit in any lane (tfar is left to the caller).
+  void clear() {
+    std::fill_n(prim, 8, kInvalidId);
+    std::fill_n(inst, 8, kNoInstance);
+    u = v = float8(0.0f);
+  }
 
   /// Runs f(lane, hit) for each lane of `mask` on that lane's closest hit as a scalar Hit
   /// (t = the lane's tfar), which f may improve: the lanes are stored once, then reloaded.
@@ -182,12 +193,13 @@ struct PacketHits {
     auto& [tf, uu, vv] = s.lanes;
     for (uint32_t b = mask; b; b &= b - 1) {
       const int lane = std::countr_zero(b);
-      Hit hit{tf[lane], prim[lane], uu[lane], vv[lane]};
+      Hit hit{tf[lane], prim[lane], uu[lane], vv[lane], inst[lane]};
       f(lane, hit);
       tf[lane] = hit.t;
       uu[lane] = hit.u;
       vv[lane] = hit.v;
       prim[lane] = hit.prim_id;
+      inst[lane] = hit.instance_id;
     }
     tfar = s.load(0);
     u = s.load(1);

@@ -1,8 +1,12 @@
 #include "backends/simd/simd_backend.h"
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
+#include <vector>
 
 #include "backends/simd/bvh8.h"
+#include "backends/simd/instances.h"
 #include "backends/simd/large_packet.h"
 #include "backends/simd/stream.h"
 #include "backends/simd/traversal.h"
@@ -12,24 +16,69 @@ namespace rp::bvh8 {
 
 namespace {
 
+/// The trees of a scene's instanced meshes (build_mesh), each once, and the instance tree
+/// over its instances (build_instances): the second and top levels (instances.h).
+template <class Kernel>
+struct InstanceLevel {
+  std::vector<Bvh8> meshes;  ///< one per instanced mesh that some instance places
+  std::vector<Traversal<Kernel>> traversals;  ///< meshes[k]'s
+  InstanceTree tree;
+  std::optional<InstanceTraversal<Kernel>> traversal;
+  size_t mesh_bytes = 0;
+  double seconds = 0;
+
+  InstanceLevel(const Scene& scene, const BuildOptions& options) {
+    if (scene.instances().empty()) return;
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<uint32_t> tree_of(scene.meshes().size(), kInvalidId);
+    for (const Instance& in : scene.instances())
+      if (tree_of[in.mesh] == kInvalidId) {
+        tree_of[in.mesh] = uint32_t(meshes.size());
+        meshes.push_back(build_mesh(scene, in.mesh, options));
+        mesh_bytes += meshes.back().stats.bytes;
+      }
+    traversals.reserve(meshes.size());  // never reallocated: the instances point at them
+    for (const Bvh8& m : meshes) traversals.emplace_back(m, scene);
+    std::vector<typename InstanceTraversal<Kernel>::Placed> placed;
+    for (const Instance& in : scene.instances()) placed.push_back({in.world_to_object, &traversals[tree_of[in.mesh]]});
+    tree = build_instances(scene);
+    traversal.emplace(tree, std::move(placed));
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+};
+
 template <class Kernel>
 class SimdBackend final : public Backend {
  public:
   SimdBackend(const Scene& scene, const std::string& variant, const BuildOptions& build_options, bool large_packets,
               bool streams)
       : bvh_(build(scene, build_options)),
+        level_(scene, build_options),
         traversal_(bvh_, scene),
         large_(traversal_),
         stream_(traversal_),
         large_packets_(large_packets),
         streams_(streams) {
+    if (level_.traversal) traversal_.set_instances(&*level_.traversal);
     info_.name = "simd";
     info_.variant = variant;
-    info_.build_seconds = bvh_.stats.seconds;
-    info_.bytes = bvh_.stats.bytes;
+    info_.build_seconds = bvh_.stats.seconds + level_.seconds;
+    info_.levels = {bvh_.stats.bytes + level_.tree.stats.bytes, level_.mesh_bytes};
+    info_.bytes = info_.levels.top + info_.levels.meshes;
     info_.stats = {{"nodes", double(bvh_.stats.nodes)},  {"leaves", double(bvh_.stats.leaves)},
                    {"depth", double(bvh_.stats.depth)},  {"sah_cost", bvh_.stats.sah_cost},
                    {"prims", double(bvh_.stats.prims)}};
+    if (!scene.instances().empty()) {
+      size_t mesh_prims = 0;
+      for (const Bvh8& m : level_.meshes) mesh_prims += m.stats.prims;
+      info_.stats.insert(info_.stats.end(), {{"instances", double(level_.tree.stats.prims)},
+                                             {"instance_nodes", double(level_.tree.stats.nodes)},
+                                             {"instance_depth", double(level_.tree.stats.depth)},
+                                             {"world_bytes", double(bvh_.stats.bytes)},
+                                             {"instance_bytes", double(level_.tree.stats.bytes)},
+                                             {"mesh_trees", double(level_.meshes.size())},
+                                             {"mesh_prims", double(mesh_prims)}});
+    }
   }
 
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
@@ -66,6 +115,7 @@ class SimdBackend final : public Backend {
 
  private:
   Bvh8 bvh_;
+  InstanceLevel<Kernel> level_;
   Traversal<Kernel> traversal_;
   LargePacketTraversal<Kernel> large_;
   StreamTraversal<Kernel> stream_;

@@ -9,7 +9,8 @@
 /// with its own stream. At a leaf the vertex block is decoded once for the whole stream and
 /// every ray takes the single-ray triangle test. A stream of fewer than kMinStream rays, and
 /// a leaf holding an analytic primitive, go on ray by ray (Traversal::closest / any, from
-/// that node).
+/// that node). In a scene with instances, each ray then goes through the instance level by
+/// itself (instances.h).
 ///
 /// Why it pays over tracing the rays one by one: a ray alone walks the tree as a chain of
 /// dependent loads and branches no predictor can guess (how many children were hit, node or
@@ -94,7 +95,7 @@ class StreamTraversal {
     for (size_t i = 0; i < n; ++i) {
       if (!s.streamed[i]) continue;
       if (!hits[i].hit()) hits[i] = Hit{};
-      t_.scene().intersect_planes(rays[i], hits[i]);
+      t_.finish_single(rays[i], hits[i]);  // the instances, ray by ray, then the planes
     }
   }
 
@@ -121,6 +122,9 @@ class StreamTraversal {
                    [&](uint32_t i, int32_t ref) {
                      if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
                    });
+    if (const InstanceQueries<Kernel>* in = t_.instances())  // the instances, ray by ray
+      for (size_t i = 0; i < n; ++i)
+        if (s.streamed[i] && !out[i] && in->any(rays[i])) out[i] = 1;
   }
 
   /// What the node test reads of a stream ray.

@@ -5,11 +5,18 @@
 /// continues as an 8-ray packet, a packet with few live lanes as single rays. AVX2+FMA
 /// translation units only.
 ///
-/// The closest hit is the least (t, prim_id): among primitives hit at exactly the same t (a
-/// ray through a shared edge or vertex), the lowest prim_id. The rule does not depend on the
-/// order in which leaves are visited, so every traversal (single rays, 8-ray packets, large
-/// packets) gives every ray the same primitive and the same t, u, v bits. (The unbounded
+/// The closest hit is the least (t, prim_id, instance_id): among primitives hit at exactly the
+/// same t (a ray through a shared edge or vertex), the lowest prim_id, and among placements
+/// of one primitive by several instances, the lowest instance id (kNoInstance, the largest,
+/// for the world's own primitives). The rule does not depend on the order in which leaves or
+/// instances are visited, so every traversal (single rays, 8-ray packets, large packets,
+/// streams) gives every ray the same primitive, instance and t, u, v bits. (The unbounded
 /// planes then take a hit at equal t, after any traversal: Scene::intersect_planes.)
+///
+/// A Traversal serves one tree: the world's (Bvh8 of build()), whose traversal also hands
+/// each ray to the scene's instances (set_instances, instances.h) before the planes, or an
+/// instanced mesh's (build_mesh), which the instances' traversal runs on object-space rays
+/// with the instance's id (the `inst` arguments below: kNoInstance in the world's tree).
 
 #include <algorithm>
 #include <bit>
@@ -26,12 +33,56 @@
 
 namespace rp::bvh8 {
 
+/// The queries the world's traversal makes of the instance level when the scene has instances
+/// (implemented by InstanceTraversal, instances.h): a virtual call per ray or packet, and
+/// only in scenes with instances.
+template <class Kernel>
+class InstanceQueries {
+ public:
+  virtual ~InstanceQueries() = default;
+  /// Takes any closer hit of valid ray `r` among the instances into `best`.
+  virtual void closest(const Ray& r, Hit& best) const noexcept = 0;
+  /// True when some instance occludes valid ray `r`.
+  virtual bool any(const Ray& r) const noexcept = 0;
+  /// Takes closer hits of the lanes `mask` of packet `p` (the rays `rays`, set up in `ps`) into `h`.
+  virtual void closest_packet(uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                              std::span<const Ray> rays, PacketHits& h) const noexcept = 0;
+  /// The lanes of `live` that some instance occludes (tfar per lane).
+  virtual uint32_t any_packet(uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                              std::span<const Ray> rays, const float8& tfar) const noexcept = 0;
+};
+
 /// Traversal stack bound: the build keeps binary depth <= 64 + log2(n) < 100, so an 8-wide
 /// tree holds at most 7 pending children per level.
 inline constexpr int kStackSize = 1024;
 
 /// A packet entry with at most this many active lanes continues as single rays.
 inline constexpr int kSingleRayLanes = 2;
+
+/// A subtree a single ray still has to visit, with its entry distance.
+struct DistanceEntry {
+  int32_t ref;
+  float t;
+};
+
+/// Pushes the children `bits` of node `n` onto `stack` at `sp`, sorted there by descending
+/// entry distance `dist` (a stable insertion sort: ties keep the higher slot nearer the top),
+/// then pops the nearest and returns its reference: near-first order for a single ray.
+RP_SIMD_INLINE int32_t push_near_first(const Bvh8Node& n, uint32_t bits, const float* dist, DistanceEntry* stack,
+                                       int& sp) {
+  RP_DCHECK(sp + 8 <= kStackSize);
+  DistanceEntry* hit = stack + sp;
+  int k = 0;
+  for (; bits; bits &= bits - 1) {
+    const int c = std::countr_zero(bits);
+    const DistanceEntry e{n.child[c], dist[c]};
+    int j = k++;
+    for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];
+    hit[j] = e;
+  }
+  sp += k - 1;
+  return hit[k - 1].ref;
+}
 
 /// Single-ray and 8-ray packet traversal of one tree (see the top of this file).
 template <class Kernel>
@@ -42,37 +93,46 @@ class Traversal {
   const Bvh8& bvh() const { return bvh_; }
   const Scene& scene() const { return scene_; }
 
+  /// The world's traversal hands every ray to `instances` too (null: the scene has none).
+  void set_instances(const InstanceQueries<Kernel>* instances) { instances_ = instances; }
+  const InstanceQueries<Kernel>* instances() const { return instances_; }
+
   // ---- single rays: one ray against the 8 children of a node ----
 
-  /// Closest hit of one ray (a miss for an invalid one), the planes included.
+  /// Closest hit of one ray (a miss for an invalid one), the instances and planes included.
   Hit intersect_single(const Ray& r) const noexcept {
     Hit best;
     if (!valid_ray(r)) return best;
     if (!bvh_.empty()) closest(r, 0, best);
-    scene_.intersect_planes(r, best);
+    finish_single(r, best);
     return best;
   }
 
-  /// Any hit of one valid ray, the planes included; stops at the first.
+  /// What follows a valid ray's traversal of the world's tree: the instances, then the planes.
+  void finish_single(const Ray& r, Hit& best) const noexcept {
+    if (instances_) instances_->closest(r, best);
+    scene_.intersect_planes(r, best);
+  }
+
+  /// Any hit of one valid ray, the instances and planes included; stops at the first.
   bool occluded_single(const Ray& r) const noexcept {
     if (scene_.occluded_by_planes(r)) return true;
-    return !bvh_.empty() && any(r, 0);
+    return (!bvh_.empty() && any(r, 0)) || (instances_ && instances_->any(r));
   }
 
   /// Closest hit of a valid ray in the subtree `root`, replacing `best` by any hit within
-  /// [tnear, min(tfar, best.t)]. Children are visited near-first by their entry distance, the
-  /// far ones pushed first; popped entries farther than the current hit are skipped.
-  void closest(const Ray& r, int32_t root, Hit& best) const noexcept { closest(r, SingleRay(r), root, best); }
+  /// [tnear, min(tfar, best.t)]; a hit taken names instance `inst`. Children are visited
+  /// near-first by their entry distance, the far ones pushed first; popped entries farther
+  /// than the current hit are skipped.
+  void closest(const Ray& r, int32_t root, Hit& best, uint32_t inst = kNoInstance) const noexcept {
+    closest(r, SingleRay(r), root, best, inst);
+  }
 
   /// The same for a ray set up already (sr = SingleRay(r)).
-  void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best) const noexcept {
+  void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best, uint32_t inst = kNoInstance) const noexcept {
     float tfar = std::min(r.tfar, best.t);
     const typename Kernel::Single kr(r);
-    struct Entry {
-      int32_t ref;
-      float t;
-    };
-    Entry stack[kStackSize];
+    DistanceEntry stack[kStackSize];
     int sp = 0;
     int32_t ref = root;
     for (;;) {
@@ -99,20 +159,7 @@ class Traversal {
             continue;
           }
           prefetch_children(n, bits);
-          // Onto the stack in slot order, then sorted there by descending distance (a stable
-          // insertion sort: ties keep the higher slot nearer the top); the nearest is visited.
-          RP_DCHECK(sp + 8 <= kStackSize);
-          Entry* hit = stack + sp;
-          int k = 0;
-          for (; bits; bits &= bits - 1) {
-            const int c = std::countr_zero(bits);
-            const Entry e{n.child[c], dist[c]};
-            int j = k++;
-            for (; j > 0 && hit[j - 1].t < e.t; --j) hit[j] = hit[j - 1];
-            hit[j] = e;
-          }
-          sp += k - 1;
-          ref = hit[k - 1].ref;
+          ref = push_near_first(n, bits, dist, stack, sp);
           continue;
         }
       } else {
@@ -124,17 +171,17 @@ class Traversal {
           Ray rr = r;
           rr.tfar = tfar;
           const Intersection<float> ah = scene_.intersect_analytic(id, rr);
-          if (ah.hit && (ah.t < tfar || id < best.prim_id)) {
+          if (ah.hit && (ah.t < tfar || before(id, kNoInstance, best))) {
             tfar = ah.t;
             best = {ah.t, id, ah.u, ah.v};
           }
         } else {
-          leaf_single(leaf, LeafView(leaf), kr, tfar, best);
+          leaf_single(leaf, LeafView(leaf), kr, tfar, best, inst);
         }
       }
       for (;;) {  // pop, skipping subtrees entered beyond the current hit
         if (sp == 0) return;
-        const Entry e = stack[--sp];
+        const DistanceEntry e = stack[--sp];
         if (e.t <= std::fma(tfar, kSlabPad, sr.pad)) {  // conservative, as intersect_node
           ref = e.ref;
           break;
@@ -145,10 +192,10 @@ class Traversal {
 
   /// The triangles of `leaf` (read into `lv`) against one ray (set up in `kr`) whose closest
   /// hit so far is `best`, searching up to `tfar` (best.t, or the ray's tfar before any hit):
-  /// takes a closer hit, or one at the same t with a lower prim_id (the rule at the top of
-  /// this file). True when it took one.
+  /// takes a closer hit, or one at the same t with a lower (prim_id, instance) (the rule at
+  /// the top of this file; `inst` places the leaf's triangles). True when it took one.
   RP_SIMD_INLINE static bool leaf_single(const Leaf& leaf, const LeafView& lv, const typename Kernel::Single& kr,
-                                         float& tfar, Hit& best) {
+                                         float& tfar, Hit& best, uint32_t inst = kNoInstance) {
     const TriHit8 h = kr.block(lv, float8(tfar));
     const uint32_t bits = simd::movemask(h.hit) & ((1u << leaf.n) - 1);
     if (!bits) return false;
@@ -156,9 +203,9 @@ class Traversal {
         simd::reduce_min(xsimd::select(simd::mask_from_bits(bits), h.t, float8(std::numeric_limits<float>::infinity())));
     const int lane = lowest_prim(leaf, simd::movemask(h.t == float8(tmin)) & bits);
     const uint32_t id = leaf.prim(uint32_t(lane));
-    if (!(tmin < tfar || id < best.prim_id)) return false;
+    if (!(tmin < tfar || before(id, inst, best))) return false;
     tfar = tmin;
-    best = {tmin, id, h.u.get(size_t(lane)), h.v.get(size_t(lane))};
+    best = {tmin, id, h.u.get(size_t(lane)), h.v.get(size_t(lane)), inst};
     return true;
   }
 
@@ -218,17 +265,17 @@ class Traversal {
   // ---- packets: 8 rays against one node's boxes ----
 
   /// Closest hits of the lanes of `mask` of packet `p` (rays `rays`, set up in `ps`) in the
-  /// subtree `root`, improving `h`. Below kSingleRayLanes live lanes an entry's rays continue
-  /// one at a time.
+  /// subtree `root`, improving `h` (hits taken name instance `inst`). Below kSingleRayLanes
+  /// live lanes an entry's rays continue one at a time.
   void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
-                      std::span<const Ray> rays, PacketHits& h) const noexcept {
+                      std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     PacketEntry stack[kStackSize];
     stack[0] = {root, mask};
     int sp = 1;
     while (sp > 0) {
       const PacketEntry e = stack[--sp];
       if (simd::lane_count(e.mask) <= kSingleRayLanes) {
-        single_rays_closest(e.ref, e.mask, rays, h);
+        single_rays_closest(e.ref, e.mask, rays, h, inst);
         continue;
       }
       if (!is_leaf(e.ref)) {
@@ -238,17 +285,17 @@ class Traversal {
         for (int j = 0; j < k; ++j) stack[sp++] = {kids[j].ref, kids[j].mask};
         continue;
       }
-      leaf_closest(e.ref, e.mask, p, ps, rays, h);
+      leaf_closest(e.ref, e.mask, p, ps, rays, h, inst);
     }
   }
 
   /// The primitives of leaf `ref` against the lanes of `mask` (set up in `ps`), improving `h`:
   /// a lane at a time when few lanes reach the leaf (leaf_by_rays), else a triangle at a time.
   void leaf_closest(int32_t ref, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
-                    std::span<const Ray> rays, PacketHits& h) const noexcept {
+                    std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     const Leaf leaf = bvh_.leaf(ref);
     if (by_rays(mask, leaf.n) && analytic_leaf(leaf) == kInvalidId) {
-      leaf_by_rays(leaf, LeafView(leaf), mask, p, rays, h);
+      leaf_by_rays(leaf, LeafView(leaf), mask, p, rays, h, inst);
       return;
     }
     for (uint32_t k = 0; k < leaf.n; ++k) {
@@ -257,7 +304,7 @@ class Traversal {
         analytic_packet(id, rays, mask, h);
         continue;
       }
-      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar), mask, id);
+      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar), mask, id, inst);
     }
   }
 
@@ -270,10 +317,10 @@ class Traversal {
   /// this way) against each lane of `mask` in turn, by the single-ray test: the same hits and
   /// bits as a triangle at a time.
   void leaf_by_rays(const Leaf& leaf, const LeafView& lv, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
-                    PacketHits& h) const noexcept {
+                    PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     h.each_lane(mask, [&](int lane, Hit& hit) {
       float tfar = hit.t;
-      leaf_single(leaf, lv, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit);
+      leaf_single(leaf, lv, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit, inst);
     });
   }
 
@@ -340,14 +387,17 @@ class Traversal {
     return done;
   }
 
-  /// Closest hits of up to 8 rays as one packet, the planes included.
+  /// Closest hits of up to 8 rays as one packet, the instances and planes included.
   void intersect_packet(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
     RayPacket p;
     PacketHits h;
     const uint32_t active = load_packet(rays, p, h.tfar);
-    std::fill_n(h.prim, 8, kInvalidId);
-    h.u = h.v = float8(0.0f);
-    if (active && !bvh_.empty()) closest_packet(0, active, p, PacketSetup<Kernel>(p, rays, active), rays, h);
+    h.clear();
+    if (active && (!bvh_.empty() || instances_)) {
+      const PacketSetup<Kernel> ps(p, rays, active);
+      if (!bvh_.empty()) closest_packet(0, active, p, ps, rays, h);
+      if (instances_) instances_->closest_packet(active, p, ps, rays, h);
+    }
     store_hits(rays, active, h, hits);
   }
 
@@ -362,7 +412,11 @@ class Traversal {
       if (scene_.occluded_by_planes(rays[size_t(lane)])) done |= 1u << lane;
     }
     const uint32_t live = active & ~done;
-    if (live && !bvh_.empty()) done |= any_packet(0, live, p, PacketSetup<Kernel>(p, rays, live), rays, tfar);
+    if (live && (!bvh_.empty() || instances_)) {
+      const PacketSetup<Kernel> ps(p, rays, live);
+      if (!bvh_.empty()) done |= any_packet(0, live, p, ps, rays, tfar);
+      if (instances_ && (live & ~done)) done |= instances_->any_packet(live & ~done, p, ps, rays, tfar);
+    }
     for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done >> i & 1u);
   }
 
@@ -378,24 +432,37 @@ class Traversal {
       out.prim_id = h.prim[i];
       out.u = hit ? uu[i] : 0.0f;
       out.v = hit ? vv[i] : 0.0f;
+      out.instance_id = h.inst[i];
       if (active >> i & 1u) scene_.intersect_planes(rays[i], out);
     }
   }
 
-  /// Takes the hits `m` of primitive `id` for the lanes of `mask`: closer ones, and ones at
-  /// the same t when `id` is lower (the closest-hit rule at the top of this file).
-  static void update(PacketHits& h, const TriHit8& m, uint32_t mask, uint32_t id) {
+  /// True when primitive `id` placed by instance `inst` comes before `best`'s in the
+  /// closest-hit rule's order at equal t (the top of this file).
+  static bool before(uint32_t id, uint32_t inst, const Hit& best) {
+    return id < best.prim_id || (id == best.prim_id && inst < best.instance_id);
+  }
+
+  /// Takes the hits `m` of primitive `id` (placed by instance `inst`) for the lanes of
+  /// `mask`: closer ones, and ones at the same t when (id, inst) comes first (the
+  /// closest-hit rule at the top of this file).
+  static void update(PacketHits& h, const TriHit8& m, uint32_t mask, uint32_t id, uint32_t inst = kNoInstance) {
     uint32_t bits = simd::movemask(m.hit) & mask;
     if (!bits) return;
     if (const uint32_t ties = simd::movemask(m.t == h.tfar) & bits)  // rare: exactly equal t
-      for (uint32_t b = ties; b; b &= b - 1)
-        if (!(id < h.prim[std::countr_zero(b)])) bits &= ~(b & -b);
+      for (uint32_t b = ties; b; b &= b - 1) {
+        const int lane = std::countr_zero(b);
+        if (!(id < h.prim[lane] || (id == h.prim[lane] && inst < h.inst[lane]))) bits &= ~(b & -b);
+      }
     if (!bits) return;
     const mask8 upd = simd::mask_from_bits(bits);
     h.tfar = xsimd::select(upd, m.t, h.tfar);
     h.u = xsimd::select(upd, m.u, h.u);
     h.v = xsimd::select(upd, m.v, h.v);
-    for (uint32_t b = bits; b; b &= b - 1) h.prim[std::countr_zero(b)] = id;
+    for (uint32_t b = bits; b; b &= b - 1) {
+      h.prim[std::countr_zero(b)] = id;
+      h.inst[std::countr_zero(b)] = inst;
+    }
   }
 
   /// Of the slots `at` (non-empty) of `leaf`, the one with the lowest prim_id.
@@ -421,12 +488,11 @@ class Traversal {
       Ray r = rays[size_t(lane)];
       r.tfar = hit.t;
       const Intersection<float> a = scene_.intersect_analytic(id, r);
-      if (a.hit && (a.t < hit.t || id < hit.prim_id)) hit = {a.t, id, a.u, a.v};
+      if (a.hit && (a.t < hit.t || before(id, kNoInstance, hit))) hit = {a.t, id, a.u, a.v};
     });
   }
 
 
- private:
   /// A subtree an 8-ray packet still has to visit, with the lanes that reach it.
   struct PacketEntry {
     int32_t ref;
@@ -463,18 +529,20 @@ class Traversal {
     return k;
   }
 
+ private:
   /// The lanes of `mask` through the subtree `ref` one ray at a time: a packet whose rays
   /// have drifted apart costs 8 lanes of work per box and triangle for one or two useful
   /// ones, so below kSingleRayLanes active lanes the packet hands its rays to the single-ray
   /// traversal (Benthin et al., "Combining Single and Packet-Ray Tracing for Arbitrary Ray
   /// Distributions on the Intel MIC Architecture", IEEE TVCG 18(9), 2012).
-  void single_rays_closest(int32_t ref, uint32_t mask, std::span<const Ray> rays, PacketHits& h) const noexcept {
-    h.each_lane(mask, [&](int lane, Hit& hit) { closest(rays[size_t(lane)], ref, hit); });
+  void single_rays_closest(int32_t ref, uint32_t mask, std::span<const Ray> rays, PacketHits& h,
+                           uint32_t inst) const noexcept {
+    h.each_lane(mask, [&](int lane, Hit& hit) { closest(rays[size_t(lane)], ref, hit, inst); });
   }
-
 
   const Bvh8& bvh_;
   const Scene& scene_;
+  const InstanceQueries<Kernel>* instances_ = nullptr;
 };
 
 }  // namespace rp::bvh8

@@ -29,18 +29,25 @@ namespace {
 
 bool close(double a, double b, double rel) { return std::abs(a - b) <= rel * std::max(std::abs(a), std::abs(b)); }
 
+/// The same primitive in the same placement: an instanced mesh's triangle hit through two
+/// instances is two different primitives of the world.
+template <typename A, typename B>
+bool same_primitive(const A& a, const B& b) {
+  return a.prim_id == b.prim_id && a.instance_id == b.instance_id;
+}
+
 DiffClass classify(const Hit& a, const Hit& b, const DiffOptions& o) {
   if (!a.hit() && !b.hit()) return DiffClass::agree;
   if (a.hit() != b.hit()) return DiffClass::hit_miss;
-  if (a.prim_id == b.prim_id) return close(a.t, b.t, o.t_tolerance) ? DiffClass::agree : DiffClass::t_error;
+  if (same_primitive(a, b)) return close(a.t, b.t, o.t_tolerance) ? DiffClass::agree : DiffClass::t_error;
   return close(a.t, b.t, o.tie_tolerance) ? DiffClass::tie : DiffClass::wrong_prim;
 }
 
 /// The reference supports a backend's answer when it misses where the reference misses, or
-/// hits the reference's primitive at a close t, or ties with it.
+/// hits the reference's primitive (in the same instance) at a close t, or ties with it.
 bool supported(const Hit& h, const ReferenceHit& r, const DiffOptions& o) {
   if (!h.hit() || !r.hit()) return h.hit() == r.hit();
-  if (h.prim_id == r.prim_id) return close(h.t, r.t, o.t_tolerance);
+  if (same_primitive(h, r)) return close(h.t, r.t, o.t_tolerance);
   return close(h.t, r.t, o.tie_tolerance);
 }
 
@@ -48,11 +55,10 @@ ErrorSamples error_samples(const Scene& scene, std::span<const Ray> rays, std::s
                            std::span<const ReferenceHit> ref) {
   ErrorSamples s;
   for (size_t i = 0; i < rays.size(); ++i) {
-    if (!hits[i].hit() || hits[i].prim_id != ref[i].prim_id) continue;
+    if (!hits[i].hit() || !same_primitive(hits[i], ref[i])) continue;
     s.t_rel.push_back(std::abs(double(hits[i].t) - ref[i].t) / std::max(ref[i].t, 1e-30));
     const Vec3f na = scene.surface(rays[i], hits[i]).geometric_normal;
-    const Hit rh{float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
-    const Vec3f nr = scene.surface(rays[i], rh).geometric_normal;
+    const Vec3f nr = scene.surface(rays[i], to_hit(ref[i])).geometric_normal;
     const Vec3d a(na), r(nr);  // atan2 of |a x r| and a.r: accurate for tiny angles, unlike acos
     s.angle_deg.push_back(std::atan2(length(cross(a, r)), dot(a, r)) * 180.0 / kPi);
   }

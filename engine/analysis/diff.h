@@ -15,7 +15,9 @@
 
 namespace rp {
 
-/// How A's and B's answers for one ray relate.
+/// How A's and B's answers for one ray relate. "The same primitive" means the same prim_id in
+/// the same instance (Hit::instance_id): one triangle of an instanced mesh hit through two
+/// placements is two primitives (a tie at the same t, else a wrong primitive).
 enum class DiffClass : uint8_t {
   agree,       ///< both miss, or the same primitive at t within t_tolerance
   tie,         ///< different primitives at t within tie_tolerance (a shared edge or vertex)

@@ -11,7 +11,7 @@
 namespace rp {
 
 RaySet primary_rays(const Scene& scene, int width, int height) {
-  const Camera cam(scene.camera().value_or(frame_bounds(scene.bounds())), width, height);
+  const Camera cam(scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())), width, height);
   RaySet rs;
   rs.width = width;
   rs.height = height;

@@ -29,46 +29,7 @@ constexpr size_t kParallelBuild = 8192;
 constexpr int kStackSize = 64;
 constexpr double kFloatMax = double(std::numeric_limits<float>::max());
 
-/// A bounded primitive during the build.
-struct BuildItem {
-  Box3f box;
-  Vec3d centroid;  ///< box centre, coordinates clamped to the float range (never NaN)
-  uint32_t prim_id;
-};
-
-/// Largest float <= x (x not NaN).
-float round_down(double x) {
-  float f = float(x);
-  if (double(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-  return f;
-}
-
-/// Smallest float >= x (x not NaN).
-float round_up(double x) {
-  float f = float(x);
-  if (double(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-  return f;
-}
-
-/// The smallest float box containing the double box b grown by pad on every side.
-Box3f outward(const Box3d& b, double pad) {
-  Box3f f;
-  for (int k = 0; k < 3; ++k) {
-    f.lo[k] = round_down(b.lo[k] - pad);
-    f.hi[k] = round_up(b.hi[k] + pad);
-  }
-  return f;
-}
-
 double max_abs(const Vec3d& v) { return max_component(abs(v)); }
-
-BuildItem make_item(const Box3f& box, uint32_t prim_id) {
-  Vec3d c;
-  for (int k = 0; k < 3; ++k)
-    c[k] = 0.5 * (std::clamp(double(box.lo[k]), -kFloatMax, kFloatMax) +
-                  std::clamp(double(box.hi[k]), -kFloatMax, kFloatMax));
-  return {box, c, prim_id};
-}
 
 /// Nodes of the subtree over n primitives; the tree shape depends on n alone (median split),
 /// which lets every subtree be built in parallel straight into its depth-first slot.
@@ -80,13 +41,28 @@ uint32_t count_nodes(size_t n, std::unordered_map<size_t, uint32_t>& memo) {
   return c;
 }
 
-/// True when hit h of primitive id beats best: closer, or equally close with a larger
-/// prim_id (the order-independent tie rule of reference.h).
-inline bool closer(const Intersection<double>& h, uint32_t id, const ReferenceHit& best) {
-  return h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id));
+/// True when hit h of primitive id (placed by instance `instance`) beats best: closer, or
+/// equally close with a larger (prim_id, instance_id) (the order-independent tie rule of
+/// reference.h).
+inline bool closer(const Intersection<double>& h, uint32_t id, uint32_t instance, const ReferenceHit& best) {
+  return h.hit && (h.t < best.t || (h.t == best.t && (id > best.prim_id ||
+                                                      (id == best.prim_id && instance > best.instance_id))));
 }
 
 }  // namespace
+
+/// A bounded primitive (or, in the world's tree, an instance) during the build.
+struct Reference::BuildItem {
+  Box3f box;
+  Vec3d centroid;  ///< box centre, coordinates clamped to the float range (never NaN)
+  uint32_t prim_id;
+
+  BuildItem(const Box3f& b, uint32_t id) : box(b), prim_id(id) {
+    for (int k = 0; k < 3; ++k)
+      centroid[k] = 0.5 * (std::clamp(double(b.lo[k]), -kFloatMax, kFloatMax) +
+                           std::clamp(double(b.hi[k]), -kFloatMax, kFloatMax));
+  }
+};
 
 /// Per-ray constants of the conservative slab test (see Reference::intersect).
 struct Reference::RayBoxes {
@@ -156,16 +132,24 @@ Reference::Reference(const Scene& scene) {
   quadric_base_ = scene.quadric_base();
   polygon_base_ = scene.polygon_base();
   plane_base_ = scene.plane_base();
+  instance_base_ = scene.prim_count();
+  RP_CHECK(uint64_t(instance_base_) + scene.instances().size() < kInvalidId, "reference: ", scene.prim_count(),
+           " primitives and ", scene.instances().size(), " instances are too many to number");
+  for (size_t m = 0; m < scene.meshes().size(); ++m) mesh_base_.push_back(scene.mesh_base(m));
+  if (!mesh_base_.empty()) mesh_base_.push_back(scene.triangle_count());
 
-  // Every bounded primitive with its box, in prim_id order.
+  // Every bounded primitive with its box, in prim_id order: a world mesh's triangles go into
+  // the world's tree, an instanced mesh's into its own.
   std::vector<BuildItem> items;
   items.reserve(plane_base_);
+  std::vector<std::vector<BuildItem>> mesh_items(scene.meshes().size());
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
     const TriangleMesh& mesh = scene.meshes()[m];
+    std::vector<BuildItem>& to = scene.is_instanced(m) ? mesh_items[m] : items;
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       Box3f b;  // the float box of float vertices: exact
       for (int c = 0; c < 3; ++c) b.extend(mesh.vertex(t, c));
-      items.push_back(make_item(b, scene.mesh_base(m) + t));
+      to.emplace_back(b, scene.mesh_base(m) + t);
     }
   }
   for (uint32_t i = 0; i < scene.spheres().size(); ++i) {
@@ -176,14 +160,14 @@ Reference::Reference(const Scene& scene) {
     const double pad = 0x1p-10 * sd.radius + 0x1p-20 * max_abs(sd.center);
     const Vec3d r(sd.radius);
     analytic_boxes_.push_back(outward(Box3d(sd.center - r, sd.center + r), pad));
-    items.push_back(make_item(analytic_boxes_.back(), sphere_base_ + i));
+    items.emplace_back(analytic_boxes_.back(), sphere_base_ + i);
   }
   for (uint32_t i = 0; i < scene.quadrics().size(); ++i) {
     const Quadric<float>& q = scene.quadrics()[i].quadric;
     quadrics_.push_back(quadric_cast<double>(q));
     // A hit point, as computed, lies in the clip box: the float clip box bounds it exactly.
     analytic_boxes_.push_back(q.clip);
-    items.push_back(make_item(q.clip, quadric_base_ + i));
+    items.emplace_back(q.clip, quadric_base_ + i);
   }
   for (uint32_t i = 0; i < scene.polygons().size(); ++i) {
     const PolygonShape& p = scene.polygons()[i];
@@ -208,63 +192,40 @@ Reference::Reference(const Scene& scene) {
     }
     const double pad = 0x1p-10 * max_component(b.extent()) + 0x1p-20 * std::max(max_abs(b.lo), max_abs(b.hi));
     analytic_boxes_.push_back(outward(b, pad));
-    items.push_back(make_item(analytic_boxes_.back(), polygon_base_ + i));
+    items.emplace_back(analytic_boxes_.back(), polygon_base_ + i);
+  }
+  for (uint32_t i = 0; i < scene.instances().size(); ++i) {
+    const Instance& in = scene.instances()[i];
+    const Affine3d m(in.object_to_world);
+    const std::optional<Affine3d> w = inverse(m);
+    RP_CHECK(w.has_value(), "reference: instance ", i, " is not invertible");  // Scene::add_instance checked it
+    // The object-space point of a hit, mapped back, lies within a few double roundings of the
+    // world ray, magnified by the transform's condition (at most 2^40, kMaxInstanceScale):
+    // a guard of 2^-24 of the box's size and place covers that many times over.
+    const double cond = m.linear_norm() * w->linear_norm();
+    const double pad = 0x1p-24 * cond * (max_component(Vec3d(in.bounds.extent())) +
+                                         std::max(max_abs(Vec3d(in.bounds.lo)), max_abs(Vec3d(in.bounds.hi))));
+    const Box3f box = outward(Box3d(Vec3d(in.bounds.lo), Vec3d(in.bounds.hi)), pad);
+    instances_.push_back({in.mesh, *w, in.world_to_object, box});
+    if (!in.bounds.empty()) items.emplace_back(box, instance_base_ + i);
   }
   for (const Plane& p : scene.planes()) planes_.push_back({Vec3d(p.normal), double(p.d)});
 
-  if (!items.empty()) {
-    std::unordered_map<size_t, uint32_t> memo;
-    nodes_.resize(count_nodes(items.size(), memo));
-    const auto subtree_nodes = [&memo](size_t n) { return n <= kLeafSize ? 1u : memo.at(n); };
-    // Median split on the longest axis of the centroid bounds (ties: lower axis; equal
-    // centroids: lower prim_id, a total order, so the partition is unique). Depth-first
-    // layout: the left child follows its parent, the right child follows the left subtree.
-    const auto build = [&](auto&& self, size_t begin, size_t end, uint32_t node) -> void {
-      Box3f box;
-      Box3d centroids;
-      for (size_t i = begin; i < end; ++i) {
-        box.extend(items[i].box);
-        centroids.extend(items[i].centroid);
-      }
-      Node& n = nodes_[node];
-      for (int k = 0; k < 3; ++k) {
-        n.bounds[k] = box.lo[k];
-        n.bounds[k + 3] = box.hi[k];
-      }
-      const size_t count = end - begin;
-      if (count <= kLeafSize) {
-        n.index = uint32_t(begin);
-        n.count = uint32_t(count);
-        return;
-      }
-      const Vec3d e = centroids.extent();
-      const int axis = e.x >= e.y ? (e.x >= e.z ? 0 : 2) : (e.y >= e.z ? 1 : 2);
-      const size_t mid = begin + count / 2;
-      std::nth_element(items.begin() + std::ptrdiff_t(begin), items.begin() + std::ptrdiff_t(mid),
-                       items.begin() + std::ptrdiff_t(end), [axis](const BuildItem& a, const BuildItem& b) {
-                         return a.centroid[axis] < b.centroid[axis] ||
-                                (a.centroid[axis] == b.centroid[axis] && a.prim_id < b.prim_id);
-                       });
-      const uint32_t left = node + 1;
-      const uint32_t right = left + subtree_nodes(mid - begin);
-      n.index = right;
-      n.count = 0;
-      if (count > kParallelBuild) {
-        tbb::parallel_invoke([&] { self(self, begin, mid, left); }, [&] { self(self, mid, end, right); });
-      } else {
-        self(self, begin, mid, left);
-        self(self, mid, end, right);
-      }
-    };
-    build(build, 0, items.size(), 0);
-
-    prims_.resize(items.size());
-    leaf_index_.resize(items.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, items.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+  leaf_index_.assign(plane_base_, 0);
+  build_tree(items, world_);
+  mesh_trees_.resize(scene.meshes().size());
+  for (size_t m = 0; m < scene.meshes().size(); ++m)
+    if (!mesh_items[m].empty()) build_tree(mesh_items[m], mesh_trees_[m]);
+  // Each tree's leaves: a triangle's float corners (read from the scene once), its index.
+  for (Tree* t : [&] {
+         std::vector<Tree*> all{&world_};
+         for (Tree& mt : mesh_trees_) all.push_back(&mt);
+         return all;
+       }()) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, t->prims.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t i = range.begin(); i < range.end(); ++i) {
-        LeafPrim& p = prims_[i];
-        p.prim_id = items[i].prim_id;
-        leaf_index_[p.prim_id] = uint32_t(i);
+        LeafPrim& p = t->prims[i];
+        if (p.prim_id < plane_base_) leaf_index_[p.prim_id] = uint32_t(i);
         if (p.prim_id < sphere_base_) {
           const PrimLocation ref = scene.locate(p.prim_id);
           for (int c = 0; c < 3; ++c) p.v[c] = scene.meshes()[ref.shape].vertex(ref.local, c);
@@ -273,25 +234,85 @@ Reference::Reference(const Scene& scene) {
         }
       }
     });
-
-    const Node& root = nodes_[0];
-    double m = 0;
-    for (float b : root.bounds) m = std::max(m, std::abs(double(b)));
-    scene_scale_ = std::min(m, kFloatMax);
   }
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void Reference::build_tree(std::vector<BuildItem>& items, Tree& tree) {
+  if (items.empty()) return;
+  std::unordered_map<size_t, uint32_t> memo;
+  tree.nodes.resize(count_nodes(items.size(), memo));
+  const auto subtree_nodes = [&memo](size_t n) { return n <= kLeafSize ? 1u : memo.at(n); };
+  // Median split on the longest axis of the centroid bounds (ties: lower axis; equal
+  // centroids: lower prim_id, a total order, so the partition is unique). Depth-first
+  // layout: the left child follows its parent, the right child follows the left subtree.
+  const auto build = [&](auto&& self, size_t begin, size_t end, uint32_t node) -> void {
+    Box3f box;
+    Box3d centroids;
+    for (size_t i = begin; i < end; ++i) {
+      box.extend(items[i].box);
+      centroids.extend(items[i].centroid);
+    }
+    Node& n = tree.nodes[node];
+    for (int k = 0; k < 3; ++k) {
+      n.bounds[k] = box.lo[k];
+      n.bounds[k + 3] = box.hi[k];
+    }
+    const size_t count = end - begin;
+    if (count <= kLeafSize) {
+      n.index = uint32_t(begin);
+      n.count = uint32_t(count);
+      return;
+    }
+    const Vec3d e = centroids.extent();
+    const int axis = e.x >= e.y ? (e.x >= e.z ? 0 : 2) : (e.y >= e.z ? 1 : 2);
+    const size_t mid = begin + count / 2;
+    std::nth_element(items.begin() + std::ptrdiff_t(begin), items.begin() + std::ptrdiff_t(mid),
+                     items.begin() + std::ptrdiff_t(end), [axis](const BuildItem& a, const BuildItem& b) {
+                       return a.centroid[axis] < b.centroid[axis] ||
+                              (a.centroid[axis] == b.centroid[axis] && a.prim_id < b.prim_id);
+                     });
+    const uint32_t left = node + 1;
+    const uint32_t right = left + subtree_nodes(mid - begin);
+    n.index = right;
+    n.count = 0;
+    if (count > kParallelBuild) {
+      tbb::parallel_invoke([&] { self(self, begin, mid, left); }, [&] { self(self, mid, end, right); });
+    } else {
+      self(self, begin, mid, left);
+      self(self, mid, end, right);
+    }
+  };
+  build(build, 0, items.size(), 0);
+  tree.prims.resize(items.size());
+  for (size_t i = 0; i < items.size(); ++i) tree.prims[i].prim_id = items[i].prim_id;
+  double m = 0;
+  for (float b : tree.nodes[0].bounds) m = std::max(m, std::abs(double(b)));
+  tree.scale = std::min(m, kFloatMax);
+}
+
 Box3f Reference::prim_box(const LeafPrim& p) const noexcept {
+  if (p.prim_id >= instance_base_) return instances_[p.prim_id - instance_base_].box;
   if (p.prim_id >= sphere_base_) return analytic_boxes_[p.prim_id - sphere_base_];
   Box3f b;  // the same exact float box the build used
   for (const Vec3f& v : p.v) b.extend(v);
   return b;
 }
 
-void Reference::intersect_prim(const Rayd& r, const RayBoxes& rb, const LeafPrim& p,
-                               ReferenceHit& best) const noexcept {
+void Reference::intersect_prim(const Ray& ray, const Rayd& r, const RayBoxes& rb, const LeafPrim& p,
+                               uint32_t instance, ReferenceHit& best) const noexcept {
   const uint32_t id = p.prim_id;
+  if (id >= instance_base_) {
+    // An instance: the ray in its object space, in double, through its mesh's tree; only for
+    // a ray whose float object-space image is valid (the backends' rule).
+    const uint32_t i = id - instance_base_;
+    const InstanceD& in = instances_[i];
+    if (!valid_ray(object_ray(ray, in.float_world_to_object))) return;
+    const Rayd o = object_ray(r, in.world_to_object);
+    const Tree& tree = mesh_trees_[in.mesh];
+    traverse(tree, ray, o, RayBoxes(o, tree.scale), i, best);
+    return;
+  }
   Intersection<double> h;
   if (id < sphere_base_) {
     h = intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2]));
@@ -306,12 +327,14 @@ void Reference::intersect_prim(const Rayd& r, const RayBoxes& rb, const LeafPrim
                                   pd.plane, pd.convex);
   }
   // Plausibility last: it only runs for hits that would win.
-  if (closer(h, id, best) && rb.contains(prim_box(p), h.t)) best = {h.t, id, h.u, h.v};
+  if (closer(h, id, instance, best) && rb.contains(prim_box(p), h.t)) best = {h.t, id, h.u, h.v, instance};
 }
 
-void Reference::traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) const noexcept {
+void Reference::traverse(const Tree& tree, const Ray& ray, const Rayd& r, const RayBoxes& rb, uint32_t instance,
+                         ReferenceHit& best) const noexcept {
   // Near-first depth-first traversal; a box is entered when its grown slab interval meets
   // [tnear, min(tfar, best.t)] (closed: a hit at exactly best.t may still win the tie).
+  if (tree.nodes.empty()) return;
   struct Entry {
     uint32_t node;
     double t;
@@ -319,15 +342,15 @@ void Reference::traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) 
   Entry stack[kStackSize];
   int sp = 0;
   double t_root;
-  if (!rb.hit(nodes_[0], r.tfar, t_root)) return;
+  if (!rb.hit(tree.nodes[0], r.tfar, t_root)) return;
   uint32_t ni = 0;
   for (;;) {
-    const Node& n = nodes_[ni];
+    const Node& n = tree.nodes[ni];
     if (n.count == 0) {
       const double tmax = std::min(r.tfar, best.t);
       double tl, tr;
-      const bool hl = rb.hit(nodes_[ni + 1], tmax, tl);
-      const bool hr = rb.hit(nodes_[n.index], tmax, tr);
+      const bool hl = rb.hit(tree.nodes[ni + 1], tmax, tl);
+      const bool hr = rb.hit(tree.nodes[n.index], tmax, tr);
       if (hl && hr) {
         // Nearer child first; the left one when both enter at the same t.
         RP_DCHECK(sp < kStackSize);
@@ -345,7 +368,7 @@ void Reference::traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) 
         continue;
       }
     } else {
-      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(r, rb, prims_[k], best);
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(ray, r, rb, tree.prims[k], instance, best);
     }
     // Next deferred child that may still hold a hit at t <= best.t.
     for (;;) {
@@ -363,19 +386,34 @@ ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
   ReferenceHit best;
   if (!valid_ray(ray)) return best;
   const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  if (!nodes_.empty()) traverse(r, RayBoxes(r, scene_scale_), best);
+  traverse(world_, ray, r, RayBoxes(r, world_.scale), kNoInstance, best);
   for (uint32_t k = 0; k < planes_.size(); ++k) {
     const Intersection<double> h = intersect_plane(r, planes_[k].normal, planes_[k].d);
-    if (closer(h, plane_base_ + k, best)) best = {h.t, plane_base_ + k, h.u, h.v};
+    if (closer(h, plane_base_ + k, kNoInstance, best)) best = {h.t, plane_base_ + k, h.u, h.v};
   }
   return best;
 }
 
-bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t) const noexcept {
+bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance) const noexcept {
   if (!valid_ray(ray) || prim_id >= plane_base_ + planes_.size()) return false;
-  if (prim_id >= plane_base_) return true;
+  if (prim_id >= plane_base_) return instance == kNoInstance;
   const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  return RayBoxes(r, scene_scale_).contains(prim_box(prims_[leaf_index_[prim_id]]), t);
+  // The primitive's tree: the world's, or the instance's mesh's (which must hold it).
+  const bool triangle = prim_id < sphere_base_;
+  const size_t mesh = triangle ? size_t(std::upper_bound(mesh_base_.begin(), mesh_base_.end() - 1, prim_id) -
+                                        mesh_base_.begin() - 1)
+                               : 0;
+  const bool instanced = triangle && !mesh_trees_[mesh].prims.empty();
+  if (instance == kNoInstance) {
+    if (instanced) return false;
+    return RayBoxes(r, world_.scale).contains(prim_box(world_.prims[leaf_index_[prim_id]]), t);
+  }
+  if (instance >= instances_.size() || !instanced || instances_[instance].mesh != mesh) return false;
+  const InstanceD& in = instances_[instance];
+  if (!valid_ray(object_ray(ray, in.float_world_to_object))) return false;
+  const Rayd o = object_ray(r, in.world_to_object);
+  const Tree& tree = mesh_trees_[mesh];
+  return RayBoxes(o, tree.scale).contains(prim_box(tree.prims[leaf_index_[prim_id]]), t);
 }
 
 void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const {
@@ -386,7 +424,10 @@ void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hit
 }
 
 size_t Reference::bytes() const {
-  return nodes_.size() * sizeof(Node) + prims_.size() * sizeof(LeafPrim) + leaf_index_.size() * sizeof(uint32_t) +
+  size_t trees = world_.nodes.size() * sizeof(Node) + world_.prims.size() * sizeof(LeafPrim);
+  for (const Tree& t : mesh_trees_) trees += t.nodes.size() * sizeof(Node) + t.prims.size() * sizeof(LeafPrim);
+  return trees + leaf_index_.size() * sizeof(uint32_t) + mesh_base_.size() * sizeof(uint32_t) +
+         instances_.size() * sizeof(InstanceD) + mesh_trees_.size() * sizeof(Tree) +
          analytic_boxes_.size() * sizeof(Box3f) + spheres_.size() * sizeof(SphereD) +
          quadrics_.size() * sizeof(Quadric<double>) + polygons_.size() * sizeof(PolygonD) +
          polygon_vertices_.size() * sizeof(Vec3d) + planes_.size() * sizeof(PlaneD);

@@ -20,17 +20,26 @@
 /// from the brute-force loop of tests/backends/oracle.h only where that loop returns a
 /// phantom (or, at exactly equal t, picks the other primitive of a tie).
 /// The answer is the plausible hit of smallest t; among hits at exactly the same t the
-/// LARGEST prim_id wins. Because every primitive is tested against the full interval (not
-/// one shortened by earlier hits), this rule does not depend on the order primitives are
-/// visited in: the result is a function of the scene and the ray alone, whatever the BVH or
-/// the thread count. It is also what an ascending-id scan that replaces at `t <= best` gives
-/// (oracle.h; Scene::intersect_planes, where a plane takes a tie).
+/// LARGEST (prim_id, instance_id) wins. Because every primitive is tested against the full
+/// interval (not one shortened by earlier hits), this rule does not depend on the order
+/// primitives are visited in: the result is a function of the scene and the ray alone,
+/// whatever the BVH or the thread count. It is also what an ascending-id scan that replaces
+/// at `t <= best` gives (oracle.h; Scene::intersect_planes, where a plane takes a tie).
+///
+/// Instances (Scene::instances): the ray is taken into the instance's object space in double
+/// by the double inverse of the instance's float object_to_world (not by its float
+/// world_to_object, which the backends use), and tested against the instanced mesh there,
+/// plausibility included, in the mesh's own tree; the instance is traced only for rays whose
+/// float object-space image (rp::object_ray with Instance::world_to_object) obeys the
+/// valid-ray rule, the rule every backend follows.
 ///
 /// How. A binary BVH over the bounded primitives (median split on the longest axis of the
 /// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
 /// bound the float geometry exactly (triangles, quadric clip boxes) or outward-rounded and
-/// padded (spheres, polygons), traversed near-first in double with a conservative slab test
-/// (see Reference::intersect). Unbounded planes are tested beside it.
+/// padded (spheres, polygons, instances), traversed near-first in double with a conservative
+/// slab test (see Reference::intersect). An instance is an entry of that tree whose box is
+/// its mesh's box mapped into the world; each instanced mesh has a tree of its own, in its
+/// object space, built once. Unbounded planes are tested beside it.
 
 #include <cstddef>
 #include <cstdint>
@@ -38,6 +47,7 @@
 #include <span>
 #include <vector>
 
+#include "engine/affine.h"
 #include "engine/bbox.h"
 #include "engine/geometry/polygon.h"
 #include "engine/geometry/quadric.h"
@@ -55,9 +65,15 @@ struct ReferenceHit {
   double t = std::numeric_limits<double>::infinity();
   uint32_t prim_id = kInvalidId;
   double u = 0, v = 0;
+  uint32_t instance_id = kNoInstance;  ///< as rp::Hit
 
   constexpr bool hit() const { return prim_id != kInvalidId; }
 };
+
+/// `h` as a float Hit (t, u, v rounded to float; a miss stays Hit{}).
+inline Hit to_hit(const ReferenceHit& h) {
+  return h.hit() ? Hit{float(h.t), h.prim_id, float(h.u), float(h.v), h.instance_id} : Hit{};
+}
 
 /// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
 /// immutable and safe to query from many threads at once.
@@ -89,18 +105,20 @@ class Reference {
   /// so the result does not depend on scheduling). Throws rp::Error when the sizes differ.
   void intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const;
 
-  /// True when a hit of primitive prim_id at t is plausible for ray: prim_id is a plane, or
-  /// t lies in the ray's guarded slab interval through the primitive's box (see intersect).
-  /// False for an invalid ray or a prim_id out of range. For diagnostics (`raypack diff`:
-  /// is a backend's hit a phantom?) and for tests that mirror the reference by brute force.
-  bool plausible(const Ray& ray, uint32_t prim_id, double t) const noexcept;
+  /// True when a hit of primitive prim_id (placed by instance `instance`, or by none) at t is
+  /// plausible for ray: prim_id is a plane, or t lies in the ray's guarded slab interval
+  /// through the primitive's box (see intersect), in the instance's object space for an
+  /// instanced triangle. False for an invalid ray, a prim_id or instance out of range, or a
+  /// primitive the instance does not place. For diagnostics and for tests that mirror the
+  /// reference by brute force.
+  bool plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance = kNoInstance) const noexcept;
 
   /// Wall-clock seconds the constructor took.
   double build_seconds() const { return build_seconds_; }
   /// Bytes of the acceleration structure and the converted primitive data (capacity excluded).
   size_t bytes() const;
-  /// BVH nodes (0 when the scene has no bounded primitive).
-  size_t node_count() const { return nodes_.size(); }
+  /// BVH nodes of the world's tree (0 when the scene has no bounded primitive).
+  size_t node_count() const { return world_.nodes.size(); }
 
  private:
   /// Binary BVH node in depth-first order; the left child of an interior node follows it.
@@ -129,16 +147,37 @@ class Reference {
     Vec3d normal;
     double d;
   };
+  /// A tree over some bounded primitives: the world's, or an instanced mesh's in its object
+  /// space. An entry of the world's tree with prim_id >= instance_base_ is instance
+  /// prim_id - instance_base_.
+  struct Tree {
+    std::vector<Node> nodes;
+    std::vector<LeafPrim> prims;
+    double scale = 0;  ///< M: largest |coordinate| of the root box, capped to FLT_MAX
+  };
+  struct InstanceD {
+    uint32_t mesh;
+    Affine3d world_to_object;  ///< the double inverse of the instance's float object_to_world
+    Affine3f float_world_to_object;  ///< Instance::world_to_object, for the valid-ray rule
+    Box3f box;                       ///< the world box of the instance's tree entry
+  };
   struct RayBoxes;
+  struct BuildItem;
 
-  void traverse(const Rayd& r, const RayBoxes& rb, ReferenceHit& best) const noexcept;
-  void intersect_prim(const Rayd& r, const RayBoxes& rb, const LeafPrim& p, ReferenceHit& best) const noexcept;
+  void build_tree(std::vector<BuildItem>& items, Tree& tree);
+  void traverse(const Tree& tree, const Ray& ray, const Rayd& r, const RayBoxes& rb, uint32_t instance,
+                ReferenceHit& best) const noexcept;
+  void intersect_prim(const Ray& ray, const Rayd& r, const RayBoxes& rb, const LeafPrim& p, uint32_t instance,
+                      ReferenceHit& best) const noexcept;
   /// The BVH box of bounded primitive p (its t-interval decides plausibility).
   Box3f prim_box(const LeafPrim& p) const noexcept;
 
-  std::vector<Node> nodes_;
-  std::vector<LeafPrim> prims_;
-  std::vector<uint32_t> leaf_index_;   ///< prim_id -> index in prims_ (bounded primitives)
+  Tree world_;
+  std::vector<Tree> mesh_trees_;       ///< per mesh; empty but for instanced meshes
+  std::vector<InstanceD> instances_;
+  uint32_t instance_base_ = 0;         ///< the world tree's entry ids from here on are instances
+  std::vector<uint32_t> leaf_index_;   ///< prim_id -> index in its tree's prims (bounded primitives)
+  std::vector<uint32_t> mesh_base_;    ///< first prim_id of each mesh, then the triangle count
   std::vector<Box3f> analytic_boxes_;  ///< boxes of spheres, quadrics, polygons (id - sphere_base_)
   std::vector<SphereD> spheres_;
   std::vector<Quadric<double>> quadrics_;
@@ -146,7 +185,6 @@ class Reference {
   std::vector<Vec3d> polygon_vertices_;
   std::vector<PlaneD> planes_;
   uint32_t sphere_base_ = 0, quadric_base_ = 0, polygon_base_ = 0, plane_base_ = 0;
-  double scene_scale_ = 0;  ///< M: largest |coordinate| of the root box, capped to FLT_MAX
   double build_seconds_ = 0;
 };
 

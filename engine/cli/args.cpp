@@ -85,6 +85,20 @@ void add_scene_option(CLI::App* app, std::string& scene) {
   app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
 }
 
+void add_up_axis_option(CLI::App* app, std::string& up_axis) {
+  app->add_option("--up-axis", up_axis,
+                  "x, y or z: the axis pointing up in the scene file, which sets where a scene without a camera is "
+                  "seen from (default: what the file says; Y)");
+}
+
+std::optional<int> parse_up_axis(const std::string& up_axis) {
+  if (up_axis.empty()) return std::nullopt;
+  if (up_axis == "x" || up_axis == "X") return 0;
+  if (up_axis == "y" || up_axis == "Y") return 1;
+  if (up_axis == "z" || up_axis == "Z") return 2;
+  throw UsageError(cat("--up-axis: '", up_axis, "' is not x, y or z"));
+}
+
 void add_backend_options(CLI::App* app, std::string& backend, std::string& variant) {
   app->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
   app->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
@@ -124,8 +138,9 @@ void check_file_name(const std::string& flag, const std::string& path, void (*ch
   }
 }
 
-Scene load_scene_or_default(const std::string& path) {
-  return with_memory_context("loading " + path, [&] { return load_scene(path); });
+Scene load_scene_or_default(const std::string& path, const std::string& up_axis) {
+  const std::optional<int> up = parse_up_axis(up_axis);
+  return with_memory_context("loading " + path, [&] { return load_scene(path, up); });
 }
 
 std::unique_ptr<Backend> build_backend(const std::string& name, const std::string& variant, const Scene& scene,

@@ -42,6 +42,11 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& erro
 /// --scene: 'default' or a scene file, bound to `scene`.
 void add_scene_option(CLI::App* app, std::string& scene);
 
+/// --up-axis: x, y or z, the axis that points up in a scene file, where a scene without a
+/// camera is framed from and lit (Scene::set_up_axis); empty: what the file says (Y unless a
+/// format defines its own).
+void add_up_axis_option(CLI::App* app, std::string& up_axis);
+
 /// --backend and --variant: a backend by name and its variant (see `raypack backends`).
 void add_backend_options(CLI::App* app, std::string& backend, std::string& variant);
 
@@ -72,8 +77,12 @@ void check_method(const std::string& backend_flag, const std::string& backend, c
 /// the file name, so a bad name is found before any work.
 void check_file_name(const std::string& flag, const std::string& path, void (*check)(const std::string&));
 
-/// The scene at `path` ('default' or a file), with an out-of-memory failure named as such.
-Scene load_scene_or_default(const std::string& path);
+/// The scene at `path` ('default' or a file), with an out-of-memory failure named as such;
+/// `up_axis` as --up-axis takes it (a usage error naming the flag when it is not x, y or z).
+Scene load_scene_or_default(const std::string& path, const std::string& up_axis = "");
+
+/// --up-axis's value as an axis index (nothing for ""), or a usage error naming the flag.
+std::optional<int> parse_up_axis(const std::string& up_axis);
 
 /// The backend `name`/`variant` built over `scene` (loaded from `scene_name`), with an
 /// out-of-memory failure named as such.

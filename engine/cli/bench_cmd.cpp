@@ -10,6 +10,7 @@
 #include <fstream>
 #include <regex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -193,9 +194,7 @@ std::vector<Kind> ray_kinds(const Scene& scene, const Reference& reference, cons
     std::vector<ReferenceHit> ref_primary(primary.rays.size());
     reference.intersect(primary.rays, ref_primary);
     std::vector<Hit> primary_hits(primary.rays.size());
-    for (size_t i = 0; i < ref_primary.size(); ++i)
-      if (ref_primary[i].hit())
-        primary_hits[i] = {float(ref_primary[i].t), ref_primary[i].prim_id, float(ref_primary[i].u), float(ref_primary[i].v)};
+    for (size_t i = 0; i < ref_primary.size(); ++i) primary_hits[i] = to_hit(ref_primary[i]);
     const auto want = [&](const char* k) { return a.kinds.empty() || std::ranges::count(a.kinds, k) > 0; };
     if (want("primary")) kinds.push_back({"primary", primary.rays, false, ref_primary});
     if (want("shadow")) kinds.push_back({"shadow", shadow_rays(scene, primary, primary_hits).rays, true, {}});
@@ -264,6 +263,7 @@ void print_best(std::FILE* out, const Json& js, const std::vector<Kind>& kinds) 
 CLI::App* BenchArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("bench", "Every backend method on identical rays: speed beside accuracy");
   c->add_option("--scene", scenes, "Scene: 'default' or a file (repeatable)")->capture_default_str();
+  add_up_axis_option(c, up_axis);
   c->add_option("--size", size, "Primary rays: SIZE x SIZE pixels")->check(CLI::Range(8, 8192))->capture_default_str();
   c->add_option("--min-runs", min_runs, "Runs over which the spread is judged")
       ->check(CLI::Range(1, 1000))
@@ -320,6 +320,7 @@ int run_bench(const BenchArgs& a) {
         a.scenes.size());
   usage(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
   if (!a.ray_file.empty()) check_file_name("--rays", a.ray_file, check_ray_file_name);
+  const std::optional<int> up = parse_up_axis(a.up_axis);
   for (const std::string& k : a.kinds)
     usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
   const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
@@ -348,7 +349,7 @@ int run_bench(const BenchArgs& a) {
   const std::vector<Ray> file_rays = a.ray_file.empty() ? std::vector<Ray>{} : read_rays(a.ray_file);
   out["scenes"] = Json::array();
   for (const std::string& path : a.scenes) {
-    const Scene scene = load_scene(path);
+    const Scene scene = load_scene(path, up);
     const std::string name = path == "default" ? "default" : std::filesystem::path(path).filename().string();
     const Reference reference(scene);
     std::vector<Kind> kinds = ray_kinds(scene, reference, a, file_rays);
@@ -397,7 +398,7 @@ int run_bench(const BenchArgs& a) {
         } else {
           std::vector<Hit> ref_hits(rays.size());
           for (size_t i = 0; i < rays.size(); ++i)
-            if (k.ref[i].hit()) ref_hits[i] = {float(k.ref[i].t), k.ref[i].prim_id, float(k.ref[i].u), float(k.ref[i].v)};
+            ref_hits[i] = to_hit(k.ref[i]);
           const DiffResult d = diff_hits(scene, rays, hits, ref_hits, {}, {});
           count = d.count;
         }

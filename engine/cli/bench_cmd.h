@@ -14,6 +14,7 @@ namespace rp::cli {
 
 struct BenchArgs {
   std::vector<std::string> scenes{"default"};
+  std::string up_axis;  ///< --up-axis: "" (each file's), x, y or z, for every scene
   int size = 512;          ///< primary rays: size x size pixels
   int min_runs = 5, max_runs = 25;
   int build_runs = 5;  ///< builds timed per backend variant after a first, untimed one (median reported)

@@ -33,6 +33,7 @@ struct DiffSide {
 CLI::App* DiffArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
   add_scene_option(c, scene);
+  add_up_axis_option(c, up_axis);
   CLI::Option* k = c->add_option("--kind", kind, "Generated rays: primary, diffuse or random")->capture_default_str();
   c->add_option("--rays", rays, "A ray file (.csv, or binary: .bin, .rays) instead of generated rays")->excludes(k);
   c->add_option("--count", count, "Generated rays (primary: the first COUNT of the smallest packet-aligned image)")
@@ -76,7 +77,7 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
       throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
     if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
   });
-  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene); });
+  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene, a.up_axis); });
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.
@@ -142,8 +143,7 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
   auto side = [&](const std::string& name, const std::string& variant) {
     DiffSide s{name == "reference" ? name : name + "/" + variant, std::vector<Hit>(rays.size())};
     if (name == "reference") {
-      for (size_t i = 0; i < ref.size(); ++i)
-        if (ref[i].hit()) s.hits[i] = {float(ref[i].t), ref[i].prim_id, float(ref[i].u), float(ref[i].v)};
+      for (size_t i = 0; i < ref.size(); ++i) s.hits[i] = to_hit(ref[i]);
     } else {
       const auto backend = build_backend(name, variant, scene, a.scene);
       with_memory_context(cat("tracing ", rays.size(), " rays"),

@@ -32,6 +32,20 @@ int run_info(const InfoArgs& a) {
   std::printf("scene        %s (loaded in %.3f s)\n", a.scene.c_str(), load_s);
   std::printf("triangles    %u in %zu mesh(es), %zu vertices (%zu meshes with normals, %zu with uvs)\n",
               scene.triangle_count(), scene.meshes().size(), vertices, with_normals, with_uvs);
+  if (!scene.instances().empty()) {
+    size_t instanced_meshes = 0;
+    uint64_t unique = 0;
+    for (size_t m = 0; m < scene.meshes().size(); ++m)
+      if (scene.is_instanced(m)) {
+        ++instanced_meshes;
+        unique += scene.meshes()[m].triangle_count();
+      }
+    std::printf("instances    %zu placing %zu instanced mesh(es): %llu unique triangles, %llu instanced (placed) "
+                "triangles; %llu triangles in the world\n",
+                scene.instances().size(), instanced_meshes, (unsigned long long)unique,
+                (unsigned long long)scene.instanced_triangle_count(),
+                (unsigned long long)(scene.triangle_count() - unique + scene.instanced_triangle_count()));
+  }
   std::printf("analytic     %zu spheres, %zu quadrics, %zu polygons, %zu planes\n", scene.spheres().size(),
               scene.quadrics().size(), scene.polygons().size(), scene.planes().size());
   std::printf("primitives   %u\n", scene.prim_count());
@@ -45,7 +59,12 @@ int run_info(const InfoArgs& a) {
   const double prims = std::max(1.0, double(scene.prim_count()));
   std::printf("scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
   if (a.no_backends) return 0;
-  std::printf("\n%-8s %-10s %8s %14s %12s\n", "backend", "variant", "build s", "bytes", "bytes/prim");
+  // With instances, the bytes of each level: the top (the world's own structure and the one
+  // over the instances) and the instanced meshes' structures, each built once.
+  const bool levels = !scene.instances().empty();
+  std::printf("\n%-8s %-10s %8s %14s %12s", "backend", "variant", "build s", "bytes", "bytes/prim");
+  if (levels) std::printf(" %14s %14s", "top level", "mesh level");
+  std::printf("\n");
   for (const BackendEntry& e : list_backends()) {
     if (!e.available) {
       std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
@@ -56,6 +75,7 @@ int run_info(const InfoArgs& a) {
       const BackendInfo& i = backend->info();
       std::printf("%-8s %-10s %8.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
                   double(i.bytes) / prims);
+      if (levels) std::printf(" %14zu %14zu", i.levels.top, i.levels.meshes);
       for (const auto& [key, value] : i.stats) {
         if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
           std::printf("  %s=%lld", key.c_str(), (long long)value);

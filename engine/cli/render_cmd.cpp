@@ -143,6 +143,7 @@ bool CameraArgs::any() const {
 CLI::App* RenderArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
   add_scene_option(c, scene);
+  add_up_axis_option(c, up_axis);
   c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
   c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
   add_backend_options(c, backend, variant);
@@ -198,14 +199,14 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
   // Every rank loads the scene and builds its own backend (replicated data).
   auto t = clock::now();
   Scene scene = dist::together(comm, [&] {
-    Scene s = load_scene_or_default(a.scene);
+    Scene s = load_scene_or_default(a.scene, a.up_axis);
     for (const PointLight& l : f.lights) s.add_light(l);
     return s;
   });
   const double load_s = seconds_since(t);
   std::optional<Camera> camera_or;
   dist::together(comm, [&] {
-    const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds())));
+    const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())));
     try {
       camera_or.emplace(desc, res.width, res.height);
     } catch (const Error& e) {

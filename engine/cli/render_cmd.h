@@ -33,6 +33,7 @@ struct RenderArgs {
   float adaptive_threshold = 0.05f;
   int adaptive_depth = 3;
   std::string scene = "default";
+  std::string up_axis;  ///< --up-axis: "" (the file's), x, y or z
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
   std::string backend{kDefaultBackend};

@@ -22,7 +22,8 @@ std::vector<HitRecord> to_records(const Scene& scene, std::span<const Ray> rays,
   std::vector<HitRecord> out(hits.size());
   for (size_t i = 0; i < hits.size(); ++i)
     if (hits[i].hit())
-      out[i] = {hits[i].t, hits[i].prim_id, hits[i].u, hits[i].v, scene.surface(rays[i], hits[i]).geometric_normal};
+      out[i] = {hits[i].t, hits[i].prim_id, hits[i].u, hits[i].v, scene.surface(rays[i], hits[i]).geometric_normal,
+                hits[i].instance_id};
   return out;
 }
 

@@ -53,8 +53,7 @@ std::vector<Hit> reference_hits_across(const Comm& comm, const Scene& scene, std
     std::vector<ReferenceHit> rh(part.size());
     Reference(scene).intersect(part, rh);
     std::vector<Hit> hits(part.size());
-    for (size_t i = 0; i < rh.size(); ++i)
-      if (rh[i].hit()) hits[i] = {float(rh[i].t), rh[i].prim_id, float(rh[i].u), float(rh[i].v)};
+    for (size_t i = 0; i < rh.size(); ++i) hits[i] = to_hit(rh[i]);
     return hits;
   });
   return gather_vector(comm, std::span<const Hit>(mine), true);

@@ -9,6 +9,7 @@
 ///   {
 ///     "camera":    {...},            optional (without one the CLI frames the scene)
 ///     "materials": {"name": {...}},  optional; objects refer to materials by name
+///     "meshes":    {"name": {...}},  optional; mesh files declared once, placed by "instance" objects
 ///     "lights":    [{...}, ...],     optional; none (absent or []) = load_scene's default lights
 ///     "objects":   [{...}, ...]      required, at least one
 ///   }
@@ -31,6 +32,15 @@
 ///   "diffuse" colour = [0.8,0.8,0.8]; "specular" colour = [0,0,0]; "shininess" number = 32,
 ///   >= 0 (Blinn-Phong exponent); "emission" colour = [0,0,0]; "mirror" number = 0, in
 ///   [0, 1]; "ior" number = 1, >= 1; "opacity" number = 1, in [0, 1].
+///
+/// meshes: an object whose keys are names ("mesh": "<name>" in "instance" objects), each an
+///   object of "file" (required; as a "mesh" object's) and "material" (a name defined in
+///   "materials"; as a "mesh" object's). A mesh placed by one "instance" object is baked into
+///   world coordinates, as a "mesh" object is; placed by several, it is stored once, in its
+///   file's coordinates, and each placement is an instance (engine/scene.h: its triangles keep
+///   one set of prim_ids, Hit::instance_id names the placement). Its triangles are numbered
+///   after every object's, in the order the meshes are declared; a mesh no object places is
+///   not loaded (a warning says so).
 ///
 /// lights: an array of objects, each with "type" (required):
 ///   "point":       "position" vector (required); "intensity" colour = [1,1,1] (irradiance
@@ -73,6 +83,9 @@
 ///              as the inverse transpose, renormalised. Without "material", the file's
 ///              materials are appended to the scene and its meshes keep them; with it, every
 ///              triangle takes that material and the file's materials are not added.
+///   "instance": "mesh" (required) the name of a mesh of "meshes"; "transform" as a "mesh"
+///              object's (scale, rotate, translate; a mirroring scale is refused). No
+///              "material": a mesh's placements share its materials.
 ///
 /// Error messages, every one "<file>: " and then (the path in JSONPath notation, $ the root,
 /// $.a["not an identifier"]; values as the file has them, compact, cut to 40 characters
@@ -89,9 +102,11 @@
 ///                                                > c = 1, >= min[k] = 2, fit in a 32-bit float,
 ///                                                have a non-zero length, differ from eye (look_at),
 ///                                                not be parallel to look_at - eye
-///   <path>.type: unknown object type "cube" (expected one of: sphere, plane, polygon, quadric, mesh)
+///   <path>.type: unknown object type "cube" (expected one of: sphere, plane, polygon, quadric, mesh, instance)
 ///                likewise: unknown light type, unknown quadric shape, unknown axis
 ///   <path>.material: unknown material "blue" (materials: red, white | no materials are defined)
+///   <path>.mesh: unknown mesh "tree" (meshes: rock, house | no meshes are declared)
+///   <path>: <a Scene check's message> for a placement, e.g. the mesh placed outside the range
 ///   <path>: expected "shape" or "coefficients", not both
 ///   <path>: missing key "shape" (or "coefficients")
 ///   <path>.coefficients: {"J":-1} has no x, y or z term (one of A..I must be non-zero)
@@ -103,7 +118,7 @@
 ///   <path>: <a Scene check's message>                              (kept as a safety net)
 
 ///
-/// One file of about 680 lines on purpose: the format's specification above (110 lines) and
+/// One file of about 800 lines on purpose: the format's specification above (125 lines) and
 /// the one reader that enforces it line by line, so a rule and its check are read together.
 
 #include <algorithm>
@@ -124,6 +139,7 @@
 #include "engine/input_file.h"
 #include "engine/json_text.h"
 #include "engine/loaders/load.h"
+#include "engine/text.h"
 
 namespace rp {
 namespace {
@@ -185,7 +201,7 @@ constexpr Range kFraction{0.0, 1.0, false, false};
 constexpr Range kFov{0.0, 180.0, true, true};
 constexpr Range kIor{1.0, kInf, false, false};
 
-constexpr std::string_view kTopKeys[] = {"camera", "materials", "lights", "objects"};
+constexpr std::string_view kTopKeys[] = {"camera", "materials", "meshes", "lights", "objects"};
 constexpr std::string_view kCameraKeys[] = {"eye",         "look_at",  "up",           "fov", "model",
                                             "fisheye_fov", "aperture", "focus_distance"};
 constexpr std::string_view kCameraModels[] = {"pinhole", "panoramic", "fisheye", "thin_lens"};
@@ -195,7 +211,7 @@ constexpr std::string_view kMaterialKeys[] = {"diffuse", "specular", "shininess"
 constexpr std::string_view kLightTypes[] = {"point", "directional"};
 constexpr std::string_view kPointLightKeys[] = {"type", "position", "intensity"};
 constexpr std::string_view kDirectionalLightKeys[] = {"type", "direction", "irradiance"};
-constexpr std::string_view kObjectTypes[] = {"sphere", "plane", "polygon", "quadric", "mesh"};
+constexpr std::string_view kObjectTypes[] = {"sphere", "plane", "polygon", "quadric", "mesh", "instance"};
 constexpr std::string_view kSphereKeys[] = {"type", "center", "radius", "material"};
 constexpr std::string_view kPlaneKeys[] = {"type", "normal", "offset", "material"};
 constexpr std::string_view kPolygonKeys[] = {"type", "vertices", "material"};
@@ -212,6 +228,8 @@ constexpr std::string_view kCoefficientKeys[] = {"A", "B", "C", "D", "E", "F", "
 constexpr std::string_view kClipKeys[] = {"min", "max"};
 constexpr std::string_view kAxes[] = {"x", "y", "z"};
 constexpr std::string_view kMeshKeys[] = {"type", "file", "transform", "material"};
+constexpr std::string_view kDeclaredMeshKeys[] = {"file", "material"};
+constexpr std::string_view kInstanceKeys[] = {"type", "mesh", "transform"};
 constexpr std::string_view kTransformKeys[] = {"scale", "rotate", "translate"};
 constexpr std::string_view kRotateKeys[] = {"axis", "degrees"};
 
@@ -227,6 +245,15 @@ struct MeshTransform {
   Vec3f normal(const Vec3f& n) const {
     const Vec3d s = Vec3d(n);
     return Vec3f(normalize(rotate({s.x / scale.x, s.y / scale.y, s.z / scale.z})));
+  }
+  /// The same map as an instance's placement (rounded to float).
+  Affine3f affine() const {
+    Affine3f a;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) a.m[i][j] = float(rotation[i][j] * scale[j]);
+      a.m[i][3] = float(translation[i]);
+    }
+    return a;
   }
 };
 
@@ -268,10 +295,12 @@ class SceneReader {
       array(*l, lp);
       for (size_t i = 0; i < l->size(); ++i) read_light((*l)[i], element(lp, i));
     }
+    if (const Json* m = find(root, "meshes")) read_declared_meshes(*m, member(path, "meshes"));
     const std::string op = member(path, "objects");
     const Json& objects = array(require(root, path, "objects"), op);
     if (objects.empty()) fail(op, cat("expected at least one object, got ", show(objects)));
     for (size_t i = 0; i < objects.size(); ++i) read_object(objects[i], element(op, i));
+    place_declared_meshes();
   }
 
  private:
@@ -475,7 +504,8 @@ class SceneReader {
       case 1: read_plane(v, path); break;
       case 2: read_polygon(v, path); break;
       case 3: read_quadric(v, path); break;
-      default: read_mesh(v, path); break;
+      case 4: read_mesh(v, path); break;
+      default: read_instance(v, path); break;
     }
   }
 
@@ -616,52 +646,137 @@ class SceneReader {
     return t;
   }
 
-  void read_mesh(const Json& v, const std::string& path) {
-    check_keys(v, path, kMeshKeys);
-    const std::string fp = member(path, "file");
+  /// A mesh file as an object of `v` names it (its "file" and "material" keys): checked,
+  /// not yet loaded.
+  struct MeshFile {
+    std::string file_path;  ///< JSON path of "file"
+    std::string resolved;   ///< the file, relative to the scene's folder
+    std::string ext;
+    bool override_material = false;
+    uint32_t material = 0;
+  };
+  MeshFile mesh_file(const Json& v, const std::string& path) const {
+    MeshFile f;
+    f.file_path = member(path, "file");
     const Json& file_value = require(v, path, "file");
-    const std::string file = string(file_value, fp);
-    const std::string ext = extension(file);
-    if (ext != ".obj" && ext != ".ply") fail(fp, cat(show(file_value), " is not a mesh file (expected .obj or .ply)"));
-    const Json* transform_value = find(v, "transform");
-    const MeshTransform t =
-        transform_value != nullptr ? transform(*transform_value, member(path, "transform")) : MeshTransform{};
-    const bool override_material = find(v, "material") != nullptr;
-    const uint32_t override_id = material(v, path);
+    const std::string file = string(file_value, f.file_path);
+    f.ext = extension(file);
+    if (f.ext != ".obj" && f.ext != ".ply")
+      fail(f.file_path, cat(show(file_value), " is not a mesh file (expected .obj or .ply)"));
+    f.override_material = find(v, "material") != nullptr;
+    f.material = material(v, path);
+    f.resolved = !file.empty() && file[0] == '/' ? file : dir_ + file;
+    return f;
+  }
 
-    const std::string resolved = !file.empty() && file[0] == '/' ? file : dir_ + file;
+  /// The meshes of `f`, their materials already in the scene (appended once, or the override).
+  std::vector<TriangleMesh> load_meshes(const MeshFile& f) {
     Scene loaded;
     try {
-      if (ext == ".obj")
-        load_obj(resolved, loaded);
+      if (f.ext == ".obj")
+        load_obj(f.resolved, loaded);
       else
-        load_ply(resolved, loaded);
+        load_ply(f.resolved, loaded);
     } catch (const Error& e) {
-      fail(fp, e.what());
+      fail(f.file_path, e.what());
     }
-    if (loaded.triangle_count() == 0) fail(fp, cat(resolved, ": the file has no triangles"));
-
+    if (loaded.triangle_count() == 0) fail(f.file_path, cat(f.resolved, ": the file has no triangles"));
     // The file's materials 1.. follow the scene's; its material 0 is the scene's default too.
     const uint32_t base = uint32_t(scene_.materials().size()) - 1;
-    if (!override_material)
+    if (!f.override_material)
       for (size_t i = 1; i < loaded.materials().size(); ++i)
-        add(fp, [&] { scene_.add_material(loaded.materials()[i]); });
-    auto remap = [&](uint32_t id) { return override_material ? override_id : (id == 0 ? 0 : base + id); };
-    for (TriangleMesh mesh : loaded.meshes()) {
-      for (Vec3f& p : mesh.positions) p = t.point(p);
-      for (Vec3f& n : mesh.normals) n = t.normal(n);
+        add(f.file_path, [&] { scene_.add_material(loaded.materials()[i]); });
+    auto remap = [&](uint32_t id) { return f.override_material ? f.material : (id == 0 ? 0 : base + id); };
+    std::vector<TriangleMesh> meshes = loaded.meshes();
+    for (TriangleMesh& mesh : meshes) {
       mesh.material = remap(mesh.material);
-      if (override_material)
+      if (f.override_material)
         mesh.face_materials.clear();
       else
         for (uint32_t& m : mesh.face_materials) m = remap(m);
+    }
+    return meshes;
+  }
+
+  /// Adds `meshes` to the world, mapped by `t` (positions, and normals by the inverse transpose).
+  void bake(std::vector<TriangleMesh> meshes, const MeshTransform& t, const std::string& path) {
+    for (TriangleMesh& mesh : meshes) {
+      for (Vec3f& p : mesh.positions) p = t.point(p);
+      for (Vec3f& n : mesh.normals) n = t.normal(n);
       add(path, [&] { scene_.add_mesh(std::move(mesh)); });
+    }
+  }
+
+  MeshTransform transform_of(const Json& v, const std::string& path) const {
+    const Json* transform_value = find(v, "transform");
+    return transform_value != nullptr ? transform(*transform_value, member(path, "transform")) : MeshTransform{};
+  }
+
+  void read_mesh(const Json& v, const std::string& path) {
+    check_keys(v, path, kMeshKeys);
+    const MeshFile f = mesh_file(v, path);
+    const MeshTransform t = transform_of(v, path);
+    bake(load_meshes(f), t, path);
+  }
+
+  /// A mesh of "meshes" and the objects that place it.
+  struct DeclaredMesh {
+    std::string name, path;
+    MeshFile file;
+    std::vector<std::pair<MeshTransform, std::string>> placements;  ///< transform, object path
+  };
+
+  void read_declared_meshes(const Json& v, const std::string& path) {
+    object(v, path);
+    for (const auto& [name, value] : v.items()) {
+      const std::string mp = member(path, name);
+      object(value, mp);
+      check_keys(value, mp, kDeclaredMeshKeys);
+      declared_.push_back({name, mp, mesh_file(value, mp), {}});
+    }
+  }
+
+  void read_instance(const Json& v, const std::string& path) {
+    check_keys(v, path, kInstanceKeys);
+    const std::string mp = member(path, "mesh");
+    const Json& name_value = require(v, path, "mesh");
+    const std::string name = string(name_value, mp);
+    const auto it = std::find_if(declared_.begin(), declared_.end(), [&](const DeclaredMesh& d) { return d.name == name; });
+    if (it == declared_.end()) {
+      std::vector<std::string_view> names;
+      for (const DeclaredMesh& d : declared_) names.push_back(d.name);
+      fail(mp, cat("unknown mesh ", show(name_value), " (",
+                   names.empty() ? std::string("no meshes are declared") : "meshes: " + join(names), ")"));
+    }
+    it->placements.emplace_back(transform_of(v, path), path);
+  }
+
+  /// Each declared mesh: baked where one object places it, stored once and instanced where
+  /// several do (see "meshes" at the top of this file).
+  void place_declared_meshes() {
+    for (DeclaredMesh& d : declared_) {
+      if (d.placements.empty()) {
+        warn(cat(file_, ": ", d.path, ": no object places this mesh; it is not loaded"));
+        continue;
+      }
+      std::vector<TriangleMesh> meshes = load_meshes(d.file);
+      if (d.placements.size() == 1) {
+        bake(std::move(meshes), d.placements[0].first, d.placements[0].second);
+        continue;
+      }
+      std::vector<uint32_t> ids;
+      for (TriangleMesh& mesh : meshes) add(d.path, [&] { ids.push_back(scene_.add_instanced_mesh(std::move(mesh))); });
+      for (const auto& [t, path] : d.placements) {
+        const Affine3f a = t.affine();
+        for (uint32_t id : ids) add(path, [&] { scene_.add_instance(id, a); });
+      }
     }
   }
 
   std::string file_, dir_;
   Scene& scene_;
   std::vector<std::pair<std::string, uint32_t>> materials_;  ///< name, id; in file order
+  std::vector<DeclaredMesh> declared_;                       ///< "meshes", in file order
 };
 
 }  // namespace

@@ -11,24 +11,26 @@
 namespace rp {
 
 /// Lights for a file that brings none, placed from the scene bounds (centre c, radius
-/// r = half the diagonal; models are taken as Y up and seen from +Z, as the real models are):
-/// - a key PointLight at c + (0.5, 1.5, 2) r, above the front and a little to the right,
-///   with an intensity that gives an irradiance of 0.8 at c (intensity = 0.8 d^2);
-/// - a directional fill from the upper left front, direction normalize(1, -1, -1),
+/// r = half the diagonal) in the scene's up frame (up_frame: Y up seen from +Z, as the real
+/// models are):
+/// - a key PointLight at c + (0.5 right + 1.5 up + 2 front) r, above the front and a little
+///   to the right, with an intensity that gives an irradiance of 0.8 at c (0.8 d^2);
+/// - a directional fill from the upper left front, direction normalize(right - up - front),
 ///   irradiance 0.3.
 static void add_default_lights(Scene& scene) {
   const Box3f b = scene.bounds();
   const Vec3f c = b.empty() ? Vec3f(0.0f) : b.center();
   float r = b.empty() ? 0.0f : 0.5f * length(b.extent());
   if (!(r > 0.0f) || !std::isfinite(r)) r = 1.0f;
-  const Vec3f offset = Vec3f(0.5f, 1.5f, 2.0f) * r;
+  const UpFrame f = up_frame(scene.up_axis());
+  const Vec3f offset = (f.right * 0.5f + f.up * 1.5f + f.front * 2.0f) * r;
   Vec3f position = c + offset;  // kept within the coordinate range of engine/ray.h
   for (int a = 0; a < 3; ++a) position[a] = std::clamp(position[a], -kMaxCoordinate, kMaxCoordinate);
   scene.add_light(PointLight{.position = position, .intensity = Vec3f(0.8f * dot(offset, offset))});
-  scene.add_light(DirectionalLight{.direction = normalize(Vec3f(1.0f, -1.0f, -1.0f)), .irradiance = Vec3f(0.3f)});
+  scene.add_light(DirectionalLight{.direction = normalize(f.right - f.up - f.front), .irradiance = Vec3f(0.3f)});
 }
 
-Scene load_scene(const std::string& path) {
+Scene load_scene(const std::string& path, std::optional<int> up_axis) {
   if (path == "default") return make_default_scene();
 
   // The extension is what follows the last '.' of the file name (not of a directory).
@@ -48,10 +50,13 @@ Scene load_scene(const std::string& path) {
       load_obj(path, scene);
     else if (lower == ".ply")
       load_ply(path, scene);
+    else if (lower == ".gltf" || lower == ".glb")
+      load_gltf(path, scene);
     else
-      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply, .json)"));
+      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply, .json, .gltf, .glb)"));
     RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
   }
+  if (up_axis) scene.set_up_axis(*up_axis);
   if (scene.point_lights().empty() && scene.directional_lights().empty()) add_default_lights(scene);
   // Zero-area triangles are kept (the numbering stays the file's) but can never be hit.
   if (const size_t degenerate = scene.degenerate_triangle_count(); degenerate > 0)

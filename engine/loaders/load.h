@@ -1,18 +1,22 @@
 #pragma once
-/// Scene files: OBJ (+MTL) through tinyobjloader, PLY (ascii, binary little and big endian).
+/// Scene files: OBJ (+MTL) through tinyobjloader, PLY (ascii, binary little and big endian),
+/// JSON scenes, glTF 2.0 (.gltf, .glb) through tinygltf.
 
+#include <optional>
 #include <string>
 
 #include "engine/scene.h"
 
 namespace rp {
 
-/// Loads `path` by its extension (.obj, .ply, .json, case-insensitive), or the embedded default
-/// scene for the name "default". The scene has no camera unless the file gives one; lights
-/// are added when the file has none (a key light above the front and a directional fill) so
-/// that a render shows the model. Throws rp::Error with the file and line (or byte offset)
-/// of the first problem.
-Scene load_scene(const std::string& path);
+/// Loads `path` by its extension (.obj, .ply, .json, .gltf, .glb, case-insensitive), or the
+/// embedded default scene for the name "default". The scene has no camera unless the file
+/// gives one; lights are added when the file has none (a key light above the front and a
+/// directional fill, placed by the scene's up axis) so that a render shows the model.
+/// `up_axis` (0 x, 1 y, 2 z), when given, is the scene's up axis whatever the file says
+/// (Scene::set_up_axis). Throws rp::Error with the file and line (or byte offset, or JSON
+/// path) of the first problem.
+Scene load_scene(const std::string& path, std::optional<int> up_axis = std::nullopt);
 
 /// Appends the triangles of an OBJ file (and its MTL materials, when found) to `scene`.
 void load_obj(const std::string& path, Scene& scene);
@@ -25,5 +29,11 @@ void load_ply(const std::string& path, Scene& scene);
 /// no default lights (load_scene does). Throws rp::Error naming the file, the JSON path and
 /// the value of the first problem.
 void load_json_scene(const std::string& path, Scene& scene);
+
+/// Appends the meshes, instances, lights, materials and (first) camera of a glTF 2.0 file's
+/// default scene to `scene` (the mapping and what is ignored: the top of
+/// engine/loaders/gltf.cpp). Adds no default lights (load_scene does). Throws rp::Error
+/// naming the file and the JSON path of the first problem.
+void load_gltf(const std::string& path, Scene& scene);
 
 }  // namespace rp

@@ -125,18 +125,26 @@ std::optional<Vec2f> Camera::project(const Vec3f& direction) const {
   return Vec2f{(sx + 1.0f) * 0.5f * float(width_), (1.0f - sy) * 0.5f * float(height_)};
 }
 
-CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees) {
+CameraDesc frame_bounds(const Box3f& bounds, int up_axis, float vfov_degrees) {
   CameraDesc c;
   c.vfov_degrees = vfov_degrees;
-  if (bounds.empty()) return c;
+  const UpFrame f = up_frame(up_axis);
+  c.up = f.up;
+  if (bounds.empty()) {
+    c.eye = f.front * 5.0f;
+    return c;
+  }
   const Vec3f centre = bounds.center();
   const float radius = std::max(0.5f * length(bounds.extent()), 1e-6f);
   const float dist = radius / std::sin(vfov_degrees * float(kPi) / 360.0f) * 1.05f;
   c.look_at = centre;
-  c.eye = centre + normalize(Vec3f{0.0f, 0.35f, 1.0f}) * dist;
+  c.eye = centre + normalize(f.up * 0.35f + f.front) * dist;
   // A scene filling the coordinate range is seen from its edge (the eye must be in range).
   for (int a = 0; a < 3; ++a) c.eye[a] = std::clamp(c.eye[a], -kMaxCoordinate, kMaxCoordinate);
-  if (c.eye == c.look_at) c.eye.z = c.look_at.z > 0.0f ? -kMaxCoordinate : kMaxCoordinate;
+  if (c.eye == c.look_at) {  // the whole range filled: the eye to the far side along the front axis
+    const int a = max_abs_axis(f.front);
+    c.eye[a] = c.look_at[a] > 0.0f ? -kMaxCoordinate : kMaxCoordinate;
+  }
   return c;
 }
 

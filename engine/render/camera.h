@@ -73,9 +73,10 @@ class Camera {
   int width_, height_;
 };
 
-/// A pinhole camera that frames `bounds` from the front-above (+z, +y) with the given fov,
-/// used when a scene has none; the eye is kept within the coordinate range (a scene that
-/// fills the range is seen from its edge).
-CameraDesc frame_bounds(const Box3f& bounds, float vfov_degrees = 40.0f);
+/// A pinhole camera that frames `bounds` from the front, a little above, with the given fov,
+/// used when a scene has none: front and above as up_frame(up_axis) says (Y up: from +z and
+/// +y). The eye is kept within the coordinate range (a scene that fills the range is seen
+/// from its edge).
+CameraDesc frame_bounds(const Box3f& bounds, int up_axis = 1, float vfov_degrees = 40.0f);
 
 }  // namespace rp

@@ -61,22 +61,24 @@ void write_aovs(const std::string& path, const Aovs& a) {
   RP_CHECK(extension_of(path) == ".exr", "cannot write AOVs to '", path, "': AOVs are written as OpenEXR (.exr)");
   const size_t n = size_t(a.width) * size_t(a.height);
   RP_CHECK(n > 0 && a.depth.size() == n, "write_aovs: no pixels for '", path, "'");
-  constexpr int kChannels = 10;
+  constexpr int kChannels = 11;
   OIIO::ImageSpec spec(a.width, a.height, kChannels, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"Z", "Ng.X", "Ng.Y", "Ng.Z", "N.X", "N.Y", "N.Z", "u", "v", "primId"};
+  spec.channelnames = {"Z", "Ng.X", "Ng.Y", "Ng.Z", "N.X", "N.Y", "N.Z", "u", "v", "primId", "instanceId"};
   spec.channelformats.assign(kChannels, OIIO::TypeDesc::FLOAT);
-  spec.channelformats[9] = OIIO::TypeDesc::UINT;
+  spec.channelformats[9] = spec.channelformats[10] = OIIO::TypeDesc::UINT;
   spec.z_channel = 0;
   spec.attribute("DateTime", "");
-  // Interleaved pixels: 9 floats then one uint32, 40 bytes each.
-  std::vector<unsigned char> pixels(n * 40);
+  // Interleaved pixels: 9 floats then two uint32, 44 bytes each.
+  constexpr size_t kPixel = 44;
+  std::vector<unsigned char> pixels(n * kPixel);
   for (size_t p = 0; p < n; ++p) {
     float f[9] = {a.depth[p], a.normal[3 * p], a.normal[3 * p + 1], a.normal[3 * p + 2], a.shading_normal[3 * p],
                   a.shading_normal[3 * p + 1], a.shading_normal[3 * p + 2], a.uv[2 * p], a.uv[2 * p + 1]};
-    std::memcpy(&pixels[p * 40], f, sizeof f);
-    std::memcpy(&pixels[p * 40 + 36], &a.prim_id[p], 4);
+    std::memcpy(&pixels[p * kPixel], f, sizeof f);
+    std::memcpy(&pixels[p * kPixel + 36], &a.prim_id[p], 4);
+    std::memcpy(&pixels[p * kPixel + 40], &a.instance_id[p], 4);
   }
-  write_with_oiio(path, spec, OIIO::TypeDesc::UNKNOWN, pixels.data(), 40);
+  write_with_oiio(path, spec, OIIO::TypeDesc::UNKNOWN, pixels.data(), kPixel);
 }
 
 Image read_image(const std::string& path) {

@@ -475,6 +475,7 @@ Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camer
   a.shading_normal.assign(3 * n, 0.0f);
   a.uv.assign(2 * n, 0.0f);
   a.prim_id.assign(n, kInvalidId);
+  a.instance_id.assign(n, kNoInstance);
   const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles_y, 1, 0, tiles_x, 1), [&](const tbb::blocked_range2d<int>& r) {
     std::vector<Ray> rays;
@@ -510,6 +511,7 @@ Aovs render_aovs(const Scene& scene, const Backend& backend, const Camera& camer
           a.uv[2 * p] = hits[i].u;
           a.uv[2 * p + 1] = hits[i].v;
           a.prim_id[p] = hits[i].prim_id;
+          a.instance_id[p] = hits[i].instance_id;
         }
       }
   });

@@ -127,8 +127,8 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
 double replay_traces(const TraceLog& log, const Backend& backend);
 
 /// Arbitrary output variables of the primary hit through each pixel centre, row-major from
-/// the top row. A pixel whose ray misses has depth +inf, zero normals and barycentrics, and
-/// prim_id kInvalidId.
+/// the top row. A pixel whose ray misses has depth +inf, zero normals and barycentrics,
+/// prim_id kInvalidId and instance_id kNoInstance.
 struct Aovs {
   int width = 0, height = 0;
   std::vector<float> depth;           ///< hit distance along the (unit) camera ray
@@ -136,6 +136,7 @@ struct Aovs {
   std::vector<float> shading_normal;  ///< interpolated normal where the mesh has them; 3 per pixel
   std::vector<float> uv;              ///< barycentrics (u, v); 2 per pixel
   std::vector<uint32_t> prim_id;
+  std::vector<uint32_t> instance_id;  ///< Hit::instance_id (kNoInstance: none)
 };
 
 /// The AOVs of `scene` through `camera`, traced in 4x2 packets with all threads.

@@ -1,8 +1,10 @@
 // shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 is read as
 // vectors (rays, hits and paths transposed from their records; its triangles' corners,
 // vertex normals and materials gathered when they share a mesh, read lane by lane when they
-// do not); its triangles' surface points (triangle_point) run on float8 lanes, its analytic
-// hits' come from Scene::surface lane by lane, then all of shading.h runs on float8 lanes, and
+// do not); its world triangles' surface points (triangle_point) run on float8 lanes, its
+// analytic hits' and instances' hits' come from Scene::surface lane by lane (which maps an
+// instance's object-space point and normals into the world), then all of shading.h runs on
+// float8 lanes, and
 // its shadow rays and waiting contributions are transposed back into records and appended in
 // lane order. The last few rays of a batch go a ray at a time (shade_ray): the same bits
 // either way. Built for AVX2+FMA; the renderer calls it only on such a CPU
@@ -255,16 +257,19 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
 
 void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits,
                   std::span<const PathState> paths, bool bounce, ShadeOut& out) {
-  static_assert(sizeof(Hit) == 16 && sizeof(PathState) == 16);
+  static_assert(sizeof(Hit) == 20 && offsetof(Hit, prim_id) == 4 && offsetof(Hit, v) == 12 && sizeof(PathState) == 16);
   const size_t n = rays.size();
   size_t base = 0;
   for (; base + 8 <= n; base += 8) {
     float8 hit_rows[4], path_rows[4];  // t, prim, u, v; slot, weight
-    simd::load_records4(&hits[base].t, hit_rows);
+    simd::load_records4(&hits[base].t, hit_rows, sizeof(Hit) / sizeof(float));
     simd::load_records4(reinterpret_cast<const float*>(&paths[base]), path_rows);
     const uint32_t live = ~simd::movemask(simd::bits_equal(path_rows[0], kInvalidId)) & 0xffu;
     const uint32_t hit = ~simd::movemask(simd::bits_equal(hit_rows[1], kInvalidId)) & live;
-    const uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count())) & hit;
+    uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count())) & hit;
+    if (!s.scene.instances().empty())  // an instance's triangle goes through Scene::surface, as analytic hits do
+      for (uint32_t b = triangle; b; b &= b - 1)
+        if (hits[base + size_t(std::countr_zero(b))].instance_id != kNoInstance) triangle &= ~(b & -b);
     shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, bounce, out);
   }
   for (size_t i = base; i < n; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);

@@ -151,6 +151,52 @@ TEST_P(Conformance, DefaultSceneMatchesOracle) {
   check_scene(scene, rays, "default", 1000);
 }
 
+TEST_P(Conformance, InstancedMeshesMatchOracle) {
+  const Scene scene = test::instanced_scene();
+  check_scene(scene, random_rays(15, 4000), "instanced", 1000);
+  check_scene(scene, axis_rays(), "instanced/axis", 100, 0.05);
+}
+
+/// The instances' hits carry the instance and the mesh's own prim id, and name the same point
+/// (and normal) as the triangles baked into the world in the flattened scene: the same hit or
+/// miss and t within 1e-5 (relative) on every ray the oracle finds well-conditioned.
+TEST_P(Conformance, InstancesHitWhereTheirTrianglesBakedIntoTheWorldDo) {
+  const Scene scene = test::instanced_scene(), flat = test::flattened(scene);
+  auto a = make_param_backend(GetParam(), scene), b = make_param_backend(GetParam(), flat);
+  const std::vector<Ray> rays = random_rays(16, 4000);
+  std::vector<Hit> ha(rays.size()), hb(rays.size());
+  int instance_hits = 0, compared = 0;
+  const float delta = 1e-4f * max_component(abs(scene.bounds().extent()));
+  for (Coherence coh : {Coherence::coherent, Coherence::incoherent}) {
+    a->intersect(rays, ha, coh);
+    b->intersect(rays, hb, coh);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (ha[i].instance_id != kNoInstance) {
+        ++instance_hits;
+        const Instance& in = scene.instances()[ha[i].instance_id];
+        EXPECT_GE(ha[i].prim_id, scene.mesh_base(in.mesh)) << "ray " << i;
+        EXPECT_LT(ha[i].prim_id, scene.mesh_base(in.mesh) + scene.meshes()[in.mesh].triangle_count()) << "ray " << i;
+      } else if (ha[i].hit()) {
+        EXPECT_FALSE(scene.locate(ha[i].prim_id).kind == PrimKind::triangle && scene.is_instanced(scene.locate(ha[i].prim_id).shape))
+            << "ray " << i << ": an instanced mesh's triangle without an instance";
+      }
+      if (ha[i].hit() != hb[i].hit() || (ha[i].hit() && std::abs(ha[i].t - hb[i].t) > 1e-5f * hb[i].t)) {
+        if (oracle_ambiguous(scene, rays[i], delta) || oracle_ambiguous(flat, rays[i], delta)) continue;
+        ADD_FAILURE() << "ray " << i << ": instanced t " << ha[i].t << " prim " << ha[i].prim_id << " instance "
+                      << ha[i].instance_id << ", flattened t " << hb[i].t << " prim " << hb[i].prim_id;
+      }
+      ++compared;
+      if (ha[i].instance_id == kNoInstance || !hb[i].hit()) continue;
+      // The same point and (up to rounding) the same geometric normal, in world space.
+      const SurfacePoint pa = scene.surface(rays[i], ha[i]), pb = flat.surface(rays[i], hb[i]);
+      EXPECT_LT(length(pa.position - pb.position), 1e-4f) << "ray " << i;
+      EXPECT_GT(dot(pa.geometric_normal, pb.geometric_normal), 0.999f) << "ray " << i;
+    }
+  }
+  EXPECT_GE(instance_hits, 800);  // 2 x 4000 rays: about an eighth hit an instance
+  EXPECT_GE(compared, 7900);
+}
+
 TEST_P(Conformance, EmptySceneAlwaysMisses) {
   Scene scene;
   auto backend = make_param_backend(GetParam(), scene);
@@ -312,6 +358,13 @@ TEST_P(Conformance, ExtremeScalesWithinTheRangeGiveTheOraclesHits) {
   EXPECT_GE(checked, 2 * 70);
 }
 
+/// The image of `scene` rendered with at most `threads` worker threads.
+std::vector<float> render_with_threads(const Scene& scene, const Backend& backend, const Camera& cam,
+                                       const RenderSettings& st, int threads) {
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, size_t(threads));
+  return render(scene, backend, cam, st).image.rgb;
+}
+
 TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
   const Scene scene = make_default_scene();
   auto backend = make_param_backend(GetParam(), scene);
@@ -328,19 +381,28 @@ TEST_P(Conformance, RenderIsBitIdenticalForOneAndTwoThreads) {
     st.spp = spp;
     st.sampler = sampler;
     st.seed = 1234;
-    std::vector<float> one, two;
-    {
-      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
-      one = render(scene, *backend, cam, st).image.rgb;
-    }
-    {
-      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-      two = render(scene, *backend, cam, st).image.rgb;
-    }
+    const std::vector<float> one = render_with_threads(scene, *backend, cam, st, 1),
+                             two = render_with_threads(scene, *backend, cam, st, 2);
     ASSERT_EQ(one.size(), two.size());
     EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float))) << int(sampler);
     EXPECT_EQ(one, render(scene, *backend, cam, st).image.rgb) << int(sampler);  // and across runs
   }
+}
+
+TEST_P(Conformance, InstancedRenderIsBitIdenticalForOneAndTwoThreads) {
+  Scene scene = test::instanced_scene();
+  scene.add_light(PointLight{{2.0f, 3.0f, 2.5f}, {12.0f, 12.0f, 12.0f}});
+  auto backend = make_param_backend(GetParam(), scene);
+  const Camera cam(frame_bounds(scene.bounds()), 53, 37);
+  RenderSettings st;
+  st.width = 53;
+  st.height = 37;
+  st.spp = 2;
+  st.seed = 99;
+  const std::vector<float> one = render_with_threads(scene, *backend, cam, st, 1),
+                           two = render_with_threads(scene, *backend, cam, st, 2);
+  ASSERT_EQ(one.size(), two.size());
+  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(float)));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(backend_variants()), [](const auto& info) {

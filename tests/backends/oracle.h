@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "engine/backend.h"
 #include "engine/geometry/plane.h"
@@ -20,6 +22,7 @@ struct OracleHit {
   double t = std::numeric_limits<double>::infinity();
   uint32_t prim_id = kInvalidId;
   double u = 0, v = 0;
+  uint32_t instance_id = kNoInstance;
   bool hit() const { return prim_id != kInvalidId; }
 };
 
@@ -28,18 +31,38 @@ inline Vec3d to_d(const Vec3f& v) { return Vec3d(v); }
 inline Quadric<double> to_d(const Quadric<float>& q) { return quadric_cast<double>(q); }
 
 /// Closest hit of `ray` (converted exactly to double) in [tnear, tfar]; invalid rays miss.
+/// An instance's triangles are tested against the ray taken into its object space in double
+/// (the double inverse of its float transform), for rays whose float object-space image
+/// (rp::object_ray) is valid, the rule every backend follows. Primitives are scanned in
+/// ascending (prim_id, instance_id), the last hit at an equal t winning.
 inline OracleHit oracle_intersect(const Scene& s, const Ray& ray) {
   OracleHit best;
   if (!valid_ray(ray)) return best;
   Rayd r{to_d(ray.org), double(ray.tnear), to_d(ray.dir), double(ray.tfar)};
-  auto take = [&](const Intersection<double>& h, uint32_t id) {
+  auto take = [&](const Intersection<double>& h, uint32_t id, uint32_t instance = kNoInstance) {
     if (h.hit && h.t <= r.tfar) {
-      best = {h.t, id, h.u, h.v};
+      best = {h.t, id, h.u, h.v, instance};
       r.tfar = h.t;
     }
   };
   for (size_t m = 0; m < s.meshes().size(); ++m) {
     const TriangleMesh& mesh = s.meshes()[m];
+    if (s.is_instanced(m)) {
+      std::vector<std::pair<uint32_t, Affine3d>> placed;  // the instances of mesh m that trace this ray
+      for (uint32_t i = 0; i < s.instances().size(); ++i) {
+        const Instance& in = s.instances()[i];
+        if (in.mesh == m && valid_ray(object_ray(ray, in.world_to_object)))
+          placed.emplace_back(i, *inverse(Affine3d(in.object_to_world)));
+      }
+      for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+        for (const auto& [i, w] : placed) {
+          Rayd o = object_ray(r, w);
+          take(intersect_triangle_watertight(o, to_d(mesh.vertex(t, 0)), to_d(mesh.vertex(t, 1)),
+                                             to_d(mesh.vertex(t, 2))),
+               s.mesh_base(m) + t, i);
+        }
+      continue;
+    }
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
       take(intersect_triangle_watertight(r, to_d(mesh.vertex(t, 0)), to_d(mesh.vertex(t, 1)), to_d(mesh.vertex(t, 2))),
            s.mesh_base(m) + t);
@@ -66,23 +89,24 @@ inline OracleHit oracle_intersect(const Scene& s, const Ray& ray) {
 /// 100 times a move of 1e-6 of the origin (a double root: a tangent or a cone's apex).
 inline bool oracle_ambiguous(const Scene& s, const Ray& ray, float delta) {
   const OracleHit ref = oracle_intersect(s, ray);
+  const auto other = [&](const OracleHit& h) { return h.prim_id != ref.prim_id || h.instance_id != ref.instance_id; };
   for (int axis = 0; axis < 3; ++axis)
     for (float sign : {-1.0f, 1.0f}) {
       Ray p = ray;
       p.org[axis] += sign * delta;
-      if (oracle_intersect(s, p).prim_id != ref.prim_id) return true;
+      if (other(oracle_intersect(s, p))) return true;
       if (!ref.hit()) continue;
       const float small = 1e-6f * std::max(1.0f, std::abs(ray.org[axis]));
       p = ray;
       p.org[axis] += sign * small;
       const OracleHit q = oracle_intersect(s, p);
-      if (q.prim_id != ref.prim_id || std::abs(q.t - ref.t) > 100.0 * small * std::max(1.0, ref.t)) return true;
+      if (other(q) || std::abs(q.t - ref.t) > 100.0 * small * std::max(1.0, ref.t)) return true;
     }
   for (float f : {1.0f - 1e-5f, 1.0f + 1e-5f}) {  // a hit right at tnear or tfar
     Ray p = ray;
     p.tfar *= f;
     p.tnear *= (2.0f - f);
-    if (oracle_intersect(s, p).prim_id != ref.prim_id) return true;
+    if (other(oracle_intersect(s, p))) return true;
   }
   return false;
 }

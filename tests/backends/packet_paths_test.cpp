@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "backends/registry.h"
+#include "engine/affine.h"
 #include "engine/geometry/triangle.h"
 #include "engine/analysis/raygen.h"
 #include "engine/scene.h"
@@ -56,10 +57,12 @@ Paths make_paths(const Scene& scene, const std::string& variant) {
 uint32_t bits(float f) { return std::bit_cast<uint32_t>(f); }
 
 /// True when hit h of ray r is a hit of its primitive's own scalar test (a triangle's, by the
-/// variant's test, or an analytic primitive's).
-bool own_test_hits(const Scene& s, const Ray& r, const Hit& h, bool watertight) {
+/// variant's test, in its instance's object space for an instance's hit, or an analytic
+/// primitive's).
+bool own_test_hits(const Scene& s, const Ray& world, const Hit& h, bool watertight) {
   const PrimLocation ref = s.locate(h.prim_id);
   if (ref.kind != PrimKind::triangle) return true;
+  const Ray r = h.instance_id == kNoInstance ? world : object_ray(world, s.instances()[h.instance_id].world_to_object);
   const TriangleMesh& m = s.meshes()[ref.shape];
   const Vec3f a = m.vertex(ref.local, 0), b = m.vertex(ref.local, 1), c = m.vertex(ref.local, 2);
   return (watertight ? intersect_triangle_watertight(r, a, b, c) : intersect_triangle_mt_normal(r, a, b, c)).hit;
@@ -90,8 +93,9 @@ int expect_same_answers(const Scene& scene, const Paths& paths, const std::vecto
     hits += single[i].hit();
     for (const auto& [name, h, occ] : {std::tuple{"large", large[i], occ_large[i]}, std::tuple{"packet8", packet8[i], occ_packet8[i]},
                                        std::tuple{"stream", stream[i], occ_stream[i]}}) {
-      const bool same = h.prim_id == single[i].prim_id && bits(h.t) == bits(single[i].t) &&
-                        bits(h.u) == bits(single[i].u) && bits(h.v) == bits(single[i].v) && occ == occ_single[i];
+      const bool same = h.prim_id == single[i].prim_id && h.instance_id == single[i].instance_id &&
+                        bits(h.t) == bits(single[i].t) && bits(h.u) == bits(single[i].u) &&
+                        bits(h.v) == bits(single[i].v) && occ == occ_single[i];
       if (same) continue;
       const bool near_tie = h.hit() && single[i].hit() && occ == occ_single[i] &&
                             std::abs(double(h.t) - double(single[i].t)) <= 1e-6 * std::max(double(h.t), double(single[i].t)) &&
@@ -102,9 +106,10 @@ int expect_same_answers(const Scene& scene, const Paths& paths, const std::vecto
         continue;
       }
       ++failures;
-      ADD_FAILURE() << what << " ray " << i << ": " << name << " prim " << h.prim_id << " t " << h.t << " u " << h.u
-                    << " v " << h.v << " occluded " << int(occ) << "; single prim " << single[i].prim_id << " t "
-                    << single[i].t << " u " << single[i].u << " v " << single[i].v << " occluded " << int(occ_single[i]);
+      ADD_FAILURE() << what << " ray " << i << ": " << name << " prim " << h.prim_id << " instance " << h.instance_id
+                    << " t " << h.t << " u " << h.u << " v " << h.v << " occluded " << int(occ) << "; single prim "
+                    << single[i].prim_id << " instance " << single[i].instance_id << " t " << single[i].t << " u "
+                    << single[i].u << " v " << single[i].v << " occluded " << int(occ_single[i]);
     }
   }
   return hits;
@@ -112,14 +117,16 @@ int expect_same_answers(const Scene& scene, const Paths& paths, const std::vecto
 
 /// Rays from `eye` at the vertices and edge midpoints of the tessellated sphere (where two,
 /// and at vertices several, triangles give the same t), in spans of neighbouring targets, some
-/// nudged by an ulp or two.
-std::vector<Ray> shared_edge_rays(const Scene& s, const Vec3f& eye, uint32_t seed) {
+/// nudged by an ulp or two; the sphere placed by `placement` (its vertices mapped in double).
+std::vector<Ray> shared_edge_rays(const Scene& s, const Vec3f& eye, uint32_t seed, const Affine3f& placement = {}) {
   std::mt19937 rng(seed);
   std::vector<Ray> rays;
   const TriangleMesh& m = s.meshes()[0];
+  const Affine3d to_world(placement);
+  const auto vertex = [&](uint32_t t, int k) { return Vec3f(to_world.point(Vec3d(m.vertex(t, k)))); };
   for (uint32_t t = 0; t < m.triangle_count(); ++t)
     for (int k = 0; k < 3; ++k) {
-      const Vec3f a = m.vertex(t, k), b = m.vertex(t, (k + 1) % 3);
+      const Vec3f a = vertex(t, k), b = vertex(t, (k + 1) % 3);
       for (const Vec3f& target : {a, (a + b) * 0.5f}) {
         Vec3f d = target - eye;
         if (rng() % 4 == 0) d.x = std::nextafter(d.x, rng() % 2 ? 1.0f : -1.0f);
@@ -201,6 +208,55 @@ TEST_P(PacketPaths, AnalyticPrimitivesGiveTheSameAnswersOnEveryPath) {
     EXPECT_GT(expect_same_answers(scene, paths, rays, span, "analytic, span " + std::to_string(span), near_ties, false),
               1000);
   EXPECT_EQ(near_ties, 0);
+}
+
+TEST_P(PacketPaths, InstancesGiveTheSameAnswersOnEveryPath) {
+  const Scene scene = test::instanced_scene();
+  const Paths paths = make_paths(scene, GetParam());
+  std::vector<Ray> rays = random_rays(31, 6000);
+  const RaySet primary = primary_rays(scene, 64, 48);
+  rays.insert(rays.end(), primary.rays.begin(), primary.rays.end());
+  for (size_t i = 0; i < rays.size(); i += 53) rays[i].dir = -rays[i].dir;  // another octant inside a group
+  int near_ties = 0;
+  for (size_t span : {size_t(9072), size_t(512), size_t(64), size_t(13), size_t(1)})
+    EXPECT_GT(expect_same_answers(scene, paths, rays, span, "instances, span " + std::to_string(span), near_ties,
+                                  GetParam() == "watertight"),
+              3000);
+  EXPECT_EQ(near_ties, 0);
+}
+
+TEST_P(PacketPaths, SharedEdgesOfAnInstanceGiveTheSameAnswersOnEveryPath) {
+  // The tessellated sphere placed twice: rotated and scaled, and a second time exactly over
+  // the first, so that every hit is an exact tie between two instances of one primitive,
+  // which every path gives to the lower instance id.
+  const Scene ball = tessellated_sphere(24, 12);
+  const Affine3f at = test::placement({0.8f, 0.6f, 0.7f}, {1, 2, 0}, 25.0f, {0.2f, -0.1f, 0.3f});
+  Scene scene;
+  const uint32_t mesh = scene.add_instanced_mesh(ball.meshes()[0]);
+  scene.add_instance(mesh, at);
+  scene.add_instance(mesh, at);
+  const Paths paths = make_paths(scene, GetParam());
+  int near_ties = 0, rays_traced = 0;
+  for (const Vec3f& eye : {Vec3f{0.1f, 0.2f, 5.0f}, Vec3f{-3.0f, 2.5f, 2.0f}}) {
+    const std::vector<Ray> rays = shared_edge_rays(ball, eye, 7, at);
+    for (size_t span : {size_t(256), size_t(9)}) {
+      EXPECT_GT(expect_same_answers(scene, paths, rays, span, "instance edges, span " + std::to_string(span),
+                                    near_ties, GetParam() == "watertight"),
+                500);
+      rays_traced += int(rays.size());
+    }
+    // The tie goes to instance 0. Not asserted for the watertight variant: there the second
+    // instance meets the first's hit as tfar, where the certified filter's documented
+    // exception lets Möller–Trumbore decide, whose t may be an ulp nearer than Woop's.
+    if (GetParam() == "watertight") continue;
+    std::vector<Hit> hits(rays.size());
+    paths.single->intersect(rays, hits, Coherence::incoherent);
+    for (const Hit& h : hits)
+      if (h.hit()) {
+        EXPECT_EQ(h.instance_id, 0u);
+      }
+  }
+  EXPECT_LE(near_ties, 3 * rays_traced / 200) << near_ties << " near-ties in " << rays_traced << " rays x 3 paths";
 }
 
 INSTANTIATE_TEST_SUITE_P(Simd, PacketPaths, ::testing::Values("default", "median", "watertight", "spatial"),

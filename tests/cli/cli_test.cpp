@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "engine/render/image_io.h"
+#include "tests/support/gltf_files.h"
 #include "engine/rayfile.h"
 #include "engine/text.h"
 #include "tests/support/shell.h"
@@ -138,7 +139,8 @@ TEST_F(Cli, QuietPrintsNothingOnSuccessInEverySubcommand) {
 TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
   for (const std::string args : {"render --resolution 10by10", "render --variant fastest", "render --backend simd --variant robust", "render --resolution 0x10",
                                  "render --resolution 100000x100000", "render --spp 0", "render --spp abc",
-                                 "render --threads -1", "render --no-such-flag", "frobnicate"}) {
+                                 "render --threads -1", "render --no-such-flag", "frobnicate", "render --up-axis w",
+                                 "diff --up-axis 2", "bench --up-axis up"}) {
     const Result r = run(args + " -o " + (dir_ / "x.png").string());
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
@@ -187,13 +189,13 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
   std::getline(in, header);
   std::getline(in, first);
   std::getline(in, second);
-  EXPECT_EQ(header, "t,prim_id,u,v,ng_x,ng_y,ng_z");
+  EXPECT_EQ(header, "t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id");
   EXPECT_EQ(first.rfind("10,", 0), 0u) << first;  // t = 10 on the plane
-  EXPECT_EQ(first.substr(first.size() - 6), ",0,1,0") << first;  // normal +y
-  EXPECT_EQ(second, "inf,-1,0,0,0,0,0");
+  EXPECT_EQ(first.substr(first.size() - 9), ",0,1,0,-1") << first;  // normal +y, no instance
+  EXPECT_EQ(second, "inf,-1,0,0,0,0,0,-1");
   r = run("trace --rays " + rays.string() + " -o " + bin.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_EQ(fs::file_size(bin), 16u + 2u * 28u);
+  EXPECT_EQ(fs::file_size(bin), 16u + 2u * 32u);
 }
 
 TEST_F(Cli, AFileNameWithAnUnknownExtensionIsABadFlagFoundBeforeAnyWork) {
@@ -473,7 +475,7 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
   // Standard output on a pipe: the bytes arrive there.
   r = run("trace --rays " + rays.string() + " -o /dev/stdout -q");
   EXPECT_EQ(r.status, 0);
-  EXPECT_EQ(r.output.size(), 16u + 28u);
+  EXPECT_EQ(r.output.size(), 16u + 32u);
   EXPECT_EQ(r.output.substr(0, 4), "RPHT");
   // A symlink stays a link; the file it names gets the image.
   fs::create_directory(dir_ / "store");
@@ -632,6 +634,43 @@ TEST_F(Cli, InfoPrintsCountsAsIntegers) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("prims=3600"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("e+"), std::string::npos) << r.output;
+}
+
+TEST_F(Cli, UpAxisIsXYOrZ) {
+  const Result r = run("render --up-axis w -o " + (dir_ / "x.png").string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.output, "raypack: --up-axis: 'w' is not x, y or z\n");
+  // A Z-up quad standing in the xz plane: with --up-axis z it faces the camera and fills the
+  // middle of the picture; taken as Y up, the camera looks down at its edge and sees sky.
+  const fs::path scene = dir_ / "standing.obj", out = dir_ / "standing.png";
+  std::ofstream(scene) << "v -1 0 0\nv 1 0 0\nv 1 0 2\nv -1 0 2\nf 1 2 3 4\n";
+  ASSERT_EQ(run("render --scene " + scene.string() + " --up-axis z --resolution 32x32 -q -o " + out.string()).status, 0);
+  const rp::Image z = rp::read_image(out.string());
+  ASSERT_EQ(run("render --scene " + scene.string() + " --resolution 32x32 -q -o " + out.string()).status, 0);
+  const rp::Image y = rp::read_image(out.string());
+  const auto grey = [](const rp::Image& img, int x, int row) {  // the quad is grey, the sky bluish
+    const float* p = &img.rgb[3 * size_t(row * img.width + x)];
+    return std::abs(p[0] - p[2]) < 0.02f;
+  };
+  EXPECT_TRUE(grey(z, 16, 16));
+  EXPECT_FALSE(grey(y, 16, 4));
+}
+
+TEST_F(Cli, RendersAndDescribesAGltfWithInstances) {
+  const fs::path scene = dir_ / "scene.glb", out = dir_ / "gltf.png";
+  rp::test::write_gltf(rp::test::hierarchy_gltf().model, scene.string(), rp::test::GltfForm::binary);
+  Result r = run("render --backend simd --scene " + scene.string() + " --resolution 48x32 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(rp::read_image(out.string()).width, 48);
+  r = run("info " + scene.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("triangles    15 in 4 mesh(es)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("instances    3 placing 1 instanced mesh(es): 2 unique triangles, 6 instanced (placed) "
+                          "triangles; 19 triangles in the world"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("top level     mesh level"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("instances=3"), std::string::npos) << r.output;
 }
 
 TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {

@@ -69,6 +69,23 @@ void expect_round_trip(const CameraDesc& d, int w, int h) {
   EXPECT_GT(checked, 1000);
 }
 
+TEST(Camera, FramingFollowsTheUpAxis) {
+  // A tall box standing on z = 0 (a Z-up scan): framed from its front (-y) and a little above,
+  // z up; Y up (the default) sees the same box from +z, y up.
+  const Box3f box({-1, -1, 0}, {1, 1, 6});
+  const CameraDesc z = frame_bounds(box, 2);
+  EXPECT_EQ(z.up, Vec3f(0, 0, 1));
+  EXPECT_EQ(z.look_at, box.center());
+  EXPECT_LT(z.eye.y, box.lo.y);
+  EXPECT_GT(z.eye.z, box.center().z);
+  EXPECT_NEAR(z.eye.x, 0.0f, 1e-6f);
+  const CameraDesc y = frame_bounds(box);
+  EXPECT_EQ(y.up, Vec3f(0, 1, 0));
+  EXPECT_GT(y.eye.z, box.hi.z);
+  const Camera cam(z, 64, 64);  // a valid placement
+  EXPECT_GT(dot(cam.generate(32.0f, 32.0f).dir, Vec3f(0, 1, 0)), 0.9f);  // looking along +y
+}
+
 TEST(Camera, EveryMappingRoundTrips) {
   CameraDesc d{{1, 2, 3}, {0, 1, -2}, {0, 1, 0}, 50.0f};
   expect_round_trip(d, 64, 48);

@@ -43,8 +43,8 @@ std::array<uint32_t, 8> bits(const Ray& r) {
   return {bits(r.org.x), bits(r.org.y), bits(r.org.z), bits(r.dir.x),
           bits(r.dir.y), bits(r.dir.z), bits(r.tnear), bits(r.tfar)};
 }
-std::array<uint32_t, 7> bits(const HitRecord& h) {
-  return {bits(h.t), h.prim_id, bits(h.u), bits(h.v), bits(h.ng.x), bits(h.ng.y), bits(h.ng.z)};
+std::array<uint32_t, 8> bits(const HitRecord& h) {
+  return {bits(h.t), h.prim_id, bits(h.u), bits(h.v), bits(h.ng.x), bits(h.ng.y), bits(h.ng.z), h.instance_id};
 }
 
 void write_bytes(const std::string& path, const std::string& bytes) {
@@ -95,7 +95,7 @@ std::vector<HitRecord> special_hits() {
   const uint32_t ids[] = {0, 1, 7, 4294967294u, kInvalidId};
   for (size_t i = 0; i < n; ++i) {
     auto v = [&](size_t k) { return from_bits(kSpecialBits[(i + 5 * k) % n]); };
-    hits.push_back({v(0), ids[i % 5], v(1), v(2), {v(3), v(4), v(5)}});
+    hits.push_back({v(0), ids[i % 5], v(1), v(2), {v(3), v(4), v(5)}, ids[(i + 2) % 5]});
   }
   hits.push_back(HitRecord{});  // a miss
   return hits;
@@ -214,10 +214,10 @@ TEST(HitFileBinary, RoundTripIsBitExact) {
   std::vector<HitRecord> many(5000);
   std::mt19937 rng(7);
   for (HitRecord& h : many) h = {from_bits(rng()), uint32_t(rng()), from_bits(rng()), from_bits(rng()),
-                                 {from_bits(rng()), from_bits(rng()), from_bits(rng())}};
+                                 {from_bits(rng()), from_bits(rng()), from_bits(rng())}, uint32_t(rng())};
   for (const std::vector<HitRecord>& hits : {special_hits(), many, std::vector<HitRecord>{}}) {
     write_hits(path, hits);
-    EXPECT_EQ(fs::file_size(path), 16 + 28 * hits.size());
+    EXPECT_EQ(fs::file_size(path), 16 + 32 * hits.size());
     const std::vector<HitRecord> back = read_hits(path);
     ASSERT_EQ(back.size(), hits.size());
     for (size_t i = 0; i < hits.size(); ++i) EXPECT_EQ(bits(back[i]), bits(hits[i])) << "hit " << i;
@@ -225,20 +225,51 @@ TEST(HitFileBinary, RoundTripIsBitExact) {
   EXPECT_EQ(tmp.entries(), std::set<std::string>{"hits.bin"});
 }
 
-TEST(HitFileBinary, LayoutIsHeaderThenTPrimUVNormal) {
+TEST(HitFileBinary, LayoutIsHeaderThenTPrimUVNormalInstance) {
   TempDir tmp;
   const std::string path = tmp / "hits";
-  write_hits(path, std::vector<HitRecord>{{2.5f, 0x01020304u, 0.25f, 0.5f, {0, -1, 0}}});
+  write_hits(path, std::vector<HitRecord>{{2.5f, 0x01020304u, 0.25f, 0.5f, {0, -1, 0}, 0x0a0b0c0du}});
   const std::string b = read_bytes(path);
-  ASSERT_EQ(b.size(), 16u + 28u);
-  EXPECT_EQ(b.substr(0, 16), std::string("RPHT\x01\0\0\0\x01\0\0\0\0\0\0\0", 16));
+  ASSERT_EQ(b.size(), 16u + 32u);
+  EXPECT_EQ(b.substr(0, 16), std::string("RPHT\x02\0\0\0\x01\0\0\0\0\0\0\0", 16));  // version 2
   EXPECT_EQ(b.substr(20, 4), std::string("\x04\x03\x02\x01", 4));  // prim_id little-endian
+  EXPECT_EQ(b.substr(44, 4), std::string("\x0d\x0c\x0b\x0a", 4));  // instance_id
   const float want[7] = {2.5f, 0, 0.25f, 0.5f, 0, -1, 0};
   for (int k : {0, 2, 3, 4, 5, 6}) {
     float f;
     std::memcpy(&f, b.data() + 16 + 4 * k, 4);
     EXPECT_EQ(bits(f), bits(want[k])) << "field " << k;
   }
+}
+
+TEST(HitFileBinary, Version1FilesAreStillReadWithoutInstances) {
+  // A file written before instances: version 1, 28-byte records (no instance_id).
+  TempDir tmp;
+  const std::string path = tmp / "old.hits";
+  std::string bytes = header("RPHT", 1, 2);
+  const float f[7] = {2.5f, 0, 0.25f, 0.5f, 0, -1, 0};
+  for (uint32_t prim : {7u, kInvalidId}) {
+    std::string rec(28, '\0');
+    std::memcpy(rec.data(), f, 28);
+    std::memcpy(rec.data() + 4, &prim, 4);
+    bytes += rec;
+  }
+  write_bytes(path, bytes);
+  const std::vector<HitRecord> hits = read_hits(path);
+  ASSERT_EQ(hits.size(), 2u);
+  EXPECT_EQ(hits[0].prim_id, 7u);
+  EXPECT_EQ(hits[0].t, 2.5f);
+  EXPECT_EQ(hits[0].ng.y, -1.0f);
+  EXPECT_EQ(hits[0].instance_id, kNoInstance);
+  EXPECT_EQ(hits[1].prim_id, kInvalidId);
+  EXPECT_EQ(hits[1].instance_id, kNoInstance);
+  // And a CSV file without the instance_id column.
+  const std::string csv = tmp / "old.csv";
+  write_bytes(csv, "t,prim_id,u,v,ng_x,ng_y,ng_z\n2.5,7,0.25,0.5,0,-1,0\n");
+  const std::vector<HitRecord> from_csv = read_hits(csv);
+  ASSERT_EQ(from_csv.size(), 1u);
+  EXPECT_EQ(from_csv[0].prim_id, 7u);
+  EXPECT_EQ(from_csv[0].instance_id, kNoInstance);
 }
 
 TEST(RayFileCsv, RoundTripKeepsEveryBitButNanPayloads) {
@@ -456,6 +487,7 @@ TEST(HitFileCsv, RoundTripAndMissIsWrittenAsMinusOne) {
   for (size_t i = 0; i < hits.size(); ++i) {
     const auto w = bits(hits[i]), g = bits(back[i]);
     EXPECT_EQ(w[1], g[1]) << "hit " << i << " prim_id";
+    EXPECT_EQ(w[7], g[7]) << "hit " << i << " instance_id";
     for (size_t k : {0, 2, 3, 4, 5, 6}) {
       if (std::isnan(from_bits(w[k])))
         EXPECT_TRUE(std::isnan(from_bits(g[k]))) << "hit " << i << " field " << k;
@@ -463,13 +495,13 @@ TEST(HitFileCsv, RoundTripAndMissIsWrittenAsMinusOne) {
         EXPECT_EQ(w[k], g[k]) << "hit " << i << " field " << k;
     }
   }
-  write_hits(path, std::vector<HitRecord>{HitRecord{}, {2.5f, 7, 0.25f, 0.5f, {0, 0, 1}},
+  write_hits(path, std::vector<HitRecord>{HitRecord{}, {2.5f, 7, 0.25f, 0.5f, {0, 0, 1}, 3},
                                           {1, 4294967294u, 0, 1, {-0.0f, 1, 0}}});
   EXPECT_EQ(read_bytes(path),
-            "t,prim_id,u,v,ng_x,ng_y,ng_z\n"
-            "inf,-1,0,0,0,0,0\n"
-            "2.5,7,0.25,0.5,0,0,1\n"
-            "1,4294967294,0,1,-0,1,0\n");
+            "t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id\n"
+            "inf,-1,0,0,0,0,0,-1\n"
+            "2.5,7,0.25,0.5,0,0,1,3\n"
+            "1,4294967294,0,1,-0,1,0,-1\n");
   const std::vector<HitRecord> three = read_hits(path);
   ASSERT_EQ(three.size(), 3u);
   EXPECT_EQ(bits(three[0]), bits(HitRecord{}));
@@ -516,7 +548,9 @@ TEST(RayFileErrors, UnsupportedVersion) {
   write_bytes(p, header("RPRY", 7, 0));
   EXPECT_EQ(error_of([&] { read_rays(p); }), p + ": unsupported version 7 (1)");
   write_bytes(p, header("RPHT", 0, 0));
-  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": unsupported version 0 (1)");
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": unsupported version 0 (1 or 2)");
+  write_bytes(p, header("RPHT", 3, 0));
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": unsupported version 3 (1 or 2)");
 }
 
 TEST(RayFileErrors, FileShorterThanTheHeader) {
@@ -562,12 +596,14 @@ TEST(RayFileErrors, TruncatedDataAndTrailingBytes) {
   EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (56 bytes) but 57 bytes follow it");
   write_bytes(p, header("RPHT", 1, 2) + std::string(55, '\0'));
   EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (56 bytes) but 55 bytes follow it");
+  write_bytes(p, header("RPHT", 2, 2) + std::string(56, '\0'));  // version 2: 32-byte records
+  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": the header declares 2 hits (64 bytes) but 56 bytes follow it");
 }
 
 TEST(RayFileErrors, CsvHeaderMustNameTheColumns) {
   TempDir tmp;
   const std::string p = tmp / "h.csv";
-  const std::string rays = "ox,oy,oz,dx,dy,dz,tnear,tfar", hits = "t,prim_id,u,v,ng_x,ng_y,ng_z";
+  const std::string rays = "ox,oy,oz,dx,dy,dz,tnear,tfar", hits = "t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id";
   const std::pair<std::string, std::string> cases[] = {
       {"", "empty file: expected a header naming the columns"},
       {"\n", "expected a header naming the columns (" + rays + ")"},
@@ -585,7 +621,8 @@ TEST(RayFileErrors, CsvHeaderMustNameTheColumns) {
   write_rays(p, std::vector<Ray>(1));
   EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 1: expected a header naming the columns (" + hits + ")");
   write_bytes(p, "t,prim_id,u,v,ng_x,ng_y\n");
-  EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 1: no column 'ng_z' (columns: " + hits + ")");
+  EXPECT_EQ(error_of([&] { read_hits(p); }),
+            p + ": line 1: no column 'ng_z' (columns: " + hits + "; all but instance_id are needed)");
 }
 
 TEST(RayFileErrors, CsvWrongValueCounts) {
@@ -642,6 +679,17 @@ TEST(RayFileErrors, CsvPrimitiveIdMustBeAnIntegerFromMinusOneToTwoToTheThirtyTwo
   EXPECT_EQ(hits[0].prim_id, 4294967294u);
   EXPECT_EQ(hits[1].prim_id, kInvalidId);
   EXPECT_EQ(hits[2].prim_id, 0u);
+  // instance_id follows the same rule.
+  const std::string with_instance = "t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id\n";
+  for (const char* id : {"4294967295", "-2", "1.5", "", "x"}) {
+    write_bytes(p, with_instance + "1,3,0,0,0,0,1," + id + "\n");
+    EXPECT_EQ(error_of([&] { read_hits(p); }), p + ": line 2: '" + id + "' is not an instance id") << id;
+  }
+  write_bytes(p, with_instance + "1,3,0,0,0,0,1,4294967294\ninf,-1,0,0,0,0,0,-1\n");
+  const std::vector<HitRecord> placed = read_hits(p);
+  ASSERT_EQ(placed.size(), 2u);
+  EXPECT_EQ(placed[0].instance_id, 4294967294u);
+  EXPECT_EQ(placed[1].instance_id, kNoInstance);
 }
 
 TEST(RayFileWrite, MissingDirectoryGivesTheWriteErrorAndLeavesNoFile) {

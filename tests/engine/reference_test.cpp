@@ -22,7 +22,9 @@
 #include "engine/geometry/sphere.h"
 #include "engine/geometry/triangle.h"
 #include "engine/scene.h"
+#include "engine/scene_transform.h"
 #include "tests/backends/oracle.h"
+#include "tests/support/scenes.h"
 
 namespace rp {
 namespace {
@@ -30,18 +32,34 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Brute force with the reference's documented rule: every primitive tested against the
-/// whole [tnear, tfar] by the double routine, phantom hits dropped (Reference::plausible),
-/// smallest t, ties to the larger prim_id.
+/// whole [tnear, tfar] by the double routine (an instance's triangles against the ray taken
+/// into its object space by the double inverse of its transform, where its float image is
+/// valid), phantom hits dropped (Reference::plausible), smallest t, ties to the larger
+/// (prim_id, instance_id).
 ReferenceHit brute_force(const Scene& s, const Reference& ref, const Ray& ray) {
   ReferenceHit best;
   if (!valid_ray(ray)) return best;
   const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  const auto take = [&](const Intersection<double>& h, uint32_t id) {
-    if (h.hit && (h.t < best.t || (h.t == best.t && id > best.prim_id)) && ref.plausible(ray, id, h.t))
-      best = {h.t, id, h.u, h.v};
+  const auto take = [&](const Intersection<double>& h, uint32_t id, uint32_t inst = kNoInstance) {
+    if (h.hit &&
+        (h.t < best.t || (h.t == best.t && (id > best.prim_id || (id == best.prim_id && inst > best.instance_id)))) &&
+        ref.plausible(ray, id, h.t, inst))
+      best = {h.t, id, h.u, h.v, inst};
   };
   for (size_t m = 0; m < s.meshes().size(); ++m) {
     const TriangleMesh& mesh = s.meshes()[m];
+    if (s.is_instanced(m)) {
+      for (uint32_t i = 0; i < s.instances().size(); ++i) {
+        const Instance& in = s.instances()[i];
+        if (in.mesh != m || !valid_ray(object_ray(ray, in.world_to_object))) continue;
+        const Rayd o = object_ray(r, *inverse(Affine3d(in.object_to_world)));
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
+          take(intersect_triangle_watertight(o, Vec3d(mesh.vertex(t, 0)), Vec3d(mesh.vertex(t, 1)),
+                                             Vec3d(mesh.vertex(t, 2))),
+               s.mesh_base(m) + t, i);
+      }
+      continue;
+    }
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
       take(intersect_triangle_watertight(r, Vec3d(mesh.vertex(t, 0)), Vec3d(mesh.vertex(t, 1)), Vec3d(mesh.vertex(t, 2))),
            s.mesh_base(m) + t);
@@ -215,13 +233,15 @@ void expect_matches_brute_force(const Scene& scene, const std::vector<Ray>& rays
     const ReferenceHit want = brute_force(scene, ref, rays[i]);
     const ReferenceHit& got = hits[i];
     hits_seen += got.hit();
-    const bool same = got.prim_id == want.prim_id && got.t == want.t && got.u == want.u && got.v == want.v;
+    const bool same = got.prim_id == want.prim_id && got.instance_id == want.instance_id && got.t == want.t &&
+                      got.u == want.u && got.v == want.v;
     if (!same) ++mismatches;
-    EXPECT_TRUE(same) << what << " ray " << i << ": reference prim " << got.prim_id << " t " << got.t
-                      << ", brute force prim " << want.prim_id << " t " << want.t;
+    EXPECT_TRUE(same) << what << " ray " << i << ": reference prim " << got.prim_id << " instance "
+                      << got.instance_id << " t " << got.t << ", brute force prim " << want.prim_id << " instance "
+                      << want.instance_id << " t " << want.t;
     const test::OracleHit o = test::oracle_intersect(scene, rays[i]);
-    if (o.prim_id != got.prim_id) {
-      if (o.hit() && !ref.plausible(rays[i], o.prim_id, o.t)) {
+    if (o.prim_id != got.prim_id || o.instance_id != got.instance_id) {
+      if (o.hit() && !ref.plausible(rays[i], o.prim_id, o.t, o.instance_id)) {
         ++oracle_phantoms;
       } else {
         ++oracle_ties;
@@ -465,6 +485,34 @@ TEST(ReferenceAgreement, EqualsBruteForceOnADeepBvhBuiltInParallel) {
   s.add_mesh(quantized_uv_sphere(64, 32, {-1.0f, 0.5f, 0.25f}, 1.25f));
   EXPECT_GT(s.prim_count(), 16000u);
   expect_matches_brute_force(s, grid_and_random_rays(121, 600, {0, 0, 0}), "deep_bvh");
+}
+
+TEST(ReferenceAgreement, EqualsBruteForceWithInstances) {
+  // Instanced meshes placed several times (rotated, scaled unevenly, mirrored) beside world
+  // geometry, then the same scene moved far from the origin: the instances' transforms compose.
+  const Scene s = test::instanced_scene();
+  expect_matches_brute_force(s, grid_and_random_rays(131, 3000, {0, 0, 0}), "instances");
+  const Vec3f offset{1024.0f, -512.0f, 2048.0f};
+  expect_matches_brute_force(transformed(s, 1.0, Vec3d(offset)), grid_and_random_rays(132, 3000, offset),
+                             "instances_offset");
+}
+
+TEST(ReferenceAgreement, InstancesGiveTheHitsOfTheirTrianglesBakedIntoTheWorld) {
+  // The same triangles flattened into world meshes (mapped in double, rounded to float): the
+  // same hit or miss and t within 1e-5 relative, wherever the oracle is well-conditioned.
+  const Scene s = test::instanced_scene(), flat = test::flattened(s);
+  const Reference a(s), b(flat);
+  const std::vector<Ray> rays = grid_and_random_rays(133, 4000, {0, 0, 0});
+  int instance_hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const ReferenceHit ha = a.intersect(rays[i]), hb = b.intersect(rays[i]);
+    instance_hits += ha.instance_id != kNoInstance;
+    if (ha.hit() == hb.hit() && (!ha.hit() || std::abs(ha.t - hb.t) <= 1e-5 * hb.t)) continue;
+    if (test::oracle_ambiguous(s, rays[i], 1e-4f) || test::oracle_ambiguous(flat, rays[i], 1e-4f)) continue;
+    ADD_FAILURE() << "ray " << i << ": instanced prim " << ha.prim_id << " instance " << ha.instance_id << " t "
+                  << ha.t << ", flattened prim " << hb.prim_id << " t " << hb.t;
+  }
+  EXPECT_GT(instance_hits, 150);  // of 4000 rays, about 200 hit an instance
 }
 
 // ---- Rules: invalid rays, empty scenes, ties, determinism -----------------------------

@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
 
 #include "engine/error.h"
 #include "engine/scene.h"
 #include "tests/support/error_of.h"
+#include "tests/support/scenes.h"
 
 namespace rp {
 namespace {
@@ -141,6 +145,106 @@ TEST(SceneSurface, SpherePointLiesOnTheSphere) {
   const SurfacePoint sp = s.surface(r, Hit{5.0f, 0, 0, 0});
   EXPECT_FLOAT_EQ(length(sp.position - Vec3f{1, 2, 3}), 2.0f);
   EXPECT_EQ(sp.geometric_normal, (Vec3f{0, 0, 1}));
+}
+
+TEST(SceneInstances, AMeshIsStoredOnceAndCountedOncePerPlacement) {
+  Scene s;
+  s.add_mesh(two_triangles("world"));
+  const uint32_t m = s.add_instanced_mesh(two_triangles("placed"));
+  Affine3f shift;
+  for (int k = 0; k < 3; ++k) {
+    shift.m[0][3] = 10.0f * float(k + 1);
+    EXPECT_EQ(s.add_instance(m, shift), uint32_t(k));
+  }
+  EXPECT_EQ(s.triangle_count(), 4u);  // each mesh's triangles once in the numbering
+  EXPECT_EQ(s.instanced_triangle_count(), 6u);
+  EXPECT_TRUE(s.is_instanced(m));
+  EXPECT_FALSE(s.is_instanced(0));
+  EXPECT_EQ(s.mesh_base(m), 2u);
+  // The world's bounds: the world mesh and the instances' boxes, not the placed mesh itself.
+  EXPECT_EQ(s.bounds().lo, Vec3f(0.0f, 0.0f, 0.0f));
+  EXPECT_EQ(s.bounds().hi, Vec3f(31.0f, 1.0f, 0.0f));
+  EXPECT_EQ(s.instances()[1].bounds.lo, Vec3f(20.0f, 0.0f, 0.0f));
+}
+
+TEST(SceneInstances, BadPlacementsAreRejectedWithTheReason) {
+  Scene s;
+  const uint32_t world = s.add_mesh(two_triangles("w"));
+  const uint32_t m = s.add_instanced_mesh(two_triangles("p"));
+  expect_error([&] { s.add_instance(world, {}); }, "instance 0: mesh 'w' is a world mesh, not an instanced one");
+  expect_error([&] { s.add_instance(7, {}); }, "instance 0: mesh 7 out of range (2 meshes)");
+  Affine3f flat;
+  flat.m[2][2] = 0.0f;
+  expect_error([&] { s.add_instance(m, flat); }, "instance 0: the transform of mesh 'p' is not invertible");
+  Affine3f nan;
+  nan.m[1][3] = std::numeric_limits<float>::quiet_NaN();
+  expect_error([&] { s.add_instance(m, nan); }, "instance 0: the transform of mesh 'p' is not finite");
+  Affine3f tiny;
+  tiny.m[0][0] = tiny.m[1][1] = tiny.m[2][2] = 0x1p-21f;
+  expect_error([&] { s.add_instance(m, tiny); },
+               "instance 0: the transform of mesh 'p' stretches by 2.09715e+06, beyond 1.04858e+06 (2^20) either way");
+  Affine3f far;
+  far.m[0][3] = 0x1p30f;
+  expect_error([&] { s.add_instance(m, far); },
+               "instance 0: mesh 'p' placed at (1.07374e+09, 0, 0) - (1.07374e+09, 1, 0) is outside the supported "
+               "coordinate range |x| <= 1073741824 (2^30)");
+  EXPECT_TRUE(s.instances().empty());
+}
+
+TEST(SceneInstances, SurfaceIsTheObjectSpacePointMappedWithNormalsByTheInverseTranspose) {
+  // A unit right triangle in z = 0, scaled by (2, 3, -1) (a mirror) and moved by (1, 2, 3):
+  // the hit at (u, v) = (0.25, 0.5) is at (1 + 2 * 0.25, 2 + 3 * 0.5, 3), and the geometric
+  // normal points where the baked triangle's would: (c1 - c0) x (c2 - c0) = (2,0,0) x (0,3,0).
+  Scene s;
+  TriangleMesh m;
+  m.name = "t";
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.indices = {0, 1, 2};
+  const uint32_t mesh = s.add_instanced_mesh(m);
+  Affine3f a;
+  a.m[0][0] = 2.0f;
+  a.m[1][1] = 3.0f;
+  a.m[2][2] = -1.0f;
+  a.m[0][3] = 1.0f;
+  a.m[1][3] = 2.0f;
+  a.m[2][3] = 3.0f;
+  s.add_instance(mesh, a);
+  EXPECT_EQ(s.instances()[0].orientation, -1.0f);
+  const Ray r{{1.5f, 3.5f, 10.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, std::numeric_limits<float>::infinity()};
+  const SurfacePoint sp = s.surface(r, Hit{7.0f, 0, 0.25f, 0.5f, 0});
+  EXPECT_FLOAT_EQ(sp.position.x, 1.5f);
+  EXPECT_FLOAT_EQ(sp.position.y, 3.5f);
+  EXPECT_FLOAT_EQ(sp.position.z, 3.0f);
+  EXPECT_EQ(sp.geometric_normal, Vec3f(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(sp.shading_normal, Vec3f(0.0f, 0.0f, 1.0f));
+}
+
+TEST(SceneInstances, TheFloatInverseIsTheInverseToAFewUlpsAndRefusesSingularMaps) {
+  // Against the double inverse of the same float map (an independent computation): random
+  // rotations, uneven scales and far translations, each entry within a few float ulps of the
+  // map's size; the float inverse composed with the map is the identity as closely.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int k = 0; k < 1000; ++k) {
+    const Affine3f a = test::placement({0.2f + std::abs(u(rng)) * 3.0f, 0.2f + std::abs(u(rng)), -0.5f + u(rng) * 0.2f},
+                                       {u(rng), u(rng), 1.0f}, 180.0f * u(rng), {100 * u(rng), 100 * u(rng), 100 * u(rng)});
+    const std::optional<Affine3f> f = float_inverse(a);
+    const std::optional<Affine3d> d = inverse(Affine3d(a));
+    ASSERT_TRUE(f && d);
+    const double size = std::max({Affine3d(*f).linear_norm(), 1.0});
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j)
+        EXPECT_NEAR(f->m[i][j], d->m[i][j], (j == 3 ? 200.0 : 1.0) * size * 8e-7) << k << " [" << i << "][" << j << "]";
+    const Affine3d id = compose(Affine3d(*f), Affine3d(a));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) EXPECT_NEAR(id.m[i][j], i == j ? 1.0 : 0.0, j == 3 ? 2e-4 : 2e-6) << k;
+  }
+  Affine3f flat;
+  flat.m[2][2] = 0.0f;
+  EXPECT_FALSE(float_inverse(flat).has_value());
+  Affine3f tiny;
+  for (int i = 0; i < 3; ++i) tiny.m[i][i] = 1e-20f;  // det 1e-60 underflows to 0 in float
+  EXPECT_FALSE(float_inverse(tiny).has_value());
 }
 
 TEST(DefaultScene, HasEveryPrimitiveKindAndAFiftyThousandTriangleMesh) {

@@ -54,6 +54,21 @@ Scene shading_scene() {
     }
     s.add_mesh(std::move(m));
   }
+  // An instanced mesh (vertex normals, per-face materials) placed three times, one mirrored.
+  TriangleMesh placed;
+  placed.name = "placed";
+  for (int v = 0; v < 30; ++v) {
+    placed.positions.push_back(test::random_in_box(rng, -1.0f, 1.0f));
+    placed.normals.push_back(test::random_direction(rng));
+  }
+  for (int t = 0; t < 20; ++t) {
+    for (int k = 0; k < 3; ++k) placed.indices.push_back(uint32_t(rng() % 30));
+    placed.face_materials.push_back(t % 2 ? shiny : glass);
+  }
+  const uint32_t p = s.add_instanced_mesh(std::move(placed));
+  s.add_instance(p, test::placement({1.0f, 1.0f, 1.0f}, {0, 1, 0}, 30.0f, {1.0f, 0.5f, 0.0f}));
+  s.add_instance(p, test::placement({0.5f, 2.0f, 1.0f}, {1, 0, 1}, 70.0f, {-1.0f, 0.0f, 1.0f}));
+  s.add_instance(p, test::placement({-1.0f, 1.0f, 1.0f}, {0, 0, 1}, 0.0f, {0.0f, -1.0f, -1.0f}));
   s.add_light(PointLight{{3.0f, 4.0f, 2.0f}, {20.0f, 18.0f, 15.0f}});
   s.add_light(PointLight{{-2.0f, 1.0f, -3.0f}, {5.0f, 5.0f, 8.0f}});
   s.add_light(DirectionalLight{normalize(Vec3f{-0.3f, -1.0f, 0.2f}), {0.8f, 0.8f, 0.7f}});
@@ -68,7 +83,8 @@ struct Batch {
 
 /// `n` random rays with hits drawn on random primitives (the shading reads the hit, not the
 /// geometry behind it), grouped so that some groups of 8 hit one mesh, some several, some an
-/// analytic primitive; misses and rays without a path mixed in.
+/// analytic primitive, some an instanced mesh through its instances; misses and rays without
+/// a path mixed in. A hit on an instanced mesh's triangle names one of its instances.
 Batch random_batch(const Scene& s, std::mt19937& rng, size_t n) {
   Batch b;
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);
@@ -78,14 +94,17 @@ Batch random_batch(const Scene& s, std::mt19937& rng, size_t n) {
     Ray r{test::random_in_box(rng, -3.0f, 3.0f), 0.0f, test::random_direction(rng) * (0.5f + 2.0f * u01(rng)),
           std::numeric_limits<float>::infinity()};
     uint32_t prim;
-    switch (group % 4) {
+    const uint32_t placed = uint32_t(s.meshes().size() - 1);
+    switch (group % 5) {
       case 0: prim = mesh_begin + uint32_t(rng() % (mesh_end - mesh_begin)); break;  // one mesh
       case 1: prim = uint32_t(rng() % s.triangle_count()); break;                    // any mesh
+      case 2: prim = s.mesh_base(placed) + uint32_t(rng() % s.meshes()[placed].triangle_count()); break;
       default: prim = uint32_t(rng() % s.prim_count()); break;                        // any primitive
     }
     float u = u01(rng), v = u01(rng);
     if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
     Hit h{0.2f + 4.0f * u01(rng), prim, u, v};
+    if (prim >= s.mesh_base(placed) && prim < s.triangle_count()) h.instance_id = uint32_t(rng() % s.instances().size());
     if (rng() % 10 == 0) h = Hit{};  // a miss
     PathState p{uint32_t(i), {u01(rng), u01(rng), u01(rng)}};
     if (rng() % 17 == 0) p.slot = kInvalidId;  // no path

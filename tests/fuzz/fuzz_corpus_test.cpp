@@ -1,4 +1,4 @@
-/// Replays every input of corpus/<target>/ and regression/<target>/ through the four fuzz
+/// Replays every input of corpus/<target>/ and regression/<target>/ through the five fuzz
 /// targets, compiled here without libFuzzer (each target's LLVMFuzzerTestOneInput is renamed
 /// <target>_one_input by CMake), in every build with every compiler. An input passes when its
 /// target returns normally (an rp::Error caught inside the target is normal); a crash, another
@@ -26,6 +26,7 @@ extern "C" int fuzz_obj_one_input(const uint8_t* data, size_t size);
 extern "C" int fuzz_ply_one_input(const uint8_t* data, size_t size);
 extern "C" int fuzz_json_one_input(const uint8_t* data, size_t size);
 extern "C" int fuzz_rayfile_one_input(const uint8_t* data, size_t size);
+extern "C" int fuzz_gltf_one_input(const uint8_t* data, size_t size);
 
 namespace {
 
@@ -82,5 +83,6 @@ TEST(FuzzCorpus, Obj) { replay("fuzz_obj", fuzz_obj_one_input); }
 TEST(FuzzCorpus, Ply) { replay("fuzz_ply", fuzz_ply_one_input); }
 TEST(FuzzCorpus, Json) { replay("fuzz_json", fuzz_json_one_input); }
 TEST(FuzzCorpus, Rayfile) { replay("fuzz_rayfile", fuzz_rayfile_one_input); }
+TEST(FuzzCorpus, Gltf) { replay("fuzz_gltf", fuzz_gltf_one_input); }
 
 }  // namespace

@@ -307,6 +307,87 @@ TEST(JsonScene, MeshPathsResolveAgainstTheSceneFolderOrAreAbsolute) {
             "sub/scene.json: $.objects[0].file: sub/sub/tri.ply: cannot open: No such file or directory");
 }
 
+/// A mesh declared once in "meshes" and placed by several "instance" objects.
+const std::string kTwoTriangles =
+    "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nusemtl a\nf 1//1 2//1 3//1\nusemtl b\nf 2//1 4//1 3//1\n";
+
+TEST(JsonSceneInstances, AMeshPlacedSeveralTimesIsStoredOnceWithAnInstancePerPlacement) {
+  write_file("inst/two.mtl", "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 1 0\n");
+  write_file("inst/two.obj", kTwoTriangles);
+  const std::string scene = R"json({"meshes": {"pair": {"file": "two.obj"}}, "objects": [
+      {"type": "sphere"},
+      {"type": "instance", "mesh": "pair"},
+      {"type": "instance", "mesh": "pair", "transform": {"scale": [2, 1, 3],
+                                                         "rotate": {"axis": [0, 0, 1], "degrees": 90},
+                                                         "translate": [5, 0, 0]}},
+      {"type": "instance", "mesh": "pair", "transform": {"translate": [0, 0, -4]}}]})json";
+  const Scene s = json_scene(scene, "inst/scene.json");
+  ASSERT_EQ(s.meshes().size(), 1u);  // stored once
+  EXPECT_TRUE(s.is_instanced(0));
+  EXPECT_EQ(s.meshes()[0].positions[1], Vec3f(1, 0, 0));  // in the file's coordinates
+  EXPECT_EQ(s.meshes()[0].face_materials, (std::vector<uint32_t>{1, 2}));  // the file's a and b, once
+  EXPECT_EQ(s.materials().size(), 3u);
+  ASSERT_EQ(s.instances().size(), 3u);
+  EXPECT_EQ(s.instanced_triangle_count(), 6u);
+  EXPECT_EQ(s.spheres().size(), 1u);
+  EXPECT_TRUE(s.instances()[0].object_to_world.is_identity());
+  // Scale, then rotate 90 degrees about z, then translate: (1, 0, 0) -> (2, 0, 0) -> (0, 2, 0) -> (5, 2, 0).
+  expect_near(s.instances()[1].object_to_world.point({1, 0, 0}), {5, 2, 0}, 1e-6f, "instance 1");
+  expect_near(s.instances()[1].object_to_world.point({0, 1, 0}), {4, 0, 0}, 1e-6f, "instance 1");
+  EXPECT_EQ(s.instances()[2].object_to_world.point({0, 1, 0}), Vec3f(0, 1, -4));
+  // The world's bounds hold the three placements.
+  expect_near(s.bounds().lo, {-1, -1, -4}, 1e-5f, "bounds");  // the unit sphere reaches -1
+  expect_near(s.bounds().hi, {5, 2, 1}, 1e-5f, "bounds");
+}
+
+TEST(JsonSceneInstances, AMeshPlacedOnceIsBakedAsAMeshObjectIs) {
+  write_file("inst/two.mtl", "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 1 0\n");
+  write_file("inst/two.obj", kTwoTriangles);
+  const Scene once = json_scene(R"json({"meshes": {"pair": {"file": "two.obj", "material": "m"}},
+      "materials": {"m": {}},
+      "objects": [{"type": "instance", "mesh": "pair", "transform": {"translate": [0, 0, 2]}}]})json",
+                                "inst/once.json");
+  const Scene object = json_scene(R"json({"materials": {"m": {}}, "objects": [
+      {"type": "mesh", "file": "two.obj", "material": "m", "transform": {"translate": [0, 0, 2]}}]})json",
+                                  "inst/object.json");
+  EXPECT_TRUE(once.instances().empty());
+  ASSERT_EQ(once.meshes().size(), object.meshes().size());
+  EXPECT_FALSE(once.is_instanced(0));
+  EXPECT_EQ(once.meshes()[0].positions, object.meshes()[0].positions);
+  EXPECT_EQ(once.meshes()[0].normals, object.meshes()[0].normals);
+  EXPECT_EQ(once.meshes()[0].material, 1u);
+}
+
+TEST(JsonSceneInstances, ErrorsNameTheObjectOrTheDeclaration) {
+  write_file("inst/two.mtl", "newmtl a\nKd 1 0 0\nnewmtl b\nKd 0 1 0\n");
+  write_file("inst/two.obj", kTwoTriangles);
+  EXPECT_EQ(json_error(with_object(R"({"type": "instance", "mesh": "tree"})")),
+            "scene.json: $.objects[0].mesh: unknown mesh \"tree\" (no meshes are declared)");
+  EXPECT_EQ(json_error(R"({"meshes": {"rock": {"file": "r.obj"}, "house": {"file": "h.ply"}},
+                          "objects": [{"type": "instance", "mesh": "tree"}]})"),
+            "scene.json: $.objects[0].mesh: unknown mesh \"tree\" (meshes: rock, house)");
+  EXPECT_EQ(json_error(with_object(R"({"type": "instance"})")), "scene.json: $.objects[0]: missing key \"mesh\"");
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "two.obj", "scale": 2}}, "objects": [{"type": "sphere"}]})"),
+            "scene.json: $.meshes.m.scale: unknown key (expected one of: file, material)");
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "two.stl"}}, "objects": [{"type": "sphere"}]})"),
+            "scene.json: $.meshes.m.file: \"two.stl\" is not a mesh file (expected .obj or .ply)");
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "two.obj"}}, "objects": [
+                          {"type": "instance", "mesh": "m", "material": "x"}]})"),
+            "scene.json: $.objects[0].material: unknown key (expected one of: type, mesh, transform)");
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "two.obj"}}, "objects": [
+                          {"type": "instance", "mesh": "m", "transform": {"scale": -1}}]})"),
+            "scene.json: $.objects[0].transform.scale: -1 is out of range (must be > 0)");
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "missing.obj"}}, "objects": [
+                          {"type": "instance", "mesh": "m"}, {"type": "instance", "mesh": "m"}]})"),
+            "scene.json: $.meshes.m.file: missing.obj: cannot open: No such file or directory");
+  // A placement beyond the coordinate range names the object that places it.
+  EXPECT_EQ(json_error(R"({"meshes": {"m": {"file": "inst/two.obj"}}, "objects": [
+                          {"type": "instance", "mesh": "m"},
+                          {"type": "instance", "mesh": "m", "transform": {"translate": [2e9, 0, 0]}}]})"),
+            "scene.json: $.objects[1]: instance 1: mesh 'two' placed at (2e+09, 0, 0) - (2e+09, 1, 0) is outside the "
+            "supported coordinate range |x| <= 1073741824 (2^30)");
+}
+
 // --- Errors ------------------------------------------------------------------------------------
 
 TEST(JsonSceneErrors, SyntaxErrorsGiveLineAndColumn) {
@@ -348,7 +429,7 @@ TEST(JsonSceneErrors, UnknownKeysListTheExpectedOnes) {
                                       {"type": "sphere", "center": [0, 0, 0], "radus": 2}]})"),
             "scene.json: $.objects[2].radus: unknown key (expected one of: type, center, radius, material)");
   EXPECT_EQ(json_error(R"({"object": []})"),
-            "scene.json: $.object: unknown key (expected one of: camera, materials, lights, objects)");
+            "scene.json: $.object: unknown key (expected one of: camera, materials, meshes, lights, objects)");
   EXPECT_EQ(json_error(R"({"camera": {"fov_y": 40}, "objects": []})"),
             "scene.json: $.camera.fov_y: unknown key (expected one of: eye, look_at, up, fov, model, fisheye_fov, "
             "aperture, focus_distance)");
@@ -522,7 +603,7 @@ TEST(JsonSceneErrors, UnknownNamesListTheKnownOnes) {
             "scene.json: $.objects[0].material: unknown material \"red\" (no materials are defined)");
   EXPECT_EQ(json_error(with_object(R"({"type": "cube"})")),
             "scene.json: $.objects[0].type: unknown object type \"cube\" (expected one of: sphere, plane, polygon, "
-            "quadric, mesh)");
+            "quadric, mesh, instance)");
   EXPECT_EQ(json_error(with_object(R"({"type": "quadric", "shape": "torus"})")),
             "scene.json: $.objects[0].shape: unknown quadric shape \"torus\" (expected one of: ellipsoid, cylinder, "
             "cone, hyperboloid1, hyperboloid2, paraboloid)");

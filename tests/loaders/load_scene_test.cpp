@@ -46,9 +46,10 @@ TEST(LoadScene, ExtensionPicksTheLoaderIgnoringCase) {
 }
 
 TEST(LoadScene, UnknownFormatsAreRefused) {
-  EXPECT_EQ(error_of([] { load_scene("model.stl"); }), "model.stl: unknown scene format '.stl' (.obj, .ply, .json)");
-  EXPECT_EQ(error_of([] { load_scene("model"); }), "model: unknown scene format '' (.obj, .ply, .json)");
-  EXPECT_EQ(error_of([] { load_scene("scenes.d/model"); }), "scenes.d/model: unknown scene format '' (.obj, .ply, .json)");
+  EXPECT_EQ(error_of([] { load_scene("model.stl"); }), "model.stl: unknown scene format '.stl' (.obj, .ply, .json, .gltf, .glb)");
+  EXPECT_EQ(error_of([] { load_scene("model"); }), "model: unknown scene format '' (.obj, .ply, .json, .gltf, .glb)");
+  EXPECT_EQ(error_of([] { load_scene("scenes.d/model"); }),
+            "scenes.d/model: unknown scene format '' (.obj, .ply, .json, .gltf, .glb)");
   EXPECT_EQ(error_of([] { load_scene(path_of("absent.ply")); }),
             path_of("absent.ply") + ": cannot open: No such file or directory");
 }
@@ -76,6 +77,24 @@ TEST(LoadScene, LightsArePlacedFromTheBoundsWhenTheFileHasNone) {
   EXPECT_NEAR(length(fill.direction), 1.0f, 1e-6f);
   EXPECT_LT(fill.direction.y, 0.0f);  // from above
   EXPECT_EQ(fill.irradiance, Vec3f(0.3f));
+}
+
+TEST(LoadScene, AZUpFileIsLitFromAboveItsFrontWhenTheUpAxisIsZ) {
+  const std::string path = write_file("zup.ply", cube_ply(PlyFormat::little_endian, CubeLayout::plain));
+  const Scene s = load_scene(path, 2);
+  EXPECT_EQ(s.up_axis(), 2);
+  const Box3f b = s.bounds();
+  const PointLight& key = s.point_lights()[0];
+  EXPECT_GT(key.position.z, b.hi.z);  // above: +Z
+  EXPECT_LT(key.position.y, b.lo.y);  // in front: -Y
+  EXPECT_GT(key.position.x, b.center().x);  // a little to the right: +X
+  EXPECT_LT(s.directional_lights()[0].direction.z, 0.0f);  // the fill from above
+  EXPECT_EQ(load_scene(path).up_axis(), 1);  // Y unless asked
+}
+
+TEST(LoadScene, GltfFilesAreReadByTheirExtension) {
+  EXPECT_EQ(error_of([] { load_scene("model.stl"); }),
+            "model.stl: unknown scene format '.stl' (.obj, .ply, .json, .gltf, .glb)");
 }
 
 // --- the real models ---------------------------------------------------------------------------

@@ -164,7 +164,7 @@ TEST(Mpi, TraceWritesTheOneProcessHitFileInEveryFormat) {
   const Result want = run_shell("cat " + tmp / "rays.bin" + " | " + kRaypack + " trace -q --rays - -o /dev/stdout");
   const Result got = run_shell("cat " + tmp / "rays.bin" + " | " + mpirun() + " -n 3 " + kRaypack + " trace -q --rays - -o /dev/stdout");
   ASSERT_EQ(got.status, 0) << got.output.substr(0, 500);
-  EXPECT_EQ(got.output.size(), 16 + 28 * rays.size());
+  EXPECT_EQ(got.output.size(), 16 + 32 * rays.size());
   EXPECT_EQ(got.output, want.output);
   EXPECT_TRUE(no_temporaries(tmp));
 }

@@ -55,17 +55,19 @@ def test_results_have_the_documented_shapes_and_dtypes(scene, backend_name):
     rays = seeded_rays(scene, 1000)
     backend = raypack.Backend(backend_name, scene)
     hits = backend.intersect(**rays)
-    assert list(hits) == ["t", "prim_id", "u", "v", "ng"]
+    assert list(hits) == ["t", "prim_id", "u", "v", "instance_id", "ng"]
     for key, dtype, shape in [("t", np.float32, (1000,)), ("prim_id", np.uint32, (1000,)), ("u", np.float32, (1000,)),
-                              ("v", np.float32, (1000,)), ("ng", np.float32, (1000, 3))]:
+                              ("v", np.float32, (1000,)), ("instance_id", np.uint32, (1000,)),
+                              ("ng", np.float32, (1000, 3))]:
         assert hits[key].dtype == dtype and hits[key].shape == shape, key
         assert hits[key].flags["C_CONTIGUOUS"] and hits[key].flags["WRITEABLE"] and hits[key].flags["OWNDATA"] is not None
     miss = hits["prim_id"] == MISS
     assert miss.any() and (~miss).any()
     assert np.isinf(hits["t"][miss]).all() and (hits["u"][miss] == 0).all() and (hits["ng"][miss] == 0).all()
+    assert (hits["instance_id"] == MISS).all()  # no instances in this scene
     np.testing.assert_allclose(np.linalg.norm(hits["ng"][~miss], axis=1), 1, rtol=1e-5)
     without = backend.intersect(**rays, normals=False)
-    assert list(without) == ["t", "prim_id", "u", "v"]
+    assert list(without) == ["t", "prim_id", "u", "v", "instance_id"]
     assert_same_bits(without, {key: hits[key] for key in without})
     blocked = backend.occluded(**rays)
     assert blocked.dtype == np.bool_ and blocked.shape == (1000,)
@@ -125,3 +127,22 @@ def test_ray_files_round_trip_through_numpy(scene, tmp_path):
         assert list(back) == ["origins", "directions", "tnear", "tfar"]
         for key in rays:
             assert back[key].dtype == np.float32 and back[key].tobytes() == rays[key].tobytes(), (name, key)
+
+
+def test_instances_are_named_in_the_hits(tmp_path, backend_name):
+    # One triangle (z = 0) stored once and placed twice: at z = 1 and, turned over, at z = 3.
+    # Rays down -z from z = 5 meet the placement at z = 3 (instance 1) first, at t = 2; rays
+    # beside it (x = 5) miss both. The same triangle's prim_id in either placement.
+    (tmp_path / "tri.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp_path / "scene.json").write_text(
+        '{"meshes": {"tri": {"file": "tri.obj"}}, "objects": ['
+        '{"type": "instance", "mesh": "tri", "transform": {"translate": [0, 0, 1]}},'
+        '{"type": "instance", "mesh": "tri", "transform": {"rotate": {"axis": [0, 1, 0], "degrees": 180},'
+        ' "translate": [0, 0, 3]}}]}')
+    scene = raypack.load_scene(str(tmp_path / "scene.json"))
+    org = np.array([[0.0, -0.2, 5.0], [5.0, 0.0, 5.0]], dtype=np.float32)
+    hits = raypack.Backend(backend_name, scene).intersect(org, np.array([0, 0, -1], dtype=np.float32))
+    assert hits["instance_id"].tolist() == [1, MISS]
+    assert hits["prim_id"].tolist() == [0, MISS]
+    np.testing.assert_allclose(hits["t"][0], 2.0, rtol=1e-6)
+    np.testing.assert_allclose(np.abs(hits["ng"][0]), [0, 0, 1], atol=1e-6)

@@ -675,6 +675,25 @@ TEST(Transpose8x8, MovesEveryBitToItsTransposedPlace) {
   }
 }
 
+/// Eight records of 4 and of 5 words (rp::Hit's 20 bytes), in an array sized exactly: lane i of
+/// row k is word k of record i, every bit pattern kept.
+TEST(LoadRecords4, GivesEachLaneTheFirstFourWordsOfItsRecordAtAnyStride) {
+  std::mt19937 rng(83);
+  for (size_t stride : {size_t(4), size_t(5), size_t(8)}) {
+    for (int round = 0; round < 50; ++round) {
+      std::vector<uint32_t> words(7 * stride + 4);
+      for (uint32_t& b : words) b = rng();
+      float8 out[4];
+      load_records4(reinterpret_cast<const float*>(words.data()), out, stride);
+      for (int k = 0; k < 4; ++k) {
+        alignas(32) uint32_t lanes[8];
+        std::memcpy(lanes, &out[k], 32);
+        for (size_t l = 0; l < 8; ++l) ASSERT_EQ(lanes[l], words[stride * l + size_t(k)]) << "stride " << stride;
+      }
+    }
+  }
+}
+
 /// Records of 3 words in an array sized exactly (std::vector: nothing readable after it under
 /// ASan), indices hitting the first and the last record and repeating some: every lane gets
 /// its record's bits.

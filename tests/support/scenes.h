@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "engine/affine.h"
 #include "engine/math.h"
 #include "engine/geometry/quadric.h"
 #include "engine/ray.h"
@@ -169,6 +170,71 @@ inline Scene sliver_soup(uint32_t seed, int count) {
   sc.add_mesh(std::move(m));
   sc.add_sphere({{0.1f, -0.2f, 0.3f}, 0.15f, 0});
   return sc;
+}
+
+/// An affine map: scale (per axis), then rotate by `degrees` about unit `axis`, then translate.
+inline Affine3f placement(const Vec3f& scale, const Vec3f& axis, float degrees, const Vec3f& translate) {
+  const double a = double(degrees) * kPi / 180.0, c = std::cos(a), s = std::sin(a), t = 1.0 - c;
+  const Vec3d k = normalize(Vec3d(axis));
+  const double r[3][3] = {{c + t * k.x * k.x, t * k.x * k.y - s * k.z, t * k.x * k.z + s * k.y},
+                          {t * k.x * k.y + s * k.z, c + t * k.y * k.y, t * k.y * k.z - s * k.x},
+                          {t * k.x * k.z - s * k.y, t * k.y * k.z + s * k.x, c + t * k.z * k.z}};
+  Affine3f m;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) m.m[i][j] = float(r[i][j] * double(scale[j]));
+    m.m[i][3] = translate[i];
+  }
+  return m;
+}
+
+/// A closed tessellated sphere (a mesh of shared edges and vertices) and a triangle soup, each
+/// stored once and placed several times in [-1.5, 1.5]^3 (rotated, scaled unevenly, one
+/// mirrored), beside a world mesh, a sphere, a quadric and a plane: every kind of primitive
+/// next to the instances.
+inline Scene instanced_scene() {
+  const Scene ball = tessellated_sphere(24, 12), soup = triangle_soup(21, 300);
+  Scene s;
+  const uint32_t b = s.add_instanced_mesh(ball.meshes()[0]);
+  const uint32_t q = s.add_instanced_mesh(soup.meshes()[0]);
+  s.add_instance(b, placement({0.4f, 0.4f, 0.4f}, {0, 1, 0}, 0.0f, {-0.8f, 0.6f, 0.2f}));
+  s.add_instance(b, placement({0.5f, 0.25f, 0.35f}, {1, 1, 0}, 35.0f, {0.7f, 0.5f, -0.6f}));
+  s.add_instance(b, placement({-0.3f, 0.3f, 0.3f}, {0, 0, 1}, 70.0f, {0.1f, -0.7f, 0.8f}));  // mirrored
+  s.add_instance(q, placement({0.5f, 0.5f, 0.5f}, {0, 1, 0}, 90.0f, {-0.6f, -0.5f, -0.7f}));
+  s.add_instance(q, placement({0.4f, 0.7f, 0.4f}, {1, 0, 1}, -40.0f, {0.8f, -0.2f, 0.9f}));
+  TriangleMesh floor;
+  floor.name = "floor";
+  floor.positions = {{-1.4f, -1.2f, -1.4f}, {1.4f, -1.2f, -1.4f}, {1.4f, -1.2f, 1.4f}, {-1.4f, -1.2f, 1.4f}};
+  floor.indices = {0, 1, 2, 0, 2, 3};
+  s.add_mesh(floor);
+  s.add_sphere({{0.0f, 0.1f, 0.0f}, 0.3f, 0});
+  s.add_quadric({Quadric<float>::cylinder({-0.9f, -0.6f, 0.9f}, 0.2f, 0.2f, 0.4f, 1), 0});
+  s.add_plane({{0.0f, 0.0f, 1.0f}, 1.45f, 0});
+  return s;
+}
+
+/// `scene` with every instance baked into a world mesh (its mesh's positions mapped by the
+/// instance's transform in double, normals dropped), instanced meshes left out: the same
+/// triangles, flat, with the same materials, lights and camera. Prim ids differ (the baked
+/// copies come after the world meshes).
+inline Scene flattened(const Scene& scene) {
+  Scene out;
+  for (size_t i = 1; i < scene.materials().size(); ++i) out.add_material(scene.materials()[i]);
+  for (const PointLight& l : scene.point_lights()) out.add_light(l);
+  for (const DirectionalLight& l : scene.directional_lights()) out.add_light(l);
+  if (scene.camera()) out.set_camera(*scene.camera());
+  for (size_t i = 0; i < scene.meshes().size(); ++i)
+    if (!scene.is_instanced(i)) out.add_mesh(scene.meshes()[i]);
+  for (const Instance& in : scene.instances()) {
+    TriangleMesh m = scene.meshes()[in.mesh];
+    const Affine3d t(in.object_to_world);
+    for (Vec3f& p : m.positions) p = Vec3f(t.point(Vec3d(p)));
+    m.normals.clear();
+    out.add_mesh(std::move(m));
+  }
+  for (const Sphere& sp : scene.spheres()) out.add_sphere(sp);
+  for (const QuadricShape& qs : scene.quadrics()) out.add_quadric(qs);
+  for (const Plane& p : scene.planes()) out.add_plane(p);
+  return out;
 }
 
 }  // namespace rp::test

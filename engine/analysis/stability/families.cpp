@@ -328,7 +328,7 @@ void gen_leaving(Family& f, bool offset, const Reference& ref, const Geom& g, ui
     const Ray in = approach.rays[0];
     const ReferenceHit h = ref.intersect(in);
     if (!h.hit()) continue;
-    const SurfacePoint sp = s.surface(in, Hit{float(h.t), h.prim_id, float(h.u), float(h.v)});
+    const SurfacePoint sp = s.surface(in, to_hit(h));
     Vec3f nf = sp.geometric_normal;
     if (dot(nf, in.dir) > 0.0f) nf = -nf;  // face-forwarded: towards the incoming ray's side
     const bool through = rng() & 1;

@@ -1,0 +1,36 @@
+/// libFuzzer target: rp::load_gltf (tinygltf 2.7's JSON and GLB parsers, then every check of
+/// engine/loaders/gltf.cpp: accessors against their buffers, indices, the node hierarchy,
+/// cameras, lights, materials, external buffers by raypack's input rule).
+///
+/// The input is written as input.glb when it starts with "glTF", else as input.gltf. Beside it
+/// the scratch folder holds "valid-external.bin", the buffer the seed valid-external.gltf
+/// names (tests/support/gltf_files.h builds both), and a directory "folder.bin" for the seed
+/// that names one. Seeds: corpus/fuzz_gltf/ (written by make_gltf_corpus.cpp), dictionary:
+/// gltf.dict.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "engine/loaders/load.h"
+#include "tests/fuzz/fuzz_file.h"
+#include "tests/support/gltf_files.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static const bool ready = [] {
+    const std::vector<unsigned char>& bin = rp::test::hierarchy_gltf().model.buffers[0].data;
+    rp::fuzz::write_scratch("valid-external.bin", std::span<const uint8_t>(bin.data(), bin.size()));
+    std::error_code ec;
+    std::filesystem::create_directory(rp::fuzz::scratch_dir() / "folder.bin", ec);
+    return true;
+  }();
+  (void)ready;
+  const bool glb = size >= 4 && std::memcmp(data, "glTF", 4) == 0;
+  return rp::fuzz::run_on_file(data, size, glb ? ".glb" : ".gltf", [](const std::string& path) {
+    rp::Scene scene;
+    rp::load_gltf(path, scene);
+    rp::fuzz::touch(scene);
+  });
+}
