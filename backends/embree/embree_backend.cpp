@@ -310,7 +310,7 @@ class EmbreeBackend final : public Backend {
 
     rtcCommitScene(scene_handle_);
     check(dev, "embree: rtcCommitScene");
-    coherent_occlusion_ = scene.instances().empty() || scene.plane_base() == scene.sphere_base();
+    coherent_occlusion_ = scene.instances().empty();
     const int64_t top_delta = device_->bytes.load() - top_before;
     const int64_t top_buffers = int64_t(buffer_bytes - mesh_buffers);
     info_.levels.top = top_delta > top_buffers ? size_t(top_delta - top_buffers) : 0;
@@ -343,10 +343,11 @@ class EmbreeBackend final : public Backend {
   void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
     // Embree 3.13.5's coherent any-hit traversal (rtcOccluded16, and rtcOccluded1M, which
-    // uses it) never returns on some rays of a scene with an instance and two user
-    // geometries (reproduced with Embree alone: one instance of a triangle mesh, two
-    // one-primitive user geometries, 16 rays); such scenes' occlusion rays go without the
-    // coherent flag.
+    // uses it) never returns on some rays of a scene with instances (reproduced with Embree
+    // alone: one instance of a triangle mesh, two one-primitive user geometries, 16 rays; and
+    // with no user geometry: `raypack bench --scene bench/scenes/bunnies-instanced.json
+    // --method 'embree (stream|rtcIntersect16)'` hung in rtcOccluded16 on every run); every
+    // scene with instances sends its occlusion rays without the coherent flag.
     QueryContext q = context(rays, coherent_occlusion_ ? coherence : Coherence::incoherent);
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {

@@ -20,7 +20,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const bool ready = [] {
-    const std::vector<unsigned char>& bin = rp::test::hierarchy_gltf().model.buffers[0].data;
+    const auto file = rp::test::hierarchy_gltf();  // kept: its buffer is read below
+    const std::vector<unsigned char>& bin = file.model.buffers[0].data;
     rp::fuzz::write_scratch("valid-external.bin", std::span<const uint8_t>(bin.data(), bin.size()));
     std::error_code ec;
     std::filesystem::create_directory(rp::fuzz::scratch_dir() / "folder.bin", ec);
