@@ -14,11 +14,12 @@
 /// the kernels within the range where they cannot overflow; any other ray misses that
 /// instance, on every backend and in the reference (README, "Hit convention").
 ///
-/// Single rays and 8-ray packets have their own instance traversal. A packet stays a packet
-/// under an affine map: at an instance its live lanes are mapped one by one (the same
+/// Single rays and 8-ray packets have their own instance traversal here. A packet stays a
+/// packet under an affine map: at an instance its live lanes are mapped one by one (the same
 /// function, so the same bits as a single ray's) and loaded as an 8-ray packet of the mesh's
-/// tree. Large packets and ray streams trace the world's tree as they do without instances,
-/// then hand each 8-ray packet (large packets) or each ray (streams) to this level.
+/// tree. Large packets (large_packet.h) and ray streams (stream.h) go down the instance tree
+/// as groups and streams, and continue through each instance's mesh as a large packet or a
+/// stream of their own; they read the tree and the placements through InstanceQueries.
 
 #include <bit>
 #include <cmath>
@@ -33,15 +34,13 @@ namespace rp::bvh8 {
 template <class Kernel>
 class InstanceTraversal final : public InstanceQueries<Kernel> {
  public:
-  /// One instance as the traversal reads it: the map into its object space and the
-  /// traversal of its mesh's tree.
-  struct Placed {
-    Affine3f world_to_object;
-    const Traversal<Kernel>* mesh;
-  };
+  using Placed = typename InstanceQueries<Kernel>::Placed;
 
   /// `placed[i]` for instance i of the scene (ids of InstanceTree's leaves).
   InstanceTraversal(const InstanceTree& tree, std::vector<Placed> placed) : tree_(tree), placed_(std::move(placed)) {}
+
+  const InstanceTree& tree() const noexcept override { return tree_; }
+  const Placed& placed(uint32_t i) const noexcept override { return placed_[i]; }
 
   // ---- single rays ----
 
@@ -52,7 +51,7 @@ class InstanceTraversal final : public InstanceQueries<Kernel> {
   }
 
   /// The same from node `root` of the instance tree, for a ray set up already.
-  void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best) const noexcept {
+  void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best) const noexcept override {
     DistanceEntry stack[kStackSize];
     int sp = 0;
     int32_t ref = root;
@@ -87,7 +86,7 @@ class InstanceTraversal final : public InstanceQueries<Kernel> {
   bool any(const Ray& r) const noexcept override { return !tree_.empty() && any(r, SingleRay(r), 0); }
 
   /// The same from node `root`, for a ray set up already.
-  bool any(const Ray& r, const SingleRay& sr, int32_t root) const noexcept {
+  bool any(const Ray& r, const SingleRay& sr, int32_t root) const noexcept override {
     int32_t stack[kStackSize];
     stack[0] = root;
     int sp = 1;
@@ -200,9 +199,7 @@ class InstanceTraversal final : public InstanceQueries<Kernel> {
   /// object-space ray is valid (the others miss the instance).
   static uint32_t to_object(const Placed& in, std::span<const Ray> rays, uint32_t mask, Ray o[8], RayPacket& op,
                             float8& tfar) {
-    constexpr Ray kInactive{{0.0f, 0.0f, 0.0f}, 1.0f, {1.0f, 1.0f, 1.0f}, 0.0f};  // tnear > tfar: invalid
-    for (size_t lane = 0; lane < 8; ++lane)
-      o[lane] = (mask >> lane & 1u) ? object_ray(rays[lane], in.world_to_object) : kInactive;
+    object_rays(in.world_to_object, rays, mask, o);
     return load_packet(std::span<const Ray>(o, 8), op, tfar) & mask;
   }
 

@@ -9,8 +9,12 @@
 /// with its own stream. At a leaf the vertex block is decoded once for the whole stream and
 /// every ray takes the single-ray triangle test. A stream of fewer than kMinStream rays, and
 /// a leaf holding an analytic primitive, go on ray by ray (Traversal::closest / any, from
-/// that node). In a scene with instances, each ray then goes through the instance level by
-/// itself (instances.h).
+/// that node).
+///
+/// In a scene with instances the batch then goes down the instance tree (instances.h) as a
+/// stream the same way; at an instance, the rays of its stream are mapped into its object
+/// space (rp::object_ray, the single-ray path's bits) and traced through the mesh's tree as a
+/// stream of their own, with the hits found so far (the map keeps t the world t).
 ///
 /// Why it pays over tracing the rays one by one: a ray alone walks the tree as a chain of
 /// dependent loads and branches no predictor can guess (how many children were hit, node or
@@ -72,61 +76,6 @@ class StreamTraversal {
   }
 
  private:
-  /// Closest hits of one stream (at most kMaxStream rays).
-  void intersect_stream(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
-    Scratch& s = scratch();
-    const size_t n = rays.size();
-    prepare(n, s);
-    uint32_t count = 0;
-    for (size_t i = 0; i < n; ++i) {
-      hits[i] = Hit{};
-      if (!valid_ray(rays[i])) continue;
-      if (enter(rays[i], i, s, count)) {
-        hits[i].t = rays[i].tfar;  // the ray's tfar until a primitive is found
-      } else {
-        hits[i] = t_.intersect_single(rays[i]);
-      }
-    }
-    traverse<false>(count, s, [&](const Frame& f) { leaf_closest(f, s, rays, hits); },
-                    [&](uint32_t i, int32_t ref) {
-                      t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i]);
-                      s.rays[i].tfar = hits[i].t;
-                    });
-    for (size_t i = 0; i < n; ++i) {
-      if (!s.streamed[i]) continue;
-      if (!hits[i].hit()) hits[i] = Hit{};
-      t_.finish_single(rays[i], hits[i]);  // the instances, ray by ray, then the planes
-    }
-  }
-
-  /// Any hits of one stream.
-  void occluded_stream(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
-    Scratch& s = scratch();
-    const size_t n = rays.size();
-    prepare(n, s);
-    uint32_t count = 0;
-    for (size_t i = 0; i < n; ++i) {
-      out[i] = 0;
-      if (!valid_ray(rays[i])) continue;
-      if (t_.scene().occluded_by_planes(rays[i])) {
-        out[i] = 1;
-      } else if (!enter(rays[i], i, s, count)) {
-        out[i] = t_.occluded_single(rays[i]);
-      }
-    }
-    const auto done = [&](uint32_t i) {
-      out[i] = 1;
-      s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
-    };
-    traverse<true>(count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
-                   [&](uint32_t i, int32_t ref) {
-                     if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
-                   });
-    if (const InstanceQueries<Kernel>* in = t_.instances())  // the instances, ray by ray
-      for (size_t i = 0; i < n; ++i)
-        if (s.streamed[i] && !out[i] && in->any(rays[i])) out[i] = 1;
-  }
-
   /// What the node test reads of a stream ray.
   struct StreamRay {
     SlabRay slab;
@@ -148,9 +97,169 @@ class StreamTraversal {
     std::vector<uint8_t> bits;      ///< each ray's hit mask at the node being split
     std::vector<Frame> frames;
   };
-  static Scratch& scratch() {
-    static thread_local Scratch s;
-    return s;
+  /// A thread's buffers: level 0 for the world's tree and the instance tree, level 1 for an
+  /// instance's mesh (traced while the instance level's stream waits).
+  static Scratch& scratch(int level) {
+    static thread_local Scratch s[2];
+    return s[level];
+  }
+
+  /// Closest hits of one stream (at most kMaxStream rays).
+  void intersect_stream(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits[i] = Hit{};
+      if (valid_ray(rays[i])) hits[i].t = rays[i].tfar;  // the ray's tfar until a primitive is found
+    }
+    closest_tree(rays, hits, scratch(0), kNoInstance);
+    if (const InstanceQueries<Kernel>* in = t_.instances()) closest_instances(*in, rays, hits);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (!valid_ray(rays[i])) continue;
+      if (!hits[i].hit()) hits[i] = Hit{};
+      t_.scene().intersect_planes(rays[i], hits[i]);
+    }
+  }
+
+  /// Any hits of one stream.
+  void occluded_stream(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && t_.scene().occluded_by_planes(rays[i]);
+    any_tree(rays, out, scratch(0));
+    if (const InstanceQueries<Kernel>* in = t_.instances()) any_instances(*in, rays, out);
+  }
+
+  /// Closest hits in this traversal's tree of the valid rays of `rays` into `hits` (each t:
+  /// its ray's tfar, or a closer hit found already), naming instance `inst`.
+  void closest_tree(std::span<const Ray> rays, std::span<Hit> hits, Scratch& s, uint32_t inst) const noexcept {
+    if (bvh_.empty()) return;
+    const size_t n = rays.size();
+    prepare(n, s);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (!valid_ray(rays[i])) continue;
+      if (!enter(rays[i], i, hits[i].t, s, count)) t_.closest(rays[i], 0, hits[i], inst);
+    }
+    traverse<false>(bvh_.nodes.data(), false, count, s,
+                    [&](const Frame& f) { leaf_closest(f, s, rays, hits, inst); },
+                    [&](uint32_t i, int32_t ref) {
+                      t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i], inst);
+                      s.rays[i].tfar = hits[i].t;
+                    });
+  }
+
+  /// Any hits in this traversal's tree of the valid rays of `rays` not occluded already
+  /// (out[i] == 0), into `out`.
+  void any_tree(std::span<const Ray> rays, std::span<uint8_t> out, Scratch& s) const noexcept {
+    if (bvh_.empty()) return;
+    const size_t n = rays.size();
+    prepare(n, s);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (out[i] || !valid_ray(rays[i])) continue;
+      if (!enter(rays[i], i, rays[i].tfar, s, count)) out[i] = any(rays[i], 0);
+    }
+    const auto done = [&](uint32_t i) {
+      out[i] = 1;
+      s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
+    };
+    traverse<true>(bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
+                   [&](uint32_t i, int32_t ref) {
+                     if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
+                   });
+  }
+
+  /// Any hit of valid ray `r` in subtree `ref` of this traversal's tree alone.
+  bool any(const Ray& r, int32_t ref) const noexcept { return t_.any(r, ref); }
+
+  // ---- the instance level ----
+
+  /// The rays of one instance's stream in its object space, and their hits.
+  struct ObjectBatch {
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    std::vector<uint8_t> out;
+  };
+  static ObjectBatch& object_batch() {
+    static thread_local ObjectBatch b;
+    return b;
+  }
+
+  /// The valid rays of `rays` (not those `skip` marks, when given) as one stream down the
+  /// instance tree, ray i with tfar_of(i): a ray that needs the exact slab form goes through
+  /// the instance level by itself (`alone(i)`); `at_instance(f)` takes an instance's stream,
+  /// `alone_from(i, ref)` ray i from node ref.
+  template <bool kAny, class TfarOf, class AtInstance, class Alone, class AloneFrom>
+  void instance_streams(const InstanceQueries<Kernel>& in, std::span<const Ray> rays, TfarOf&& tfar_of,
+                        const uint8_t* skip, AtInstance&& at_instance, Alone&& alone,
+                        AloneFrom&& alone_from) const noexcept {
+    const InstanceTree& tree = in.tree();
+    if (tree.empty()) return;
+    Scratch& s = scratch(0);
+    const size_t n = rays.size();
+    prepare(n, s);
+    uint32_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if ((skip && skip[i]) || !valid_ray(rays[i])) continue;
+      if (!enter(rays[i], i, tfar_of(i), s, count)) alone(uint32_t(i));
+    }
+    traverse<kAny>(tree.nodes.data(), true, count, s, at_instance, alone_from);
+  }
+
+  /// Closest hits among the instances of the valid rays of `rays`, into `hits`.
+  void closest_instances(const InstanceQueries<Kernel>& in, std::span<const Ray> rays,
+                         std::span<Hit> hits) const noexcept {
+    Scratch& s = scratch(0);
+    ObjectBatch& ob = object_batch();
+    const auto at_instance = [&](const Frame& f) {
+      const uint32_t id = leaf_offset(f.ref);
+      const typename InstanceQueries<Kernel>::Placed& pl = in.placed(id);
+      ob.rays.resize(f.count);
+      ob.hits.resize(f.count);
+      for (uint32_t k = 0; k < f.count; ++k) {
+        const uint32_t i = s.ids[f.begin + k];
+        ob.rays[k] = object_ray(rays[i], pl.world_to_object);  // an invalid one misses the instance
+        ob.hits[k] = hits[i];
+      }
+      StreamTraversal(*pl.mesh).closest_tree(ob.rays, ob.hits, scratch(1), id);
+      for (uint32_t k = 0; k < f.count; ++k) {
+        const uint32_t i = s.ids[f.begin + k];
+        hits[i] = ob.hits[k];
+        s.rays[i].tfar = hits[i].t;
+      }
+    };
+    instance_streams<false>(
+        in, rays, [&](size_t i) { return hits[i].t; }, nullptr, at_instance, [&](uint32_t i) { in.closest(rays[i], hits[i]); },
+        [&](uint32_t i, int32_t ref) {
+          in.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i]);
+          s.rays[i].tfar = hits[i].t;
+        });
+  }
+
+  /// Any hits among the instances of the valid rays of `rays` not occluded already, into `out`.
+  void any_instances(const InstanceQueries<Kernel>& in, std::span<const Ray> rays,
+                     std::span<uint8_t> out) const noexcept {
+    Scratch& s = scratch(0);
+    ObjectBatch& ob = object_batch();
+    const auto done = [&](uint32_t i) {
+      out[i] = 1;
+      s.rays[i].tfar = -std::numeric_limits<float>::infinity();
+    };
+    const auto at_instance = [&](const Frame& f) {
+      const typename InstanceQueries<Kernel>::Placed& pl = in.placed(leaf_offset(f.ref));
+      ob.rays.resize(f.count);
+      ob.out.assign(f.count, 0);
+      for (uint32_t k = 0; k < f.count; ++k) {
+        const uint32_t i = s.ids[f.begin + k];
+        ob.rays[k] = object_ray(rays[i], pl.world_to_object);
+        ob.out[k] = out[i];
+      }
+      StreamTraversal(*pl.mesh).any_tree(ob.rays, ob.out, scratch(1));
+      for (uint32_t k = 0; k < f.count; ++k)
+        if (ob.out[k] && !out[s.ids[f.begin + k]]) done(s.ids[f.begin + k]);
+    };
+    instance_streams<true>(
+        in, rays, [&](size_t i) { return rays[i].tfar; }, out.data(), at_instance, [&](uint32_t i) { out[i] = in.any(rays[i]); },
+        [&](uint32_t i, int32_t ref) {
+          if (!out[i] && in.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
+        });
   }
 
   static void prepare(size_t n, Scratch& s) {
@@ -160,34 +269,37 @@ class StreamTraversal {
     s.frames.clear();
   }
 
-  /// Adds valid ray i to the stream (ids[count++]) when it takes the one-FMA slab form;
-  /// false for a ray to be traced alone (SlabRay::exact, or an empty tree).
-  bool enter(const Ray& r, size_t i, Scratch& s, uint32_t& count) const noexcept {
-    if (bvh_.empty()) return false;
+  /// Adds valid ray i to the stream (ids[count++]) with `tfar` (its own, or its closest hit
+  /// so far) when it takes the one-FMA slab form; false for a ray to be traced alone
+  /// (SlabRay::exact).
+  static bool enter(const Ray& r, size_t i, float tfar, Scratch& s, uint32_t& count) noexcept {
     StreamRay& q = s.rays[i];
     q.slab = SlabRay(r);
     if (q.slab.exact) return false;
     q.tnear = r.tnear + 0.0f;
-    q.tfar = r.tfar;
+    q.tfar = tfar;
     s.streamed[i] = 1;
     s.ids[count++] = uint32_t(i);
     return true;
   }
 
-  /// The traversal loop shared by both queries: `leaf(frame)` takes a leaf's stream, `alone(i,
-  /// ref)` takes ray i through subtree ref by itself.
+  /// The traversal loop shared by both queries and both levels, over the tree of `nodes`
+  /// (this traversal's, or the instance tree when `instances`): `leaf(frame)` takes a leaf's
+  /// (or an instance's) stream, `alone(i, ref)` takes ray i through subtree ref by itself.
   template <bool kAny, class LeafFn, class AloneFn>
-  void traverse(uint32_t count, Scratch& s, LeafFn&& leaf, AloneFn&& alone) const noexcept {
+  void traverse(const Bvh8Node* nodes, bool instances, uint32_t count, Scratch& s, LeafFn&& leaf,
+                AloneFn&& alone) const noexcept {
     if (count) s.frames.push_back({0, 0, count, count});
     while (!s.frames.empty()) {
       const Frame f = s.frames.back();
       s.frames.pop_back();
-      if (f.count < kMinStream || (is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
+      if (f.count < kMinStream ||
+          (!instances && is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
         for (uint32_t k = 0; k < f.count; ++k) alone(s.ids[f.begin + k], f.ref);
       } else if (is_leaf(f.ref)) {
         leaf(f);
       } else {
-        split<kAny>(f, s);
+        split<kAny>(nodes, instances, f, s);
       }
     }
   }
@@ -196,8 +308,8 @@ class StreamTraversal {
   /// child some ray hits: for closest hits the child its rays enter first on average on top,
   /// for any hits in slot order. Starts loading those children.
   template <bool kAny>
-  void split(const Frame& f, Scratch& s) const noexcept {
-    const Bvh8Node& n = bvh_.nodes[size_t(f.ref)];
+  void split(const Bvh8Node* nodes, bool instances, const Frame& f, Scratch& s) const noexcept {
+    const Bvh8Node& n = nodes[size_t(f.ref)];
     if (s.bits.size() < size_t(f.count) + 8) s.bits.resize(size_t(f.count) + 8);
     uint8_t* bits = s.bits.data();
     // Pass 1: each ray's hit mask, and each child's stream size.
@@ -231,7 +343,14 @@ class StreamTraversal {
       uint32_t* out = s.ids.data() + at[c];
       for (uint32_t k = 0; k < f.count; k += 8) out += simd::compress_store(in + k, simd::ByteBits8(bits + k).bit(c), out);
     }
-    t_.prefetch_children(n, hit);
+    if (instances) {  // instance tree nodes (an instance leaf has no data here)
+      for (uint32_t b = hit; b; b &= b - 1)
+        if (const int32_t c = n.child[std::countr_zero(b)]; !is_leaf(c))
+          for (uint32_t off = 0; off < sizeof(Bvh8Node); off += 64)
+            simd::prefetch(reinterpret_cast<const char*>(&nodes[size_t(c)]) + off);
+    } else {
+      t_.prefetch_children(n, hit);
+    }
     int order[8], k = 0;
     for (uint32_t b = hit; b; b &= b - 1) order[k++] = std::countr_zero(b);
     if constexpr (!kAny) {  // by the mean entry distance of their rays: the nearest pushed last
@@ -264,13 +383,15 @@ class StreamTraversal {
   }
 
   /// The triangles of the leaf of `f` (decoded once) against each ray of its stream.
-  void leaf_closest(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+  void leaf_closest(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<Hit> hits,
+                    uint32_t inst) const noexcept {
     const Leaf leaf = bvh_.leaf(f.ref);
     const LeafView lv(leaf);
     for (uint32_t k = 0; k < f.count; ++k) {
       const uint32_t i = s.ids[f.begin + k];
       float tfar = hits[i].t;
-      if (Traversal<Kernel>::leaf_single(leaf, lv, typename Kernel::Single(rays[i]), tfar, hits[i])) s.rays[i].tfar = tfar;
+      if (Traversal<Kernel>::leaf_single(leaf, lv, typename Kernel::Single(rays[i]), tfar, hits[i], inst))
+        s.rays[i].tfar = tfar;
     }
   }
 

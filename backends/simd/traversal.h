@@ -28,6 +28,7 @@
 #include "backends/simd/bvh8.h"
 #include "backends/simd/kernels.h"
 #include "backends/simd/packet.h"
+#include "engine/affine.h"
 #include "engine/error.h"
 #include "engine/scene.h"
 
@@ -37,13 +38,30 @@ namespace rp::bvh8 {
 /// (implemented by InstanceTraversal, instances.h): a virtual call per ray or packet, and
 /// only in scenes with instances.
 template <class Kernel>
+class Traversal;
+
+template <class Kernel>
 class InstanceQueries {
  public:
+  /// One instance as the traversals read it: the map into its object space and the
+  /// traversal of its mesh's tree.
+  struct Placed {
+    Affine3f world_to_object;
+    const Traversal<Kernel>* mesh;
+  };
+
   virtual ~InstanceQueries() = default;
+  /// The tree over the instances' world boxes, whose leaf ~i is instance i.
+  virtual const InstanceTree& tree() const noexcept = 0;
+  /// Instance i of the scene.
+  virtual const Placed& placed(uint32_t i) const noexcept = 0;
   /// Takes any closer hit of valid ray `r` among the instances into `best`.
   virtual void closest(const Ray& r, Hit& best) const noexcept = 0;
   /// True when some instance occludes valid ray `r`.
   virtual bool any(const Ray& r) const noexcept = 0;
+  /// The same two from node `root` of the instance tree, for a ray set up already.
+  virtual void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best) const noexcept = 0;
+  virtual bool any(const Ray& r, const SingleRay& sr, int32_t root) const noexcept = 0;
   /// Takes closer hits of the lanes `mask` of packet `p` (the rays `rays`, set up in `ps`) into `h`.
   virtual void closest_packet(uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                               std::span<const Ray> rays, PacketHits& h) const noexcept = 0;
@@ -51,6 +69,14 @@ class InstanceQueries {
   virtual uint32_t any_packet(uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
                               std::span<const Ray> rays, const float8& tfar) const noexcept = 0;
 };
+
+/// The lanes `mask` of `rays` (at most 8) in an instance's object space (rp::object_ray by
+/// `world_to_object`: the single-ray path's bits) as `o[0..8)`; the other lanes an invalid ray.
+inline void object_rays(const Affine3f& world_to_object, std::span<const Ray> rays, uint32_t mask, Ray* o) {
+  constexpr Ray kInactive{{0.0f, 0.0f, 0.0f}, 1.0f, {1.0f, 1.0f, 1.0f}, 0.0f};  // tnear > tfar: invalid
+  for (size_t lane = 0; lane < 8; ++lane)
+    o[lane] = (mask >> lane & 1u) ? object_ray(rays[lane], world_to_object) : kInactive;
+}
 
 /// Traversal stack bound: the build keeps binary depth <= 64 + log2(n) < 100, so an 8-wide
 /// tree holds at most 7 pending children per level.

@@ -225,6 +225,45 @@ TEST_P(PacketPaths, InstancesGiveTheSameAnswersOnEveryPath) {
   EXPECT_EQ(near_ties, 0);
 }
 
+TEST_P(PacketPaths, HostileSpansThroughInstancesGiveTheSameAnswers) {
+  // Large packets and streams go down the instance tree as groups and streams, and regroup in
+  // each instance's object space (other octants there, rays whose object-space image needs
+  // the exact slab form or is invalid). Spans mixing octants, axis-parallel directions,
+  // overflowing inverses and invalid rays, in a scene with world geometry and instances and
+  // in one with instances only (no world tree at all).
+  Scene only;
+  {
+    const Scene ball = tessellated_sphere(24, 12), soup = triangle_soup(21, 300);
+    const uint32_t b = only.add_instanced_mesh(ball.meshes()[0]), q = only.add_instanced_mesh(soup.meshes()[0]);
+    for (int i = 0; i < 12; ++i)
+      only.add_instance(i % 3 ? b : q, test::placement({0.3f, 0.25f + 0.02f * float(i), 0.3f}, {1, float(i % 4), 0.5f},
+                                                       30.0f * float(i), {0.5f * float(i % 4) - 0.8f,
+                                                                         0.5f * float(i / 4) - 0.5f, 0.1f * float(i)}));
+    const float tiny = 2.0f / kMaxInstanceScale;  // the most shrunk placement allowed
+    only.add_instance(b, test::placement({tiny, tiny, tiny}, {0, 1, 0}, 0.0f, {0.05f, 0.0f, 0.0f}));
+  }
+  const Scene mixed = test::instanced_scene();
+  for (const Scene* scene : {&mixed, static_cast<const Scene*>(&only)}) {
+    const Paths paths = make_paths(*scene, GetParam());
+    std::vector<Ray> rays = random_rays(41, 6000);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      if (i % 97 == 0) rays[i].org.x = std::numeric_limits<float>::quiet_NaN();
+      if (i % 89 == 0) rays[i].dir = Vec3f{0.0f, -1.0f, 0.0f};
+      if (i % 79 == 0) rays[i].dir.z = 0x1p-140f;
+      if (i % 83 == 0) rays[i].tnear = rays[i].tfar + 1.0f;
+      if (i % 7 == 0) rays[i].dir = -rays[i].dir;
+    }
+    const RaySet primary = primary_rays(*scene, 64, 48);
+    rays.insert(rays.end(), primary.rays.begin(), primary.rays.end());
+    int near_ties = 0;
+    for (size_t span : {size_t(9072), size_t(512), size_t(100), size_t(3)})
+      EXPECT_GT(expect_same_answers(*scene, paths, rays, span, "hostile instances, span " + std::to_string(span),
+                                    near_ties, GetParam() == "watertight"),
+                1000);
+    EXPECT_EQ(near_ties, 0);
+  }
+}
+
 TEST_P(PacketPaths, SharedEdgesOfAnInstanceGiveTheSameAnswersOnEveryPath) {
   // The tessellated sphere placed twice: rotated and scaled, and a second time exactly over
   // the first, so that every hit is an exact tie between two instances of one primitive,
