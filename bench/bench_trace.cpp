@@ -52,9 +52,11 @@ RaySets make_rays(const Scene& scene, const Backend& backend) {
   return {primary.rays, shadow_rays(scene, primary, hits).rays, diffuse_rays(scene, primary, hits, 2024).rays};
 }
 
-/// Which rays a method is timed on: a second coherent or incoherent method over a structure
-/// already measured is timed only on the rays that method traces, and its build is not timed.
-enum class Rays { all, coherent, incoherent };
+/// Which rays a method is timed on: every kind (primary and shadow as coherent spans, diffuse
+/// as an incoherent batch), the coherent kinds or the incoherent one only, or every kind as an
+/// incoherent batch. A second method over a structure already measured is timed only on the
+/// rays that method traces, and its build is not timed.
+enum class Rays { all, coherent, incoherent, all_incoherent };
 
 /// The backends measured: registry name, options, the label in benchmark names, and the rays
 /// it is timed on (its build is timed with Rays::all).
@@ -87,6 +89,7 @@ std::vector<Method> methods() {
       m.push_back({"simd-spatial", "simd", with("spatial", "", "")});
     } else if (e.name == "embree") {
       m.push_back({"embree-stream", "embree", with("default", "", "stream"), Rays::coherent});
+      m.push_back({"embree-stream-incoherent", "embree", with("default", "", "", "stream"), Rays::all_incoherent});
       for (const auto& [key, value] : e.facts)
         if (key == "native_ray16" && value == "yes")
           m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), Rays::coherent});
@@ -137,14 +140,12 @@ void trace(const Backend& b, const std::vector<Ray>& rays, std::vector<Hit>& hit
   else intersect_parallel(b, rays, hits, coh);
 }
 
-void BM_Trace(benchmark::State& state, const std::string& label, const std::string& scene_name, const std::string& kind) {
+void BM_Trace(benchmark::State& state, const std::string& label, const std::string& scene_name, const std::string& kind,
+              Coherence coh) {
   SceneFixture& f = fixture(scene_name);
   const Backend& b = *f.backends.at(label);
   const Backend& ref = *f.backends.at("embree");
   const std::vector<Ray>& rays = kind == "primary" ? f.rays.primary : kind == "shadow" ? f.rays.shadow : f.rays.diffuse;
-  // Primary rays and shadow rays (towards one light, in the primary rays' tile order) are
-  // coherent spans; diffuse bounces are not.
-  const Coherence coh = kind == "diffuse" ? Coherence::incoherent : Coherence::coherent;
   const bool shadow = kind == "shadow";
   std::vector<Hit> hits(rays.size()), ref_hits(rays.size());
   std::vector<uint8_t> occ(rays.size()), ref_occ(rays.size());
@@ -254,12 +255,17 @@ int main(int argc, char** argv) {
   for (const auto& [scene, path] : scene_files()) {
     (void)path;
     for (const Method& m : methods()) {
-      for (const char* kind : {"primary", "shadow", "diffuse"})
-        if (m.rays == Rays::all || (m.rays == Rays::incoherent) == (std::string_view(kind) == "diffuse"))
+      for (const char* kind : {"primary", "shadow", "diffuse"}) {
+        // Primary rays and shadow rays (towards one light, in the primary rays' tile order)
+        // are coherent spans; diffuse bounces are not.
+        const bool diffuse = std::string_view(kind) == "diffuse";
+        const Coherence coh = diffuse || m.rays == Rays::all_incoherent ? Coherence::incoherent : Coherence::coherent;
+        if (m.rays == Rays::all || m.rays == Rays::all_incoherent || (m.rays == Rays::incoherent) == diffuse)
           benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label, scene,
-                                     std::string(kind))
+                                       std::string(kind), coh)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
+      }
       if (m.rays == Rays::all)
         benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
             ->Unit(benchmark::kMillisecond)

@@ -234,9 +234,10 @@ void user_occluded(const RTCOccludedFunctionNArguments* a) {
 class EmbreeBackend final : public Backend {
  public:
   EmbreeBackend(const Scene& scene, const BackendOptions& options)
-      : scene_(scene), user_{&scene}, method_(parse_method(options.coherent_method)) {
-    if (!options.incoherent_method.empty() && options.incoherent_method != "single")
-      throw Error(cat("embree: unknown incoherent method '", options.incoherent_method, "' (single)"));
+      : scene_(scene),
+        user_{&scene},
+        method_(parse_method(options.coherent_method)),
+        incoherent_stream_(parse_incoherent(options.incoherent_method)) {
     const auto start = std::chrono::steady_clock::now();
     info_.name = "embree";
     info_.variant = options.variant;
@@ -326,6 +327,10 @@ class EmbreeBackend final : public Backend {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
+    if (coherence == Coherence::incoherent && incoherent_stream_) {
+      intersect_stream(q, hits);
+      return;
+    }
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {
         if (valid_ray(rays[i])) intersect1(q, i, hits[i]);
@@ -349,6 +354,10 @@ class EmbreeBackend final : public Backend {
     // --method 'embree (stream|rtcIntersect16)'` hung in rtcOccluded16 on every run); every
     // scene with instances sends its occlusion rays without the coherent flag.
     QueryContext q = context(rays, coherent_occlusion_ ? coherence : Coherence::incoherent);
+    if (coherence == Coherence::incoherent && incoherent_stream_) {
+      occluded_stream(q, out);
+      return;
+    }
     if (coherence == Coherence::incoherent) {
       for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
@@ -381,6 +390,13 @@ class EmbreeBackend final : public Backend {
     if (m == "packet16") return Method::packet16;
     if (m == "stream") return Method::stream;
     throw Error(cat("embree: unknown coherent method '", m, "' (packet8, packet16, stream)"));
+  }
+
+  /// True for the incoherent method "stream", false for "single" (the default).
+  static bool parse_incoherent(const std::string& m) {
+    if (m.empty() || m == "single") return false;
+    if (m == "stream") return true;
+    throw Error(cat("embree: unknown incoherent method '", m, "' (single, stream)"));
   }
 
   /// Ray i of the query as Embree sees it in a packet or stream: invalid rays are inactive.
@@ -439,8 +455,9 @@ class EmbreeBackend final : public Backend {
   void trace_packet(const int* valid, RTCIntersectContext* c, RTCRay8* p) const { rtcOccluded8(valid, scene_handle_, c, p); }
   void trace_packet(const int* valid, RTCIntersectContext* c, RTCRay16* p) const { rtcOccluded16(valid, scene_handle_, c, p); }
 
-  /// Coherent closest hits as one ray stream (rtcIntersect1M; the context carries the coherent
-  /// flag). An inactive ray has tnear > tfar, as Embree's stream API asks.
+  /// Closest hits as one ray stream (rtcIntersect1M; for a coherent span the context carries
+  /// the coherent flag, for the incoherent method "stream" not). An inactive ray has tnear >
+  /// tfar, as Embree's stream API asks.
   void intersect_stream(QueryContext& q, std::span<Hit> hits) const noexcept {
     thread_local std::vector<RTCRayHit> stream;
     stream.resize(hits.size());
@@ -458,7 +475,7 @@ class EmbreeBackend final : public Backend {
     }
   }
 
-  /// Coherent any hits as one ray stream (rtcOccluded1M).
+  /// Any hits as one ray stream (rtcOccluded1M, with the coherent flag or without as above).
   void occluded_stream(QueryContext& q, std::span<uint8_t> out) const noexcept {
     thread_local std::vector<RTCRay> stream;
     stream.resize(out.size());
@@ -627,6 +644,7 @@ class EmbreeBackend final : public Backend {
   uint32_t first_instance_geom_ = 0;  ///< instance i is geometry first_instance_geom_ + i of the top scene
   bool coherent_occlusion_ = true;    ///< occlusion queries may carry the coherent flag (see occluded)
   Method method_;
+  bool incoherent_stream_;  ///< incoherent batches by rtcIntersect1M/rtcOccluded1M without the coherent flag
   BackendInfo info_;
 };
 
@@ -636,7 +654,7 @@ std::vector<std::string> variants() { return {"default", "robust", "compact", "h
 
 std::vector<std::string> coherent_methods() { return {"packet8", "packet16", "stream"}; }
 
-std::vector<std::string> incoherent_methods() { return {"single"}; }
+std::vector<std::string> incoherent_methods() { return {"single", "stream"}; }
 
 DeviceFacts device_facts() {
   const RTCDevice dev = device_for("").handle;

@@ -81,6 +81,7 @@ std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& sk
                                                         " kernels here: 16-wide packets would be emulated")});
       m.push_back({"embree rtcIntersect8", "embree", "default", "packet8", Coherence::coherent});
       m.push_back({"embree rtcIntersect1", "embree", "default", "single", Coherence::incoherent});
+      m.push_back({"embree stream incoherent", "embree", "default", "stream", Coherence::incoherent});
       m.push_back({"embree robust 8", "embree", "robust", "packet8", Coherence::coherent});
       m.push_back({"embree robust 1", "embree", "robust", "single", Coherence::incoherent});
       m.push_back({"embree compact 8", "embree", "compact", "packet8", Coherence::coherent});
