@@ -170,6 +170,9 @@ struct Bvh8 {
 /// whatever the thread count.
 Bvh8 build(const Scene& scene, const BuildOptions& options);
 
+/// The side of a cube with the mean surface area of the leaf boxes of `bvh` (0 when empty).
+float mean_leaf_size(const Bvh8& bvh);
+
 /// Builds the tree of instanced mesh `mesh` alone, in its object space (its leaves hold the
 /// mesh's prim_ids): built once, traversed for every instance that places the mesh.
 Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options);

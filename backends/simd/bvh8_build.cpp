@@ -1292,6 +1292,20 @@ Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options) 
   return build_refs(scene, std::move(refs), options, Selection{mesh}, start);
 }
 
+float mean_leaf_size(const Bvh8& bvh) {
+  double area = 0.0;
+  size_t leaves = 0;
+  for (const Bvh8Node& n : bvh.nodes)
+    for (int c = 0; c < 8 && n.child[c] != kEmpty; ++c) {
+      if (!is_leaf(n.child[c])) continue;
+      const double dx = double(n.hi_x[c]) - n.lo_x[c], dy = double(n.hi_y[c]) - n.lo_y[c],
+                   dz = double(n.hi_z[c]) - n.lo_z[c];
+      area += 2.0 * (dx * dy + dy * dz + dz * dx);
+      ++leaves;
+    }
+  return leaves ? float(std::sqrt(area / double(leaves) / 6.0)) : 0.0f;
+}
+
 InstanceTree build_instances(const Scene& scene) {
   const auto start = std::chrono::steady_clock::now();
   InstanceTree out;

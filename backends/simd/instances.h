@@ -110,14 +110,14 @@ class InstanceTraversal final : public InstanceQueries<Kernel> {
   // ---- 8-ray packets ----
 
   /// Takes closer hits of the lanes of `mask` of packet `p` (the world rays `rays`, set up in
-  /// `ps`) among the instances into `h`. Below kSingleRayLanes live lanes an entry's rays
-  /// continue one at a time.
-  void closest_packet(uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps, std::span<const Ray> rays,
-                      PacketHits& h) const noexcept override {
+  /// `ps`) among the instances of subtree `root` into `h`. Below kSingleRayLanes live lanes an
+  /// entry's rays continue one at a time.
+  void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                      std::span<const Ray> rays, PacketHits& h) const noexcept override {
     if (tree_.empty()) return;
     using Entry = typename Traversal<Kernel>::PacketEntry;
     Entry stack[kStackSize];
-    stack[0] = {0, mask};
+    stack[0] = {root, mask};
     int sp = 1;
     while (sp > 0) {
       const Entry e = stack[--sp];
@@ -150,13 +150,14 @@ class InstanceTraversal final : public InstanceQueries<Kernel> {
     }
   }
 
-  /// The lanes of `live` of packet `p` that some instance occludes (tfar per lane).
-  uint32_t any_packet(uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps, std::span<const Ray> rays,
-                      const float8& tfar) const noexcept override {
+  /// The lanes of `live` of packet `p` that some instance of subtree `root` occludes (tfar per
+  /// lane).
+  uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
+                      std::span<const Ray> rays, const float8& tfar) const noexcept override {
     if (tree_.empty()) return 0;
     using Entry = typename Traversal<Kernel>::PacketEntry;
     Entry stack[kStackSize];
-    stack[0] = {0, live};
+    stack[0] = {root, live};
     int sp = 1;
     uint32_t done = 0;
     while (sp > 0 && live & ~done) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -38,9 +39,17 @@ struct InstanceLevel {
         mesh_bytes += meshes.back().stats.bytes;
       }
     traversals.reserve(meshes.size());  // never reallocated: the instances point at them
-    for (const Bvh8& m : meshes) traversals.emplace_back(m, scene);
+    std::vector<float> leaf_size;
+    for (const Bvh8& m : meshes) {
+      traversals.emplace_back(m, scene);
+      leaf_size.push_back(mean_leaf_size(m));
+    }
     std::vector<typename InstanceTraversal<Kernel>::Placed> placed;
-    for (const Instance& in : scene.instances()) placed.push_back({in.world_to_object, &traversals[tree_of[in.mesh]]});
+    for (const Instance& in : scene.instances()) {
+      const float scale = float(std::cbrt(std::abs(double(in.object_to_world.determinant()))));
+      const uint32_t k = tree_of[in.mesh];
+      placed.push_back({in.world_to_object, &traversals[k], leaf_size[k] * scale});
+    }
     tree = build_instances(scene);
     traversal.emplace(tree, std::move(placed));
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

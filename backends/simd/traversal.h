@@ -48,6 +48,9 @@ class InstanceQueries {
   struct Placed {
     Affine3f world_to_object;
     const Traversal<Kernel>* mesh;
+    /// The typical size of a leaf of the mesh's tree as placed, in world units (mean_leaf_size
+    /// times the placement's mean scale): large packets use it to judge the rays' density.
+    float leaf_size = 0.0f;
   };
 
   virtual ~InstanceQueries() = default;
@@ -62,11 +65,12 @@ class InstanceQueries {
   /// The same two from node `root` of the instance tree, for a ray set up already.
   virtual void closest(const Ray& r, const SingleRay& sr, int32_t root, Hit& best) const noexcept = 0;
   virtual bool any(const Ray& r, const SingleRay& sr, int32_t root) const noexcept = 0;
-  /// Takes closer hits of the lanes `mask` of packet `p` (the rays `rays`, set up in `ps`) into `h`.
-  virtual void closest_packet(uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
+  /// Takes closer hits of the lanes `mask` of packet `p` (the rays `rays`, set up in `ps`) in
+  /// the subtree `root` of the instance tree (0: all of it; a leaf: one instance) into `h`.
+  virtual void closest_packet(int32_t root, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                               std::span<const Ray> rays, PacketHits& h) const noexcept = 0;
-  /// The lanes of `live` that some instance occludes (tfar per lane).
-  virtual uint32_t any_packet(uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
+  /// The lanes of `live` that some instance of subtree `root` occludes (tfar per lane).
+  virtual uint32_t any_packet(int32_t root, uint32_t live, const RayPacket& p, const PacketSetup<Kernel>& ps,
                               std::span<const Ray> rays, const float8& tfar) const noexcept = 0;
 };
 
@@ -422,7 +426,7 @@ class Traversal {
     if (active && (!bvh_.empty() || instances_)) {
       const PacketSetup<Kernel> ps(p, rays, active);
       if (!bvh_.empty()) closest_packet(0, active, p, ps, rays, h);
-      if (instances_) instances_->closest_packet(active, p, ps, rays, h);
+      if (instances_) instances_->closest_packet(0, active, p, ps, rays, h);
     }
     store_hits(rays, active, h, hits);
   }
@@ -441,7 +445,7 @@ class Traversal {
     if (live && (!bvh_.empty() || instances_)) {
       const PacketSetup<Kernel> ps(p, rays, live);
       if (!bvh_.empty()) done |= any_packet(0, live, p, ps, rays, tfar);
-      if (instances_ && (live & ~done)) done |= instances_->any_packet(live & ~done, p, ps, rays, tfar);
+      if (instances_ && (live & ~done)) done |= instances_->any_packet(0, live & ~done, p, ps, rays, tfar);
     }
     for (size_t i = 0; i < rays.size(); ++i) out[i] = uint8_t(done >> i & 1u);
   }
