@@ -13,14 +13,14 @@
 # and add it to tests/fuzz/regression/<target>/ (rp_test_fuzz_corpus then replays it).
 #
 # Usage: .ci/fuzz.sh    (from anywhere; environment: RAYPACK_FUZZ_SECONDS per target, default
-#                        30; RAYPACK_JOBS build jobs, default 2)
+#                        20; RAYPACK_JOBS build jobs, default 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 .ci/apt-install.sh fuzz clang libclang-rt-14-dev
 
 jobs=${RAYPACK_JOBS:-2}
-seconds=${RAYPACK_FUZZ_SECONDS:-30}
+seconds=${RAYPACK_FUZZ_SECONDS:-20}
 build=build-fuzz
 targets=(fuzz_obj fuzz_ply fuzz_json fuzz_rayfile fuzz_gltf)
 declare -A dictionary=([fuzz_obj]=obj.dict [fuzz_ply]=ply.dict [fuzz_json]=json.dict [fuzz_rayfile]=rayfile.dict

@@ -273,9 +273,9 @@ bool Scene::occluded_by_any_plane(const Ray& ray) const {
   // The point and normals in the instance's object space, from the object ray, then mapped.
   const Instance& in = instances_[hit.instance_id];
   const SurfacePoint local = surface(object_ray(ray, in.world_to_object), {hit.t, hit.prim_id, hit.u, hit.v});
-  const auto normal = [&](const Vec3f& n) { return normalize(in.world_to_object.transpose_vector(n)) * in.orientation; };
-  PointLanes<float> p{in.object_to_world.point(local.position), normal(local.geometric_normal),
-                      normal(local.shading_normal)};
+  PointLanes<float> p = instance_point<float>({local.position, local.geometric_normal, local.shading_normal},
+                                              AffineLanes<float>(in.object_to_world),
+                                              AffineLanes<float>(in.world_to_object), in.orientation);
   fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
   return {p.position, p.geometric_normal, p.shading_normal, local.material};
 }

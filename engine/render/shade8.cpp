@@ -1,10 +1,10 @@
 // shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 is read as
 // vectors (rays, hits and paths transposed from their records; its triangles' corners,
 // vertex normals and materials gathered when they share a mesh, read lane by lane when they
-// do not); its world triangles' surface points (triangle_point) run on float8 lanes, its
-// analytic hits' and instances' hits' come from Scene::surface lane by lane (which maps an
-// instance's object-space point and normals into the world), then all of shading.h runs on
-// float8 lanes, and
+// do not); its triangles' surface points (triangle_point; an instance's triangle's in its
+// object space, then mapped into the world by each lane's instance, instance_point) run on
+// float8 lanes, its analytic hits' come from Scene::surface lane by lane, then all of
+// shading.h runs on float8 lanes, and
 // its shadow rays and waiting contributions are transposed back into records and appended in
 // lane order. The last few rays of a batch go a ray at a time (shade_ray): the same bits
 // either way. Built for AVX2+FMA; the renderer calls it only on such a CPU
@@ -177,11 +177,54 @@ AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, st
           int8::load_aligned(material)};
 }
 
-/// Rays [base, base + 8) of the batch: the triangle hits' surface points on 8 lanes, the other
-/// hits' from Scene::surface, then the shading of every hit on 8 lanes.
+/// The lanes `lanes` of `p`, the object-space points of hits on instances' triangles (rays
+/// `org`, `dir` at `t`), in world space as Scene::instance_surface makes them: fixed along the
+/// object-space ray, then mapped by each lane's instance.
+PointLanes<float8> instance_points(const Scene& scene, std::span<const Hit> hits, size_t base, uint32_t lanes,
+                                   const V8& org, const V8& dir, const float8& t, const PointLanes<float8>& p) {
+  const uint32_t first = hits[base + size_t(std::countr_zero(lanes))].instance_id;
+  bool one = true;
+  for (uint32_t b = lanes; b; b &= b - 1) one = one && hits[base + size_t(std::countr_zero(b))].instance_id == first;
+  AffineLanes<float8> to_world, to_object;
+  float8 orientation;
+  if (one) {
+    const Instance& in = scene.instances()[first];
+    to_world = AffineLanes<float8>(in.object_to_world);
+    to_object = AffineLanes<float8>(in.world_to_object);
+    orientation = float8(in.orientation);
+  } else {
+    simd::Spill<25> s;  // object_to_world's 12 rows, world_to_object's 12, the orientation
+    for (int lane = 0; lane < 8; ++lane) {
+      const uint32_t id = (lanes >> lane & 1u) ? hits[base + size_t(lane)].instance_id : first;
+      const Instance& in = scene.instances()[id];
+      for (int k = 0; k < 12; ++k) {
+        s.lanes[k][lane] = in.object_to_world.m[k / 4][k % 4];
+        s.lanes[12 + k][lane] = in.world_to_object.m[k / 4][k % 4];
+      }
+      s.lanes[24][lane] = in.orientation;
+    }
+    for (int k = 0; k < 12; ++k) {
+      to_world.m[k / 4][k % 4] = s.load(k);
+      to_object.m[k / 4][k % 4] = s.load(12 + k);
+    }
+    orientation = s.load(24);
+  }
+  V8 object_org, object_dir;
+  to_object.object_ray(org, dir, object_org, object_dir);
+  PointLanes<float8> local = p;
+  fix_degenerate_normal<float8>(local, object_org, object_dir, t);
+  const PointLanes<float8> world = instance_point<float8>(local, to_world, to_object, orientation);
+  const mask8 take = simd::mask_from_bits(lanes);
+  return {select<float8>(take, world.position, p.position), select<float8>(take, world.geometric_normal, p.geometric_normal),
+          select<float8>(take, world.shading_normal, p.shading_normal)};
+}
+
+/// Rays [base, base + 8) of the batch: the triangle hits' surface points on 8 lanes (those of
+/// `instanced` on an instance's triangle, mapped into the world), the other hits' from
+/// Scene::surface, then the shading of every hit on 8 lanes.
 void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits, const float8 hit_rows[4],
-            const float8 path_rows[4], size_t base, uint32_t live, uint32_t hit, uint32_t triangle, bool bounce,
-            ShadeOut& out) {
+            const float8 path_rows[4], size_t base, uint32_t live, uint32_t hit, uint32_t triangle, uint32_t instanced,
+            bool bounce, ShadeOut& out) {
   const Scene& scene = s.scene;
   float8 ray_rows[8];
   simd::load_rows8(&rays[base].org.x, ray_rows);
@@ -202,6 +245,7 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
       const TriangleInputs t = triangle_inputs(scene, hit_rows[1], triangle);
       p = triangle_point<float8>(t.c, t.n, t.has_normals, hit_rows[2], hit_rows[3]);
       material = t.material;
+      if (instanced) p = instance_points(scene, hits, base, instanced, org, dir, hit_rows[0], p);
     }
     if (analytic) {
       const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, analytic);
@@ -266,11 +310,12 @@ void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<cons
     simd::load_records4(reinterpret_cast<const float*>(&paths[base]), path_rows);
     const uint32_t live = ~simd::movemask(simd::bits_equal(path_rows[0], kInvalidId)) & 0xffu;
     const uint32_t hit = ~simd::movemask(simd::bits_equal(hit_rows[1], kInvalidId)) & live;
-    uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count())) & hit;
-    if (!s.scene.instances().empty())  // an instance's triangle goes through Scene::surface, as analytic hits do
+    const uint32_t triangle = simd::movemask(simd::bits_below(hit_rows[1], s.scene.triangle_count())) & hit;
+    uint32_t instanced = 0;  // the triangle hits on an instance
+    if (!s.scene.instances().empty())
       for (uint32_t b = triangle; b; b &= b - 1)
-        if (hits[base + size_t(std::countr_zero(b))].instance_id != kNoInstance) triangle &= ~(b & -b);
-    shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, bounce, out);
+        if (hits[base + size_t(std::countr_zero(b))].instance_id != kNoInstance) instanced |= b & (~b + 1);
+    shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, instanced, bounce, out);
   }
   for (size_t i = base; i < n; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
 }

@@ -255,12 +255,12 @@ TEST_P(PacketPaths, HostileSpansThroughInstancesGiveTheSameAnswers) {
     }
     // Camera rays sparse and dense against the instances' leaves: both ways through an
     // instance's mesh (LargePacketTraversal::dense: 8-ray packets or a group).
-    for (const auto& [w, h] : {std::pair{64, 48}, std::pair{480, 360}}) {
+    for (const auto& [w, h] : {std::pair{64, 48}, std::pair{240, 180}}) {
       const RaySet primary = primary_rays(*scene, w, h);
       rays.insert(rays.end(), primary.rays.begin(), primary.rays.end());
     }
     int near_ties = 0;
-    for (size_t span : {size_t(9072), size_t(512), size_t(100), size_t(3)})
+    for (size_t span : {size_t(9072), size_t(512), size_t(37)})
       EXPECT_GT(expect_same_answers(*scene, paths, rays, span, "hostile instances, span " + std::to_string(span),
                                     near_ties, GetParam() == "watertight"),
                 1000);
