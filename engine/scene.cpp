@@ -42,11 +42,6 @@ uint32_t Scene::add_material(Material m) {
   return uint32_t(materials_.size() - 1);
 }
 
-/// Closest point of plane n.P + d = 0 to p (removes the error of org + t*dir along n).
-static Vec3f project_to_plane(const Vec3f& p, const Vec3f& n, float d) {
-  return p - n * ((dot(n, p) + d) / dot(n, n));
-}
-
 /// "(x, y, z)" for messages.
 static std::string show(const Vec3f& v) { return cat("(", v.x, ", ", v.y, ", ", v.z, ")"); }
 
@@ -301,9 +296,9 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
     }
     case PrimKind::sphere: {
       const Sphere& s = spheres_[ref.shape];
-      Vec3f n = normalize(ray.at(hit.t) - s.center);
-      sp.position = s.center + n * s.radius;
-      sp.geometric_normal = sp.shading_normal = n;
+      const PointLanes<float> p = sphere_point<float>(ray.org, ray.dir, hit.t, s.center, s.radius);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
       sp.material = s.material;
       break;
     }
@@ -318,18 +313,15 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
       sp.material = quadrics_[ref.shape].material;
       break;
     }
-    case PrimKind::polygon: {
-      const PolygonShape& p = polygons_[ref.shape];
-      sp.position = project_to_plane(ray.at(hit.t), p.plane.n, p.plane.d);
-      sp.geometric_normal = sp.shading_normal = normalize(p.plane.n);
-      sp.material = p.material;
-      break;
-    }
+    case PrimKind::polygon:
     case PrimKind::plane: {
-      const Plane& p = planes_[ref.shape];
-      sp.position = project_to_plane(ray.at(hit.t), p.normal, p.d);
-      sp.geometric_normal = sp.shading_normal = normalize(p.normal);
-      sp.material = p.material;
+      const bool polygon = ref.kind == PrimKind::polygon;
+      const Vec3f n = polygon ? polygons_[ref.shape].plane.n : planes_[ref.shape].normal;
+      const float d = polygon ? polygons_[ref.shape].plane.d : planes_[ref.shape].d;
+      const PointLanes<float> p = plane_point<float>(ray.org, ray.dir, hit.t, n, d);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
+      sp.material = polygon ? polygons_[ref.shape].material : planes_[ref.shape].material;
       break;
     }
   }

@@ -34,6 +34,24 @@ PointLanes<F> triangle_point(const Vec3<F> c[3], const Vec3<F> n[3], typename La
   return p;
 }
 
+/// A sphere hit at t along (org, dir): the normal unit(org + dir t - centre), the point
+/// centre + normal radius (on the sphere whatever the rounding of t).
+template <class F>
+PointLanes<F> sphere_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, const Vec3<F>& centre, const F& radius) {
+  const Vec3<F> n = unit(org + dir * t - centre);
+  return {centre + n * radius, n, n};
+}
+
+/// A hit at t along (org, dir) on the plane n . p + d = 0 (an unbounded plane's or a
+/// polygon's): org + dir t projected onto the plane (its closest point there, which removes
+/// the error of org + dir t along n), and unit(n).
+template <class F>
+PointLanes<F> plane_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, const Vec3<F>& n, const F& d) {
+  const Vec3<F> p = org + dir * t;
+  const Vec3<F> u = unit(n);
+  return {p - n * ((dot(n, p) + d) / dot(n, n)), u, u};
+}
+
 /// Where rounding leaves the geometric normal without a direction (a point computed at a tiny
 /// shape's centre from far away), both normals face the ray, and a non-finite position
 /// becomes org + t dir.

@@ -177,6 +177,54 @@ AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, st
           int8::load_aligned(material)};
 }
 
+/// The spheres', planes' and polygons' among the analytic hits `lanes` (prim ids `prim`): per
+/// lane a sphere's centre and radius or a plane's normal and d, and the material.
+struct ShapeInputs {
+  uint32_t sphere = 0, flat = 0;  ///< lanes on a sphere, on a plane or a polygon
+  V8 a;                           ///< centre or normal
+  float8 b;                       ///< radius or d
+  int8 material;
+};
+ShapeInputs shape_inputs(const Scene& scene, const float8& prim, uint32_t lanes) {
+  ShapeInputs in;
+  alignas(32) uint32_t ids[8];
+  simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
+  simd::Spill<4> s;
+  alignas(32) int32_t material[8] = {};
+  for (int lane = 0; lane < 8; ++lane) {
+    for (auto& row : s.lanes) row[lane] = 0.0f;
+    if (!(lanes >> lane & 1u)) continue;
+    const PrimLocation at = scene.locate(ids[lane]);
+    Vec3f a;
+    float b;
+    uint32_t m;
+    if (at.kind == PrimKind::sphere) {
+      const Sphere& sp = scene.spheres()[at.shape];
+      a = sp.center, b = sp.radius, m = sp.material;
+      in.sphere |= 1u << lane;
+    } else if (at.kind == PrimKind::plane) {
+      const Plane& pl = scene.planes()[at.shape];
+      a = pl.normal, b = pl.d, m = pl.material;
+      in.flat |= 1u << lane;
+    } else if (at.kind == PrimKind::polygon) {
+      const PolygonShape& pg = scene.polygons()[at.shape];
+      a = pg.plane.n, b = pg.plane.d, m = pg.material;
+      in.flat |= 1u << lane;
+    } else {
+      continue;  // a quadric: Scene::surface
+    }
+    s.lanes[0][lane] = a.x;
+    s.lanes[1][lane] = a.y;
+    s.lanes[2][lane] = a.z;
+    s.lanes[3][lane] = b;
+    material[lane] = int32_t(m);
+  }
+  in.a = {s.load(0), s.load(1), s.load(2)};
+  in.b = s.load(3);
+  in.material = int8::load_aligned(material);
+  return in;
+}
+
 /// The lanes `lanes` of `p`, the object-space points of hits on instances' triangles (rays
 /// `org`, `dir` at `t`), in world space as Scene::instance_surface makes them: fixed along the
 /// object-space ray, then mapped by each lane's instance.
@@ -247,9 +295,23 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
       material = t.material;
       if (instanced) p = instance_points(scene, hits, base, instanced, org, dir, hit_rows[0], p);
     }
-    if (analytic) {
-      const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, analytic);
-      const mask8 take = simd::mask_from_bits(analytic);
+    // Spheres, planes and polygons on 8 lanes (sphere_point, plane_point: Scene::surface's own
+    // code), quadrics through Scene::surface.
+    const ShapeInputs shapes = analytic ? shape_inputs(scene, hit_rows[1], analytic) : ShapeInputs{};
+    if (shapes.sphere | shapes.flat) {
+      const PointLanes<float8> ps = sphere_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
+      const PointLanes<float8> pp = plane_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
+      const mask8 sphere = simd::mask_from_bits(shapes.sphere), flat = simd::mask_from_bits(shapes.flat);
+      const auto pick = [&](const V8& s_, const V8& f_, const V8& other) {
+        return select<float8>(sphere, s_, select<float8>(flat, f_, other));
+      };
+      p = {pick(ps.position, pp.position, p.position), pick(ps.geometric_normal, pp.geometric_normal, p.geometric_normal),
+           pick(ps.shading_normal, pp.shading_normal, p.shading_normal)};
+      material = simd::as_int(xsimd::select(sphere | flat, simd::as_float(shapes.material), simd::as_float(material)));
+    }
+    if (const uint32_t quadric = analytic & ~(shapes.sphere | shapes.flat)) {
+      const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, quadric);
+      const mask8 take = simd::mask_from_bits(quadric);
       p = {select<float8>(take, a.p.position, p.position), select<float8>(take, a.p.geometric_normal, p.geometric_normal),
            select<float8>(take, a.p.shading_normal, p.shading_normal)};
       material = simd::as_int(xsimd::select(take, simd::as_float(a.material), simd::as_float(material)));

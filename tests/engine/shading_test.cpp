@@ -54,6 +54,10 @@ Scene shading_scene() {
     }
     s.add_mesh(std::move(m));
   }
+  // A polygon and a sphere with materials of their own (the analytic scene's use material 0).
+  const Vec3f corners[3] = {{-1.5f, 2.0f, 0.5f}, {1.5f, 2.2f, 0.4f}, {0.0f, 2.5f, -1.0f}};
+  s.add_polygon(corners, shiny);
+  s.add_sphere({{0.5f, -0.5f, 1.5f}, 0.25f, glow});
   // An instanced mesh (vertex normals, per-face materials) placed three times, one mirrored.
   TriangleMesh placed;
   placed.name = "placed";
