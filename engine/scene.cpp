@@ -305,11 +305,9 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
     case PrimKind::quadric: {
       // One Newton step along the gradient pulls org + t*dir (whose error grows with t)
       // back onto the surface, so that secondary-ray offsets of a few ulps suffice.
-      const Quadric<float>& q = quadrics_[ref.shape].quadric;
-      const Vec3f p = ray.at(hit.t), g = q.gradient(p);
-      const float gg = dot(g, g);
-      sp.position = gg > 0.0f ? p - g * (q.eval(p) / gg) : p;
-      sp.geometric_normal = sp.shading_normal = normalize(q.gradient(sp.position));
+      const PointLanes<float> p = quadric_point<float>(ray.org, ray.dir, hit.t, quadrics_[ref.shape].quadric);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
       sp.material = quadrics_[ref.shape].material;
       break;
     }

@@ -5,6 +5,7 @@
 /// bits.
 
 #include "engine/affine.h"
+#include "engine/geometry/quadric.h"
 #include "engine/lanes.h"
 #include "engine/math.h"
 
@@ -50,6 +51,17 @@ PointLanes<F> plane_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, co
   const Vec3<F> p = org + dir * t;
   const Vec3<F> u = unit(n);
   return {p - n * ((dot(n, p) + d) / dot(n, n)), u, u};
+}
+
+/// A hit at t along (org, dir) on quadric q: org + dir t pulled back onto the surface by one
+/// Newton step along the gradient (whose error grows with t), and the unit gradient there.
+template <class F>
+PointLanes<F> quadric_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, const Quadric<float>& q) {
+  const Vec3<F> p = org + dir * t, g = q.gradient<F>(p);
+  const F gg = dot(g, g);
+  const Vec3<F> at = select<F>(gg > F(0.0f), p - g * (q.eval<F>(p) / gg), p);
+  const Vec3<F> n = unit(q.gradient<F>(at));
+  return {at, n, n};
 }
 
 /// Where rounding leaves the geometric normal without a direction (a point computed at a tiny

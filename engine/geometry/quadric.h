@@ -43,23 +43,31 @@ struct Quadric {
   Box3<T> clip{Vec3<T>(-std::numeric_limits<T>::infinity()),
                Vec3<T>(std::numeric_limits<T>::infinity())};
 
+  // The evaluations take points with coordinates of type P: T itself, or lanes of T (several
+  // points against this one quadric, the renderer's 8-wide shading), with the same operations
+  // in the same order, so every lane has T's bits.
+
   /// Value of the implicit function at world point w: 0 on the surface, its sign tells the side.
-  constexpr T eval(const Vec3<T>& w) const { return eval_local(w - center); }
+  template <class P = T>
+  constexpr P eval(const Vec3<P>& w) const { return eval_local(w - Vec3<P>(center)); }
 
   /// Value of the implicit function at p = P - center.
-  constexpr T eval_local(const Vec3<T>& p) const {
-    return A * p.x * p.x + B * p.y * p.y + C * p.z * p.z + D * p.x * p.y + E * p.y * p.z +
-           F * p.x * p.z + G * p.x + H * p.y + I * p.z + J;
+  template <class P = T>
+  constexpr P eval_local(const Vec3<P>& p) const {
+    return P(A) * p.x * p.x + P(B) * p.y * p.y + P(C) * p.z * p.z + P(D) * p.x * p.y + P(E) * p.y * p.z +
+           P(F) * p.x * p.z + P(G) * p.x + P(H) * p.y + P(I) * p.z + P(J);
   }
 
   /// Gradient of eval at world point w: the unnormalized surface normal, pointing towards
   /// eval > 0.
-  constexpr Vec3<T> gradient(const Vec3<T>& w) const { return gradient_local(w - center); }
+  template <class P = T>
+  constexpr Vec3<P> gradient(const Vec3<P>& w) const { return gradient_local(w - Vec3<P>(center)); }
 
   /// Gradient at p = P - center: (2Ax + Dy + Fz + G, 2By + Dx + Ez + H, 2Cz + Ey + Fx + I).
-  constexpr Vec3<T> gradient_local(const Vec3<T>& p) const {
-    return {T(2) * A * p.x + D * p.y + F * p.z + G, T(2) * B * p.y + D * p.x + E * p.z + H,
-            T(2) * C * p.z + E * p.y + F * p.x + I};
+  template <class P = T>
+  constexpr Vec3<P> gradient_local(const Vec3<P>& p) const {
+    return {P(T(2) * A) * p.x + P(D) * p.y + P(F) * p.z + P(G), P(T(2) * B) * p.y + P(D) * p.x + P(E) * p.z + P(H),
+            P(T(2) * C) * p.z + P(E) * p.y + P(F) * p.x + P(I)};
   }
 
   /// World-space bounds of the clipped surface: the clip box.

@@ -177,10 +177,13 @@ AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, st
           int8::load_aligned(material)};
 }
 
-/// The spheres', planes' and polygons' among the analytic hits `lanes` (prim ids `prim`): per
-/// lane a sphere's centre and radius or a plane's normal and d, and the material.
+/// The analytic hits `lanes` (prim ids `prim`) by kind: per lane a sphere's centre and radius
+/// or a plane's normal and d, and the material; the quadric when every quadric lane has the
+/// same one.
 struct ShapeInputs {
   uint32_t sphere = 0, flat = 0;  ///< lanes on a sphere, on a plane or a polygon
+  uint32_t quadric = 0;           ///< lanes on a quadric
+  const QuadricShape* one_quadric = nullptr;  ///< theirs, when they share it
   V8 a;                           ///< centre or normal
   float8 b;                       ///< radius or d
   int8 material;
@@ -210,8 +213,12 @@ ShapeInputs shape_inputs(const Scene& scene, const float8& prim, uint32_t lanes)
       const PolygonShape& pg = scene.polygons()[at.shape];
       a = pg.plane.n, b = pg.plane.d, m = pg.material;
       in.flat |= 1u << lane;
-    } else {
-      continue;  // a quadric: Scene::surface
+    } else {  // a quadric
+      const QuadricShape* q = &scene.quadrics()[at.shape];
+      in.one_quadric = (!in.quadric || in.one_quadric == q) ? q : nullptr;
+      in.quadric |= 1u << lane;
+      material[lane] = int32_t(q->material);
+      continue;
     }
     s.lanes[0][lane] = a.x;
     s.lanes[1][lane] = a.y;
@@ -295,8 +302,8 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
       material = t.material;
       if (instanced) p = instance_points(scene, hits, base, instanced, org, dir, hit_rows[0], p);
     }
-    // Spheres, planes and polygons on 8 lanes (sphere_point, plane_point: Scene::surface's own
-    // code), quadrics through Scene::surface.
+    // Spheres, planes, polygons and one quadric on 8 lanes (sphere_point, plane_point,
+    // quadric_point: Scene::surface's own code); several quadrics through Scene::surface.
     const ShapeInputs shapes = analytic ? shape_inputs(scene, hit_rows[1], analytic) : ShapeInputs{};
     if (shapes.sphere | shapes.flat) {
       const PointLanes<float8> ps = sphere_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
@@ -309,7 +316,14 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
            pick(ps.shading_normal, pp.shading_normal, p.shading_normal)};
       material = simd::as_int(xsimd::select(sphere | flat, simd::as_float(shapes.material), simd::as_float(material)));
     }
-    if (const uint32_t quadric = analytic & ~(shapes.sphere | shapes.flat)) {
+    if (shapes.one_quadric) {  // one quadric's lanes on 8 lanes too (quadric_point)
+      const PointLanes<float8> pq = quadric_point<float8>(org, dir, hit_rows[0], shapes.one_quadric->quadric);
+      const mask8 take = simd::mask_from_bits(shapes.quadric);
+      p = {select<float8>(take, pq.position, p.position), select<float8>(take, pq.geometric_normal, p.geometric_normal),
+           select<float8>(take, pq.shading_normal, p.shading_normal)};
+      material = simd::as_int(xsimd::select(take, simd::as_float(shapes.material), simd::as_float(material)));
+    }
+    if (const uint32_t quadric = shapes.one_quadric ? 0u : shapes.quadric) {  // several quadrics: Scene::surface
       const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, quadric);
       const mask8 take = simd::mask_from_bits(quadric);
       p = {select<float8>(take, a.p.position, p.position), select<float8>(take, a.p.geometric_normal, p.geometric_normal),
