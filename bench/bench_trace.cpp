@@ -261,10 +261,10 @@ int main(int argc, char** argv) {
         const bool diffuse = std::string_view(kind) == "diffuse";
         const Coherence coh = diffuse || m.rays == Rays::all_incoherent ? Coherence::incoherent : Coherence::coherent;
         if (m.rays == Rays::all || m.rays == Rays::all_incoherent || (m.rays == Rays::incoherent) == diffuse)
-          benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label, scene,
-                                       std::string(kind), coh)
-            ->Unit(benchmark::kMillisecond)
-            ->UseRealTime();
+          benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label,
+                                       scene, std::string(kind), coh)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
       }
       if (m.rays == Rays::all)
         benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)

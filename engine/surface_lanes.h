@@ -89,7 +89,8 @@ struct AffineLanes {
   }
   /// Affine3::point: m p + t, each row's sum from left to right.
   Vec3<F> point(const Vec3<F>& p) const {
-    return {m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3], m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+    return {m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+            m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
             m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]};
   }
   /// Affine3::transpose_vector: L^T v.
@@ -117,7 +118,8 @@ struct AffineLanes {
 template <class F>
 PointLanes<F> instance_point(const PointLanes<F>& local, const AffineLanes<F>& object_to_world,
                              const AffineLanes<F>& world_to_object, const F& orientation) {
-  return {object_to_world.point(local.position), unit(world_to_object.transpose_vector(local.geometric_normal)) * orientation,
+  return {object_to_world.point(local.position),
+          unit(world_to_object.transpose_vector(local.geometric_normal)) * orientation,
           unit(world_to_object.transpose_vector(local.shading_normal)) * orientation};
 }
 

@@ -92,9 +92,8 @@ class StreamTraversal {
   /// A thread's buffers, reused from batch to batch.
   struct Scratch {
     std::vector<StreamRay> rays;
-    std::vector<uint8_t> streamed;  ///< the ray goes through the stream (else it was traced alone)
-    std::vector<uint32_t> ids;      ///< every pending stream, back to back
-    std::vector<uint8_t> bits;      ///< each ray's hit mask at the node being split
+    std::vector<uint32_t> ids;  ///< every pending stream, back to back
+    std::vector<uint8_t> bits;  ///< each ray's hit mask at the node being split
     std::vector<Frame> frames;
   };
   /// A thread's buffers: level 0 for the world's tree and the instance tree, level 1 for an
@@ -137,12 +136,12 @@ class StreamTraversal {
       if (!valid_ray(rays[i])) continue;
       if (!enter(rays[i], i, hits[i].t, s, count)) t_.closest(rays[i], 0, hits[i], inst);
     }
-    traverse<false>(bvh_.nodes.data(), false, count, s,
-                    [&](const Frame& f) { leaf_closest(f, s, rays, hits, inst); },
-                    [&](uint32_t i, int32_t ref) {
-                      t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i], inst);
-                      s.rays[i].tfar = hits[i].t;
-                    });
+    traverse<false>(
+        bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_closest(f, s, rays, hits, inst); },
+        [&](uint32_t i, int32_t ref) {
+          t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i], inst);
+          s.rays[i].tfar = hits[i].t;
+        });
   }
 
   /// Any hits in this traversal's tree of the valid rays of `rays` not occluded already
@@ -160,10 +159,11 @@ class StreamTraversal {
       out[i] = 1;
       s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
     };
-    traverse<true>(bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
-                   [&](uint32_t i, int32_t ref) {
-                     if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
-                   });
+    traverse<true>(
+        bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
+        [&](uint32_t i, int32_t ref) {
+          if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
+        });
   }
 
   /// Any hit of valid ray `r` in subtree `ref` of this traversal's tree alone.
@@ -226,7 +226,8 @@ class StreamTraversal {
       }
     };
     instance_streams<false>(
-        in, rays, [&](size_t i) { return hits[i].t; }, nullptr, at_instance, [&](uint32_t i) { in.closest(rays[i], hits[i]); },
+        in, rays, [&](size_t i) { return hits[i].t; }, nullptr, at_instance,
+        [&](uint32_t i) { in.closest(rays[i], hits[i]); },
         [&](uint32_t i, int32_t ref) {
           in.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i]);
           s.rays[i].tfar = hits[i].t;
@@ -256,7 +257,8 @@ class StreamTraversal {
         if (ob.out[k] && !out[s.ids[f.begin + k]]) done(s.ids[f.begin + k]);
     };
     instance_streams<true>(
-        in, rays, [&](size_t i) { return rays[i].tfar; }, out.data(), at_instance, [&](uint32_t i) { out[i] = in.any(rays[i]); },
+        in, rays, [&](size_t i) { return rays[i].tfar; }, out.data(), at_instance,
+        [&](uint32_t i) { out[i] = in.any(rays[i]); },
         [&](uint32_t i, int32_t ref) {
           if (!out[i] && in.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
         });
@@ -265,7 +267,6 @@ class StreamTraversal {
   static void prepare(size_t n, Scratch& s) {
     if (s.rays.size() < n) s.rays.resize(n);
     if (s.ids.size() < n) s.ids.resize(n);
-    s.streamed.assign(n, 0);
     s.frames.clear();
   }
 
@@ -278,7 +279,6 @@ class StreamTraversal {
     if (q.slab.exact) return false;
     q.tnear = r.tnear + 0.0f;
     q.tfar = tfar;
-    s.streamed[i] = 1;
     s.ids[count++] = uint32_t(i);
     return true;
   }
@@ -293,8 +293,7 @@ class StreamTraversal {
     while (!s.frames.empty()) {
       const Frame f = s.frames.back();
       s.frames.pop_back();
-      if (f.count < kMinStream ||
-          (!instances && is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
+      if (f.count < kMinStream || (!instances && is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
         for (uint32_t k = 0; k < f.count; ++k) alone(s.ids[f.begin + k], f.ref);
       } else if (is_leaf(f.ref)) {
         leaf(f);

@@ -49,7 +49,9 @@ struct Quadric {
 
   /// Value of the implicit function at world point w: 0 on the surface, its sign tells the side.
   template <class P = T>
-  constexpr P eval(const Vec3<P>& w) const { return eval_local(w - Vec3<P>(center)); }
+  constexpr P eval(const Vec3<P>& w) const {
+    return eval_local(w - Vec3<P>(center));
+  }
 
   /// Value of the implicit function at p = P - center.
   template <class P = T>
@@ -61,7 +63,9 @@ struct Quadric {
   /// Gradient of eval at world point w: the unnormalized surface normal, pointing towards
   /// eval > 0.
   template <class P = T>
-  constexpr Vec3<P> gradient(const Vec3<P>& w) const { return gradient_local(w - Vec3<P>(center)); }
+  constexpr Vec3<P> gradient(const Vec3<P>& w) const {
+    return gradient_local(w - Vec3<P>(center));
+  }
 
   /// Gradient at p = P - center: (2Ax + Dy + Fz + G, 2By + Dx + Ez + H, 2Cz + Ey + Fx + I).
   template <class P = T>

@@ -181,11 +181,11 @@ AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, st
 /// or a plane's normal and d, and the material; the quadric when every quadric lane has the
 /// same one.
 struct ShapeInputs {
-  uint32_t sphere = 0, flat = 0;  ///< lanes on a sphere, on a plane or a polygon
-  uint32_t quadric = 0;           ///< lanes on a quadric
+  uint32_t sphere = 0, flat = 0;              ///< lanes on a sphere, on a plane or a polygon
+  uint32_t quadric = 0;                       ///< lanes on a quadric
   const QuadricShape* one_quadric = nullptr;  ///< theirs, when they share it
-  V8 a;                           ///< centre or normal
-  float8 b;                       ///< radius or d
+  V8 a;                                       ///< centre or normal
+  float8 b;                                   ///< radius or d
   int8 material;
 };
 ShapeInputs shape_inputs(const Scene& scene, const float8& prim, uint32_t lanes) {
@@ -270,7 +270,8 @@ PointLanes<float8> instance_points(const Scene& scene, std::span<const Hit> hits
   fix_degenerate_normal<float8>(local, object_org, object_dir, t);
   const PointLanes<float8> world = instance_point<float8>(local, to_world, to_object, orientation);
   const mask8 take = simd::mask_from_bits(lanes);
-  return {select<float8>(take, world.position, p.position), select<float8>(take, world.geometric_normal, p.geometric_normal),
+  return {select<float8>(take, world.position, p.position),
+          select<float8>(take, world.geometric_normal, p.geometric_normal),
           select<float8>(take, world.shading_normal, p.shading_normal)};
 }
 
@@ -312,7 +313,8 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
       const auto pick = [&](const V8& s_, const V8& f_, const V8& other) {
         return select<float8>(sphere, s_, select<float8>(flat, f_, other));
       };
-      p = {pick(ps.position, pp.position, p.position), pick(ps.geometric_normal, pp.geometric_normal, p.geometric_normal),
+      p = {pick(ps.position, pp.position, p.position),
+           pick(ps.geometric_normal, pp.geometric_normal, p.geometric_normal),
            pick(ps.shading_normal, pp.shading_normal, p.shading_normal)};
       material = simd::as_int(xsimd::select(sphere | flat, simd::as_float(shapes.material), simd::as_float(material)));
     }

@@ -43,7 +43,8 @@ std::vector<std::string> backend_variants() {
     if (b.available) {
       for (const std::string& v : b.variants) out.push_back(b.name + "/" + v);
       for (size_t m = 1; m < b.coherent_methods.size(); ++m) out.push_back(b.name + "/default@" + b.coherent_methods[m]);
-      for (size_t m = 1; m < b.incoherent_methods.size(); ++m) out.push_back(b.name + "/default@incoherent-" + b.incoherent_methods[m]);
+      for (size_t m = 1; m < b.incoherent_methods.size(); ++m)
+        out.push_back(b.name + "/default@incoherent-" + b.incoherent_methods[m]);
     }
   return out;
 }
@@ -451,7 +452,10 @@ TEST(Registry, UnknownVariantOrMethodIsAnError) {
   EXPECT_THROW(make_backend("simd", scene, {.variant = "fastest", .device_config = {}, .coherent_method = {}, .incoherent_method = {}}), Error);
   EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = "large", .incoherent_method = {}}), Error);
   EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = "stream", .incoherent_method = {}}), Error);
-  EXPECT_THROW(make_backend("embree", scene, {.variant = "default", .device_config = {}, .coherent_method = {}, .incoherent_method = "large"}), Error);
+  EXPECT_THROW(
+      make_backend("embree", scene,
+                   {.variant = "default", .device_config = {}, .coherent_method = {}, .incoherent_method = "large"}),
+      Error);
   EXPECT_THROW(make_backend("simd", scene, {.variant = "default", .device_config = {}, .coherent_method = {}, .incoherent_method = "packet8"}), Error);
 }
 

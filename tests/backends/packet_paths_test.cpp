@@ -236,9 +236,10 @@ TEST_P(PacketPaths, HostileSpansThroughInstancesGiveTheSameAnswers) {
     const Scene ball = tessellated_sphere(24, 12), soup = triangle_soup(21, 300);
     const uint32_t b = only.add_instanced_mesh(ball.meshes()[0]), q = only.add_instanced_mesh(soup.meshes()[0]);
     for (int i = 0; i < 12; ++i)
-      only.add_instance(i % 3 ? b : q, test::placement({0.3f, 0.25f + 0.02f * float(i), 0.3f}, {1, float(i % 4), 0.5f},
-                                                       30.0f * float(i), {0.5f * float(i % 4) - 0.8f,
-                                                                         0.5f * float(i / 4) - 0.5f, 0.1f * float(i)}));
+      only.add_instance(
+          i % 3 ? b : q,
+          test::placement({0.3f, 0.25f + 0.02f * float(i), 0.3f}, {1, float(i % 4), 0.5f}, 30.0f * float(i),
+                          {0.5f * float(i % 4) - 0.8f, 0.5f * float(i / 4) - 0.5f, 0.1f * float(i)}));
     const float tiny = 2.0f / kMaxInstanceScale;  // the most shrunk placement allowed
     only.add_instance(b, test::placement({tiny, tiny, tiny}, {0, 1, 0}, 0.0f, {0.05f, 0.0f, 0.0f}));
   }
