@@ -149,17 +149,23 @@ template <typename T>
 constexpr RayT<T> object_ray(const RayT<T>& r, const Affine3<T>& w) {
   return {w.point(r.org), r.tnear, w.vector(r.dir), r.tfar};
 }
-inline Ray object_ray(const Ray& r, const Affine3f& w) {
+/// The float map's fused form (below) of an origin o and a direction d, for one lane (float:
+/// std::fma) or several (an xsimd batch: its fma, found by argument-dependent lookup: the
+/// renderer's 8-wide shading of instance hits), with the same bits in every lane.
+template <typename T>
+void object_ray_fused(const Affine3<T>& w, const Vec3<T>& o, const Vec3<T>& d, Vec3<T>& oo, Vec3<T>& od) {
+  using std::fma;
   const auto& m = w.m;
-  const Vec3f& o = r.org;
-  const Vec3f& d = r.dir;
-  Vec3f po, pd;
-  float* out_o[3] = {&po.x, &po.y, &po.z};
-  float* out_d[3] = {&pd.x, &pd.y, &pd.z};
+  T* out_o[3] = {&oo.x, &oo.y, &oo.z};
+  T* out_d[3] = {&od.x, &od.y, &od.z};
   for (int i = 0; i < 3; ++i) {
-    *out_o[i] = std::fma(o.x, m[i][0], std::fma(o.y, m[i][1], std::fma(o.z, m[i][2], m[i][3])));
-    *out_d[i] = std::fma(d.x, m[i][0], std::fma(d.y, m[i][1], d.z * m[i][2]));
+    *out_o[i] = fma(o.x, m[i][0], fma(o.y, m[i][1], fma(o.z, m[i][2], m[i][3])));
+    *out_d[i] = fma(d.x, m[i][0], fma(d.y, m[i][1], d.z * m[i][2]));
   }
+}
+inline Ray object_ray(const Ray& r, const Affine3f& w) {
+  Vec3f po, pd;
+  object_ray_fused(w, r.org, r.dir, po, pd);
   return {po, r.tnear, pd, r.tfar};
 }
 

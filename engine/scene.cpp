@@ -269,8 +269,8 @@ bool Scene::occluded_by_any_plane(const Ray& ray) const {
   const Instance& in = instances_[hit.instance_id];
   const SurfacePoint local = surface(object_ray(ray, in.world_to_object), {hit.t, hit.prim_id, hit.u, hit.v});
   PointLanes<float> p = instance_point<float>({local.position, local.geometric_normal, local.shading_normal},
-                                              AffineLanes<float>(in.object_to_world),
-                                              AffineLanes<float>(in.world_to_object), in.orientation);
+                                              in.object_to_world, in.world_to_object,
+                                              in.orientation);
   fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
   return {p.position, p.geometric_normal, p.shading_normal, local.material};
 }

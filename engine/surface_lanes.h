@@ -76,48 +76,14 @@ void fix_degenerate_normal(PointLanes<F>& p, const Vec3<F>& org, const Vec3<F>& 
   p.position = select<F>(bad && !finite3(p.position), org + dir * t, p.position);
 }
 
-/// Affine maps in lanes: row-major 3 x 4 as Affine3, one map per lane.
-template <class F>
-struct AffineLanes {
-  F m[3][4];
-
-  AffineLanes() = default;
-  /// One map in every lane.
-  explicit AffineLanes(const Affine3f& a) {
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 4; ++j) m[i][j] = F(a.m[i][j]);
-  }
-  /// Affine3::point: m p + t, each row's sum from left to right.
-  Vec3<F> point(const Vec3<F>& p) const {
-    return {m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
-            m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
-            m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]};
-  }
-  /// Affine3::transpose_vector: L^T v.
-  Vec3<F> transpose_vector(const Vec3<F>& v) const {
-    return {m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z, m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
-            m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z};
-  }
-  /// rp::object_ray's origin and direction (its fused form) for the ray (o, d).
-  void object_ray(const Vec3<F>& o, const Vec3<F>& d, Vec3<F>& oo, Vec3<F>& od) const {
-    using L = Lanes<F>;
-    F* out_o[3] = {&oo.x, &oo.y, &oo.z};
-    F* out_d[3] = {&od.x, &od.y, &od.z};
-    for (int i = 0; i < 3; ++i) {
-      *out_o[i] = L::fma(o.x, m[i][0], L::fma(o.y, m[i][1], L::fma(o.z, m[i][2], m[i][3])));
-      *out_d[i] = L::fma(d.x, m[i][0], L::fma(d.y, m[i][1], d.z * m[i][2]));
-    }
-  }
-};
-
 /// The world point and normals of a hit on an instance's triangle (Scene::instance_surface)
 /// from `local`, its point and normals in the instance's object space (triangle_point, then
 /// fix_degenerate_normal along the object-space ray): the point mapped by `object_to_world`,
 /// each normal by the inverse transpose (`world_to_object`'s L^T), normalised and turned by
 /// `orientation` (-1 for a mirroring map).
 template <class F>
-PointLanes<F> instance_point(const PointLanes<F>& local, const AffineLanes<F>& object_to_world,
-                             const AffineLanes<F>& world_to_object, const F& orientation) {
+PointLanes<F> instance_point(const PointLanes<F>& local, const Affine3<F>& object_to_world,
+                             const Affine3<F>& world_to_object, const F& orientation) {
   return {object_to_world.point(local.position),
           unit(world_to_object.transpose_vector(local.geometric_normal)) * orientation,
           unit(world_to_object.transpose_vector(local.shading_normal)) * orientation};

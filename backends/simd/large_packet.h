@@ -24,7 +24,8 @@
 /// packets from the root.
 ///
 /// In a scene with instances the same groups then go down the instance tree (instances.h)
-/// as they went down the world's: beam, partition ranges, near-first order. At an instance,
+/// with their beam and near-first order, the members that reach each subtree kept as bits
+/// (not a range: see MaskEntry). At an instance,
 /// the members whose rays reach its box are mapped into its object space (rp::object_ray per
 /// lane, the single-ray path's bits), regrouped by their object-space octants and traced
 /// through the mesh's tree as a large packet of their own, sharing the world packets' hits
@@ -673,15 +674,15 @@ class LargePacketTraversal {
   }
 
   /// The lanes `lanes[j]` of the m world packets `which[j]` of `w` in the object space of
-  /// instance `pl`, loaded as object packet j of `ow` (its rays in ow.rays); the regrouping
-  /// by object-space octant in `g`. Returns the object-space rays.
+  /// instance `pl`, loaded as object packet j of `ow` (its rays in ow.rays, its hits left
+  /// for the caller); the regrouping by object-space octant in `g`. Returns the object-space
+  /// rays.
   static std::span<const Ray> to_object(const typename InstanceQueries<Kernel>::Placed& pl, std::span<const Ray> rays,
-                                        const uint8_t* which, const uint32_t* lanes, int m, Work& ow, bool closest,
-                                        Groups& g) {
+                                        const uint8_t* which, const uint32_t* lanes, int m, Work& ow, Groups& g) {
     for (int j = 0; j < m; ++j)
       object_rays(pl.world_to_object, packet_rays(rays, which[j]), lanes[j], &ow.rays[8 * size_t(j)]);
     const std::span<const Ray> orays(ow.rays.data(), 8 * size_t(m));
-    LargePacketTraversal(*pl.mesh).load(orays, ow, closest);
+    LargePacketTraversal(*pl.mesh).load(orays, ow, false);
     group(ow, g);
     return orays;
   }
@@ -694,7 +695,7 @@ class LargePacketTraversal {
       const typename InstanceQueries<Kernel>::Placed& pl = in.placed(id);
       if (pl.mesh->bvh().empty()) return;
       Groups g;
-      const std::span<const Ray> orays = to_object(pl, rays, which, lanes, m, ow, false, g);
+      const std::span<const Ray> orays = to_object(pl, rays, which, lanes, m, ow, g);
       for (int j = 0; j < m; ++j) ow.packets[size_t(j)].h = w.packets[which[j]].h;  // t is the world t
       const LargePacketTraversal mesh(*pl.mesh);
       for (int o = 0; o < 8; ++o)
@@ -733,7 +734,7 @@ class LargePacketTraversal {
       const typename InstanceQueries<Kernel>::Placed& pl = in.placed(id);
       if (pl.mesh->bvh().empty()) return;
       Groups g;
-      const std::span<const Ray> orays = to_object(pl, rays, which, lanes, m, ow, false, g);
+      const std::span<const Ray> orays = to_object(pl, rays, which, lanes, m, ow, g);
       uint32_t found[kMaxPackets] = {};
       const LargePacketTraversal mesh(*pl.mesh);
       for (int o = 0; o < 8; ++o)

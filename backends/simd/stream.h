@@ -153,7 +153,7 @@ class StreamTraversal {
     uint32_t count = 0;
     for (size_t i = 0; i < n; ++i) {
       if (out[i] || !valid_ray(rays[i])) continue;
-      if (!enter(rays[i], i, rays[i].tfar, s, count)) out[i] = any(rays[i], 0);
+      if (!enter(rays[i], i, rays[i].tfar, s, count)) out[i] = t_.any(rays[i], 0);
     }
     const auto done = [&](uint32_t i) {
       out[i] = 1;
@@ -165,9 +165,6 @@ class StreamTraversal {
           if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
         });
   }
-
-  /// Any hit of valid ray `r` in subtree `ref` of this traversal's tree alone.
-  bool any(const Ray& r, int32_t ref) const noexcept { return t_.any(r, ref); }
 
   // ---- the instance level ----
 

@@ -240,12 +240,12 @@ PointLanes<float8> instance_points(const Scene& scene, std::span<const Hit> hits
   const uint32_t first = hits[base + size_t(std::countr_zero(lanes))].instance_id;
   bool one = true;
   for (uint32_t b = lanes; b; b &= b - 1) one = one && hits[base + size_t(std::countr_zero(b))].instance_id == first;
-  AffineLanes<float8> to_world, to_object;
+  Affine3<float8> to_world, to_object;
   float8 orientation;
   if (one) {
     const Instance& in = scene.instances()[first];
-    to_world = AffineLanes<float8>(in.object_to_world);
-    to_object = AffineLanes<float8>(in.world_to_object);
+    to_world = Affine3<float8>(in.object_to_world);
+    to_object = Affine3<float8>(in.world_to_object);
     orientation = float8(in.orientation);
   } else {
     simd::Spill<25> s;  // object_to_world's 12 rows, world_to_object's 12, the orientation
@@ -265,7 +265,7 @@ PointLanes<float8> instance_points(const Scene& scene, std::span<const Hit> hits
     orientation = s.load(24);
   }
   V8 object_org, object_dir;
-  to_object.object_ray(org, dir, object_org, object_dir);
+  object_ray_fused(to_object, org, dir, object_org, object_dir);
   PointLanes<float8> local = p;
   fix_degenerate_normal<float8>(local, object_org, object_dir, t);
   const PointLanes<float8> world = instance_point<float8>(local, to_world, to_object, orientation);
