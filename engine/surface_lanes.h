@@ -70,6 +70,7 @@ PointLanes<F> quadric_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, 
 template <class F>
 void fix_degenerate_normal(PointLanes<F>& p, const Vec3<F>& org, const Vec3<F>& dir, const F& t) {
   const auto bad = !(dot(p.geometric_normal, p.geometric_normal) > F(0.5f));
+  if (!Lanes<F>::any(bad)) return;  // the usual case: nothing to fix
   const Vec3<F> facing = -unit(dir);
   p.geometric_normal = select<F>(bad, facing, p.geometric_normal);
   p.shading_normal = select<F>(bad, facing, p.shading_normal);

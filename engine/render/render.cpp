@@ -89,7 +89,8 @@ struct Tracer {
 
 /// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
 struct ShadeWork {
-  std::vector<Ray> rays, next_rays;
+  std::vector<Ray> primary, rays, next_rays;  ///< primary: kept at a tile's size for all its samples
+  std::vector<PathState> primary_paths;
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
@@ -130,29 +131,32 @@ void bounce(const Scene& scene, const BounceHit& b, const PathState& ps, ShadeWo
   }
 }
 
-/// Shades the primary rays in w.rays / w.paths (whose groups of 8 are packets), adding each
+/// Shades the primary rays `primary` / `primary_paths` (whose groups of 8 are packets), adding each
 /// path's radiance to out[slot]: Blinn-Phong with shadow rays through occluded(), then the
 /// bounces, up to max_depth, traced as incoherent batches. The per-hit work is the batch
 /// shader's (shade_group.h: 8 hits at a time where the CPU allows).
-void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, int max_depth, ShadeWork& w,
-           std::span<Vec3f> out, Counters& n) {
+void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_batch, int max_depth,
+           std::span<const Ray> primary, std::span<const PathState> primary_paths, ShadeWork& w, std::span<Vec3f> out,
+           Counters& n) {
   const size_t n_lights = scene.shadow_tfar.size();
   w.shadow_rays.resize(n_lights);
   w.pending.resize(n_lights);
-  for (int depth = 0; !w.rays.empty(); ++depth) {
+  std::span<const Ray> rays = primary;
+  std::span<const PathState> paths = primary_paths;
+  for (int depth = 0; !rays.empty(); ++depth) {
     const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
-    w.hits.resize(w.rays.size());
-    backend.intersect(w.rays, w.hits, coherence);
+    w.hits.resize(rays.size());
+    backend.intersect(rays, w.hits, coherence);
     for (size_t l = 0; l < n_lights; ++l) {
       w.shadow_rays[l].clear();
       w.pending[l].clear();
     }
     w.bounces.clear();
     ShadeOut sink{out, w.shadow_rays, w.pending, w.bounces};
-    shade_batch(scene, w.rays, w.hits, w.paths, depth < max_depth, sink);
+    shade_batch(scene, rays, w.hits, paths, depth < max_depth, sink);
     w.next_rays.clear();
     w.next_paths.clear();
-    for (const BounceHit& b : w.bounces) bounce(scene.scene, b, w.paths[b.ray], w, n);
+    for (const BounceHit& b : w.bounces) bounce(scene.scene, b, paths[b.ray], w, n);
     // Contributions are added light by light, in batch order: a fixed order for the tile,
     // whatever the thread count.
     for (size_t l = 0; l < n_lights; ++l) {
@@ -165,6 +169,8 @@ void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_ba
     }
     std::swap(w.rays, w.next_rays);
     std::swap(w.paths, w.next_paths);
+    rays = w.rays;
+    paths = w.paths;
   }
 }
 
@@ -191,8 +197,8 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
   for (int s = 0; s < st.spp; ++s) {
     const SampleStreams::Stratum stratum = streams.stratum(s);
     // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
-    w.rays.resize(kTile * kTile);
-    w.paths.resize(kTile * kTile);
+    w.primary.resize(kTile * kTile);
+    w.primary_paths.resize(kTile * kTile);
     size_t at = 0;
     for (int by = 0; by < kTile; by += 2)
       for (int bx = 0; bx < kTile; bx += 4, at += 8) {
@@ -204,23 +210,23 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
           py[lane] = base_y[at + size_t(lane)] + j.y;
           if (thin_lens) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);
         }
-        camera.generate8(px, py, thin_lens ? lens : nullptr, &w.rays[at]);
+        camera.generate8(px, py, thin_lens ? lens : nullptr, &w.primary[at]);
         for (int lane = 0; lane < 8; ++lane) {
           const int lx = bx + lane % 4, ly = by + lane / 4;
-          Ray& r = w.rays[at + size_t(lane)];
+          Ray& r = w.primary[at + size_t(lane)];
           if (x0 + lx >= st.width || y0 + ly >= st.height) {
             r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
-            w.paths[at + size_t(lane)] = {kInvalidId, {}};
+            w.primary_paths[at + size_t(lane)] = {kInvalidId, {}};
             continue;
           }
           // No ray (outside a fisheye's image circle): the pixel stays black. A pinhole ray is
           // valid by construction (the camera checked its eye; its direction is unit length).
           const bool valid = pinhole || valid_ray(r);
-          w.paths[at + size_t(lane)] = {valid ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}};
+          w.primary_paths[at + size_t(lane)] = {valid ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}};
           primary += valid;
         }
       }
-    shade(scene, backend, shade_batch, st.max_depth, w, tile, n);
+    shade(scene, backend, shade_batch, st.max_depth, w.primary, w.primary_paths, w, tile, n);
   }
   const float inv = 1.0f / float(st.spp);
   for (Vec3f& c : tile) c *= inv;
@@ -257,7 +263,7 @@ uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatc
       primary += valid_ray(r);
     }
     shaded.assign(wanted.size(), Vec3f{});
-    shade(scene, backend, shade_batch, st.max_depth, w, shaded, n);
+    shade(scene, backend, shade_batch, st.max_depth, w.rays, w.paths, w, shaded, n);
     for (size_t i = 0; i < wanted.size(); ++i) colour[key(wanted[i].first, wanted[i].second)] = shaded[i];
     wanted.clear();
   };

@@ -1,14 +1,13 @@
 // shade_batch8 (shade_group.h): a batch shaded eight rays at a time. A group of 8 is read as
-// vectors (rays, hits and paths transposed from their records; its triangles' corners,
-// vertex normals and materials gathered when they share a mesh, read lane by lane when they
-// do not); its triangles' surface points (triangle_point; an instance's triangle's in its
-// object space, then mapped into the world by each lane's instance, instance_point) run on
-// float8 lanes, its analytic hits' come from Scene::surface lane by lane, then all of
-// shading.h runs on float8 lanes, and
-// its shadow rays and waiting contributions are transposed back into records and appended in
-// lane order. The last few rays of a batch go a ray at a time (shade_ray): the same bits
-// either way. Built for AVX2+FMA; the renderer calls it only on such a CPU
-// (shade_batch_function).
+// vectors: rays, hits and paths transposed from their records; its triangles' corners, vertex
+// normals and materials broadcast when every hit is on one triangle, gathered when they share
+// a mesh, read lane by lane when they do not. Its surface points run on float8 lanes
+// (surface_lanes.h: triangle_point, instance_point for an instance's triangle, sphere_point,
+// plane_point, quadric_point where the group's quadric hits share one quadric; hits on
+// several quadrics come from Scene::surface lane by lane), then all of shading.h, and its
+// shadow rays and waiting contributions are transposed back into records and appended in lane
+// order. The last few rays of a batch go a ray at a time (shade_ray): the same bits either
+// way. Built for AVX2+FMA; the renderer calls it only on such a CPU (shade_batch_function).
 
 #include <algorithm>
 #include <bit>
@@ -39,16 +38,49 @@ struct TriangleInputs {
   int8 material;
 };
 
-/// Gathers them as vectors when every hit lies in one mesh, else reads them lane by lane.
-TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t hit) {
+/// The triangles [begin, end) of one mesh: the last one a batch's hits were found in, so
+/// that most groups need no Scene::locate.
+struct MeshRange {
+  uint32_t mesh = 0, begin = 0, end = 0;
+  /// The mesh of triangle `id`, remembered.
+  uint32_t of(const Scene& scene, uint32_t id) {
+    if (id < begin || id >= end) {
+      mesh = scene.locate(id).shape;
+      begin = scene.mesh_base(mesh);
+      end = begin + scene.meshes()[mesh].triangle_count();
+    }
+    return mesh;
+  }
+};
+
+/// Gathers them as vectors when every hit lies in one mesh (broadcasts them when every hit
+/// is on one triangle, as a packet's rays on a large triangle are), else reads them lane by
+/// lane. The same bits each way: only the hit lanes are read.
+TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t hit, MeshRange& range) {
   TriangleInputs in;
   alignas(32) uint32_t ids[8];
   simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
   const uint32_t first = ids[std::countr_zero(hit)];
-  const uint32_t mesh = scene.locate(first).shape;
-  const uint32_t begin = scene.mesh_base(mesh), end = begin + scene.meshes()[mesh].triangle_count();
-  bool one_mesh = true;
-  for (uint32_t b = hit; b; b &= b - 1) one_mesh = one_mesh && ids[std::countr_zero(b)] >= begin && ids[std::countr_zero(b)] < end;
+  const uint32_t mesh = range.of(scene, first);
+  const uint32_t begin = range.begin, end = range.end;
+  bool one_mesh = true, one_triangle = true;
+  for (uint32_t b = hit; b; b &= b - 1) {
+    const uint32_t id = ids[std::countr_zero(b)];
+    one_mesh = one_mesh && id >= begin && id < end;
+    one_triangle = one_triangle && id == first;
+  }
+  if (one_triangle) {
+    const TriangleMesh& m = scene.meshes()[mesh];
+    const uint32_t local = first - begin;
+    const uint32_t* idx = &m.indices[3 * size_t(local)];
+    for (int k = 0; k < 3; ++k) {
+      in.c[k] = V8(m.positions[idx[k]]);
+      in.n[k] = m.normals.empty() ? V8(Vec3f{0.0f}) : V8(m.normals[idx[k]]);
+    }
+    in.has_normals = simd::mask_from_bits(m.normals.empty() ? 0u : 0xffu);
+    in.material = int8(int32_t(m.face_materials.empty() ? m.material : m.face_materials[local]));
+    return in;
+  }
   if (one_mesh) {
     const TriangleMesh& m = scene.meshes()[mesh];
     const mask8 on = simd::mask_from_bits(hit);
@@ -280,7 +312,7 @@ PointLanes<float8> instance_points(const Scene& scene, std::span<const Hit> hits
 /// Scene::surface, then the shading of every hit on 8 lanes.
 void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit> hits, const float8 hit_rows[4],
             const float8 path_rows[4], size_t base, uint32_t live, uint32_t hit, uint32_t triangle, uint32_t instanced,
-            bool bounce, ShadeOut& out) {
+            bool bounce, MeshRange& range, ShadeOut& out) {
   const Scene& scene = s.scene;
   float8 ray_rows[8];
   simd::load_rows8(&rays[base].org.x, ray_rows);
@@ -298,7 +330,7 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
   if (hit) {
     const uint32_t analytic = hit & ~triangle;
     if (triangle) {
-      const TriangleInputs t = triangle_inputs(scene, hit_rows[1], triangle);
+      const TriangleInputs t = triangle_inputs(scene, hit_rows[1], triangle, range);
       p = triangle_point<float8>(t.c, t.n, t.has_normals, hit_rows[2], hit_rows[3]);
       material = t.material;
       if (instanced) p = instance_points(scene, hits, base, instanced, org, dir, hit_rows[0], p);
@@ -363,13 +395,13 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
                  out.shadow_rays[l], out.pending[l]);
     ++l;
   }
-  if (!bounce) return;
+  if (!bounce || !s.any_bounce) return;
   alignas(32) int32_t ids[8];
   material.store_aligned(ids);
   const uint32_t back = simd::movemask(h.back);
   for (uint32_t b = hit; b; b &= b - 1) {
     const int lane = std::countr_zero(b);
-    if (!may_bounce(scene.materials()[size_t(ids[lane])])) continue;
+    if (!s.bounces[size_t(ids[lane])]) continue;
     out.bounces.push_back({uint32_t(base) + uint32_t(lane), lane_of(p.position, lane), lane_of(h.ng, lane),
                            lane_of(h.d, lane), lane_of(h.origin, lane), bool(back >> lane & 1u), uint32_t(ids[lane])});
   }
@@ -381,6 +413,7 @@ void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<cons
                   std::span<const PathState> paths, bool bounce, ShadeOut& out) {
   static_assert(sizeof(Hit) == 20 && offsetof(Hit, prim_id) == 4 && offsetof(Hit, v) == 12 && sizeof(PathState) == 16);
   const size_t n = rays.size();
+  MeshRange range;
   size_t base = 0;
   for (; base + 8 <= n; base += 8) {
     float8 hit_rows[4], path_rows[4];  // t, prim, u, v; slot, weight
@@ -393,7 +426,7 @@ void shade_batch8(const ShadeScene& s, std::span<const Ray> rays, std::span<cons
     if (!s.scene.instances().empty())
       for (uint32_t b = triangle; b; b &= b - 1)
         if (hits[base + size_t(std::countr_zero(b))].instance_id != kNoInstance) instanced |= b & (~b + 1);
-    shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, instanced, bounce, out);
+    shade8(s, rays, hits, hit_rows, path_rows, base, live, hit, triangle, instanced, bounce, range, out);
   }
   for (size_t i = base; i < n; ++i) shade_ray(s, rays[i], hits[i], paths[i], uint32_t(i), bounce, out);
 }

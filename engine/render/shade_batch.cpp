@@ -20,6 +20,8 @@ ShadeScene::ShadeScene(const Scene& s) : scene(s) {
                                 m.specular.z, m.emission.x, m.emission.y, m.emission.z, m.shininess,
                                 m.mirror,     m.opacity};
     for (int r = 0; r < kRows; ++r) rows[r].push_back(terms[r]);
+    bounces.push_back(may_bounce(m));
+    any_bounce = any_bounce || bounces.back();
   }
   shadow_tfar.assign(s.point_lights().size(), kShadowTfar);
   shadow_tfar.resize(s.point_lights().size() + s.directional_lights().size(), std::numeric_limits<float>::infinity());

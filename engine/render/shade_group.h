@@ -50,6 +50,9 @@ struct ShadeScene {
   std::vector<float> rows[kRows];
   /// Shadow ray tfar per light (point lights first, then directional ones).
   std::vector<float> shadow_tfar;
+  /// may_bounce of each material, and of any.
+  std::vector<uint8_t> bounces;
+  bool any_bounce = false;
 };
 
 /// Where the shading of one batch goes. The per-light vectors are appended to.

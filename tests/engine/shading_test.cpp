@@ -86,23 +86,29 @@ struct Batch {
 };
 
 /// `n` random rays with hits drawn on random primitives (the shading reads the hit, not the
-/// geometry behind it), grouped so that some groups of 8 hit one mesh, some several, some an
-/// analytic primitive, some an instanced mesh through its instances; misses and rays without
-/// a path mixed in. A hit on an instanced mesh's triangle names one of its instances.
+/// geometry behind it), grouped so that some groups of 8 hit one triangle, some one mesh, some
+/// several, some an analytic primitive, some an instanced mesh through its instances; misses
+/// and rays without a path mixed in. A hit on an instanced mesh's triangle names one of its
+/// instances.
 Batch random_batch(const Scene& s, std::mt19937& rng, size_t n) {
   Batch b;
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);
   const uint32_t mesh_begin = s.mesh_base(1), mesh_end = mesh_begin + s.meshes()[1].triangle_count();
+  uint32_t group_triangle = 0;  // the one triangle of a group that hits one
   for (size_t i = 0; i < n; ++i) {
     const size_t group = i / 8;
+    if (i % 8 == 0) group_triangle = uint32_t(rng() % s.triangle_count());
     Ray r{test::random_in_box(rng, -3.0f, 3.0f), 0.0f, test::random_direction(rng) * (0.5f + 2.0f * u01(rng)),
           std::numeric_limits<float>::infinity()};
     uint32_t prim;
     const uint32_t placed = uint32_t(s.meshes().size() - 1);
-    switch (group % 5) {
+    switch (group % 6) {
       case 0: prim = mesh_begin + uint32_t(rng() % (mesh_end - mesh_begin)); break;  // one mesh
       case 1: prim = uint32_t(rng() % s.triangle_count()); break;                    // any mesh
       case 2: prim = s.mesh_base(placed) + uint32_t(rng() % s.meshes()[placed].triangle_count()); break;
+      case 3:
+        prim = group_triangle;
+        break;                                                                        // one triangle
       default: prim = uint32_t(rng() % s.prim_count()); break;                        // any primitive
     }
     float u = u01(rng), v = u01(rng);
