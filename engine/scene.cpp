@@ -188,17 +188,10 @@ void Scene::add_light(const DirectionalLight& l) {
   directional_lights_.push_back(l);
 }
 
-PrimLocation Scene::locate(uint32_t id) const {
-  if (id < triangle_count_) {
-    // Last mesh whose base is <= id.
-    auto it = std::upper_bound(mesh_base_.begin(), mesh_base_.end(), id) - 1;
-    uint32_t mesh = uint32_t(it - mesh_base_.begin());
-    return {PrimKind::triangle, mesh, id - *it};
-  }
-  if (id < quadric_base()) return {PrimKind::sphere, id - sphere_base(), 0};
-  if (id < polygon_base()) return {PrimKind::quadric, id - quadric_base(), 0};
-  if (id < plane_base()) return {PrimKind::polygon, id - polygon_base(), 0};
-  return {PrimKind::plane, id - plane_base(), 0};
+PrimLocation Scene::locate_triangle(uint32_t id) const {
+  // The last mesh whose base is <= id.
+  auto it = std::upper_bound(mesh_base_.begin(), mesh_base_.end(), id) - 1;
+  return {PrimKind::triangle, uint32_t(it - mesh_base_.begin()), id - *it};
 }
 
 Box3f Scene::bounds() const {

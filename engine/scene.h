@@ -234,7 +234,13 @@ class Scene {
   uint32_t prim_count() const { return plane_base() + uint32_t(planes_.size()); }
 
   /// Kind and index of prim_id (< prim_count()).
-  PrimLocation locate(uint32_t prim_id) const;
+  PrimLocation locate(uint32_t prim_id) const {
+    if (prim_id < triangle_count_) return locate_triangle(prim_id);
+    if (prim_id < quadric_base()) return {PrimKind::sphere, prim_id - sphere_base(), 0};
+    if (prim_id < polygon_base()) return {PrimKind::quadric, prim_id - quadric_base(), 0};
+    if (prim_id < plane_base()) return {PrimKind::polygon, prim_id - polygon_base(), 0};
+    return {PrimKind::plane, prim_id - plane_base(), 0};
+  }
   /// Bounds of every bounded primitive in the world (world meshes, instances' boxes, analytic
   /// primitives; planes excluded); empty box for an empty scene.
   Box3f bounds() const;
@@ -264,6 +270,8 @@ class Scene {
   size_t bytes() const;
 
  private:
+  /// locate() of a triangle's id: its mesh by binary search over the mesh bases.
+  PrimLocation locate_triangle(uint32_t prim_id) const;
   SurfacePoint instance_surface(const Ray& ray, const Hit& hit) const;  ///< surface of an instance's hit
   void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
   bool occluded_by_any_plane(const Ray& ray) const;

@@ -209,9 +209,9 @@ AnalyticInputs analytic_inputs(const Scene& scene, std::span<const Ray> rays, st
           int8::load_aligned(material)};
 }
 
-/// The analytic hits `lanes` (prim ids `prim`) by kind: per lane a sphere's centre and radius
-/// or a plane's normal and d, and the material; the quadric when every quadric lane has the
-/// same one.
+/// The analytic hits `lanes` (prim ids `prim`) by kind, from the ids' ranges: per lane a
+/// sphere's centre and radius or a plane's (or a polygon's) normal and d, and the material,
+/// gathered from ShadeScene's shape rows; the quadric when every quadric lane has the same one.
 struct ShapeInputs {
   uint32_t sphere = 0, flat = 0;              ///< lanes on a sphere, on a plane or a polygon
   uint32_t quadric = 0;                       ///< lanes on a quadric
@@ -220,47 +220,31 @@ struct ShapeInputs {
   float8 b;                                   ///< radius or d
   int8 material;
 };
-ShapeInputs shape_inputs(const Scene& scene, const float8& prim, uint32_t lanes) {
+ShapeInputs shape_inputs(const ShadeScene& s, const float8& prim, uint32_t lanes) {
+  const Scene& scene = s.scene;
   ShapeInputs in;
-  alignas(32) uint32_t ids[8];
-  simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
-  simd::Spill<4> s;
-  alignas(32) int32_t material[8] = {};
-  for (int lane = 0; lane < 8; ++lane) {
-    for (auto& row : s.lanes) row[lane] = 0.0f;
-    if (!(lanes >> lane & 1u)) continue;
-    const PrimLocation at = scene.locate(ids[lane]);
-    Vec3f a;
-    float b;
-    uint32_t m;
-    if (at.kind == PrimKind::sphere) {
-      const Sphere& sp = scene.spheres()[at.shape];
-      a = sp.center, b = sp.radius, m = sp.material;
-      in.sphere |= 1u << lane;
-    } else if (at.kind == PrimKind::plane) {
-      const Plane& pl = scene.planes()[at.shape];
-      a = pl.normal, b = pl.d, m = pl.material;
-      in.flat |= 1u << lane;
-    } else if (at.kind == PrimKind::polygon) {
-      const PolygonShape& pg = scene.polygons()[at.shape];
-      a = pg.plane.n, b = pg.plane.d, m = pg.material;
-      in.flat |= 1u << lane;
-    } else {  // a quadric
-      const QuadricShape* q = &scene.quadrics()[at.shape];
-      in.one_quadric = (!in.quadric || in.one_quadric == q) ? q : nullptr;
-      in.quadric |= 1u << lane;
-      material[lane] = int32_t(q->material);
-      continue;
-    }
-    s.lanes[0][lane] = a.x;
-    s.lanes[1][lane] = a.y;
-    s.lanes[2][lane] = a.z;
-    s.lanes[3][lane] = b;
-    material[lane] = int32_t(m);
+  const uint32_t below_quadrics = simd::movemask(simd::bits_below(prim, scene.quadric_base()));
+  const uint32_t below_polygons = simd::movemask(simd::bits_below(prim, scene.polygon_base()));
+  in.sphere = lanes & below_quadrics;
+  in.quadric = lanes & below_polygons & ~below_quadrics;
+  in.flat = lanes & ~below_polygons;
+  // Each lane's row; lanes outside `lanes` read the first one's.
+  const float8 first = simd::broadcast_lane(prim, std::countr_zero(lanes));
+  const int8 row =
+      simd::as_int(xsimd::select(simd::mask_from_bits(lanes), prim, first)) - int8(int32_t(scene.sphere_base()));
+  using R = ShadeScene::ShapeRow;
+  in.a = {simd::gather(s.shape_rows[R::shape_ax].data(), row), simd::gather(s.shape_rows[R::shape_ay].data(), row),
+          simd::gather(s.shape_rows[R::shape_az].data(), row)};
+  in.b = simd::gather(s.shape_rows[R::shape_b].data(), row);
+  in.material = simd::gather(s.shape_material.data(), row);
+  if (in.quadric) {
+    alignas(32) int32_t rows[8];
+    row.store_aligned(rows);
+    const int32_t q = rows[std::countr_zero(in.quadric)];
+    bool one = true;
+    for (uint32_t b = in.quadric; b; b &= b - 1) one = one && rows[std::countr_zero(b)] == q;
+    if (one) in.one_quadric = &scene.quadrics()[size_t(q) - (scene.quadric_base() - scene.sphere_base())];
   }
-  in.a = {s.load(0), s.load(1), s.load(2)};
-  in.b = s.load(3);
-  in.material = int8::load_aligned(material);
   return in;
 }
 
@@ -337,7 +321,7 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
     }
     // Spheres, planes, polygons and one quadric on 8 lanes (sphere_point, plane_point,
     // quadric_point: Scene::surface's own code); several quadrics through Scene::surface.
-    const ShapeInputs shapes = analytic ? shape_inputs(scene, hit_rows[1], analytic) : ShapeInputs{};
+    const ShapeInputs shapes = analytic ? shape_inputs(s, hit_rows[1], analytic) : ShapeInputs{};
     if (shapes.sphere | shapes.flat) {
       const PointLanes<float8> ps = sphere_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
       const PointLanes<float8> pp = plane_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);

@@ -23,6 +23,15 @@ ShadeScene::ShadeScene(const Scene& s) : scene(s) {
     bounces.push_back(may_bounce(m));
     any_bounce = any_bounce || bounces.back();
   }
+  const auto add_shape = [&](const Vec3f& a, float b, uint32_t material) {
+    const float terms[kShapeRows] = {a.x, a.y, a.z, b};
+    for (int r = 0; r < kShapeRows; ++r) shape_rows[r].push_back(terms[r]);
+    shape_material.push_back(int32_t(material));
+  };
+  for (const Sphere& sp : s.spheres()) add_shape(sp.center, sp.radius, sp.material);
+  for (const QuadricShape& q : s.quadrics()) add_shape(Vec3f{0.0f}, 0.0f, q.material);
+  for (const PolygonShape& pg : s.polygons()) add_shape(pg.plane.n, pg.plane.d, pg.material);
+  for (const Plane& pl : s.planes()) add_shape(pl.normal, pl.d, pl.material);
   shadow_tfar.assign(s.point_lights().size(), kShadowTfar);
   shadow_tfar.resize(s.point_lights().size() + s.directional_lights().size(), std::numeric_limits<float>::infinity());
 }

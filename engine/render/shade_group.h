@@ -53,6 +53,12 @@ struct ShadeScene {
   /// may_bounce of each material, and of any.
   std::vector<uint8_t> bounces;
   bool any_bounce = false;
+  /// The analytic primitives' terms as rows, by prim id - Scene::sphere_base() (spheres,
+  /// quadrics, polygons, planes): a sphere's centre and radius, a plane's or a polygon's
+  /// normal and d (a quadric's: 0), for the 8-wide code to gather; and each one's material.
+  enum ShapeRow { shape_ax, shape_ay, shape_az, shape_b, kShapeRows };
+  std::vector<float> shape_rows[kShapeRows];
+  std::vector<int32_t> shape_material;
 };
 
 /// Where the shading of one batch goes. The per-light vectors are appended to.
