@@ -194,38 +194,50 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
         base_x[at] = float(x);
         base_y[at] = float(y);
       }
+  // Every lane's path: its pixel's slot, or none past the image. A pinhole ray is valid by
+  // construction (the camera checked its eye; its direction is unit length), so its paths
+  // hold for every sample; other cameras' rays are checked per sample below.
+  const bool partial = x0 + kTile > st.width || y0 + kTile > st.height;
+  w.primary.resize(kTile * kTile);
+  w.primary_paths.resize(kTile * kTile);
+  for (int by = 0, at = 0; by < kTile; by += 2)
+    for (int bx = 0; bx < kTile; bx += 4)
+      for (int lane = 0; lane < 8; ++lane, ++at) {
+        const int lx = bx + lane % 4, ly = by + lane / 4;
+        const bool inside = x0 + lx < st.width && y0 + ly < st.height;
+        w.primary_paths[size_t(at)] =
+            inside ? PathState{uint32_t(ly * kTile + lx), Vec3f{1.0f}} : PathState{kInvalidId, {}};
+        primary += uint64_t(pinhole && inside) * uint64_t(st.spp);
+      }
   for (int s = 0; s < st.spp; ++s) {
     const SampleStreams::Stratum stratum = streams.stratum(s);
     // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
-    w.primary.resize(kTile * kTile);
-    w.primary_paths.resize(kTile * kTile);
-    size_t at = 0;
-    for (int by = 0; by < kTile; by += 2)
-      for (int bx = 0; bx < kTile; bx += 4, at += 8) {
-        float px[8], py[8];
-        Vec2f lens[8];
-        for (int lane = 0; lane < 8; ++lane) {
-          const Vec2f j = streams.pixel(pixel_keys[at + size_t(lane)], stratum);
-          px[lane] = base_x[at + size_t(lane)] + j.x;
-          py[lane] = base_y[at + size_t(lane)] + j.y;
-          if (thin_lens) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);
-        }
-        camera.generate8(px, py, thin_lens ? lens : nullptr, &w.primary[at]);
-        for (int lane = 0; lane < 8; ++lane) {
-          const int lx = bx + lane % 4, ly = by + lane / 4;
-          Ray& r = w.primary[at + size_t(lane)];
-          if (x0 + lx >= st.width || y0 + ly >= st.height) {
-            r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
-            w.primary_paths[at + size_t(lane)] = {kInvalidId, {}};
-            continue;
-          }
-          // No ray (outside a fisheye's image circle): the pixel stays black. A pinhole ray is
-          // valid by construction (the camera checked its eye; its direction is unit length).
-          const bool valid = pinhole || valid_ray(r);
-          w.primary_paths[at + size_t(lane)] = {valid ? uint32_t(ly * kTile + lx) : kInvalidId, Vec3f{1.0f}};
-          primary += valid;
-        }
+    for (size_t at = 0; at < size_t(kTile * kTile); at += 8) {
+      float px[8], py[8];
+      Vec2f lens[8];
+      for (int lane = 0; lane < 8; ++lane) {
+        const Vec2f j = streams.pixel(pixel_keys[at + size_t(lane)], stratum);
+        px[lane] = base_x[at + size_t(lane)] + j.x;
+        py[lane] = base_y[at + size_t(lane)] + j.y;
       }
+      if (thin_lens)
+        for (int lane = 0; lane < 8; ++lane) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);
+      camera.generate8(px, py, thin_lens ? lens : nullptr, &w.primary[at]);
+      if (pinhole && !partial) continue;
+      for (size_t k = at; k < at + 8; ++k) {
+        const int lx = int(k / 8 % (kTile / 4)) * 4 + int(k % 4), ly = int(k / 8 / (kTile / 4)) * 2 + int(k % 8 / 4);
+        Ray& r = w.primary[k];
+        if (x0 + lx >= st.width || y0 + ly >= st.height) {
+          r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
+          continue;
+        }
+        if (pinhole) continue;
+        // No ray (outside a fisheye's image circle): the pixel stays black.
+        const bool valid = valid_ray(r);
+        w.primary_paths[k].slot = valid ? uint32_t(ly * kTile + lx) : kInvalidId;
+        primary += valid;
+      }
+    }
     shade(scene, backend, shade_batch, st.max_depth, w.primary, w.primary_paths, w, tile, n);
   }
   const float inv = 1.0f / float(st.spp);
