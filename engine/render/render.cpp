@@ -89,7 +89,9 @@ struct Tracer {
 
 /// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
 struct ShadeWork {
-  std::vector<Ray> primary, rays, next_rays;  ///< primary: kept at a tile's size for all its samples
+  /// A batch's first rays and paths (a tile's primary rays, kept for all its samples), then
+  /// each bounce's.
+  std::vector<Ray> primary, rays, next_rays;
   std::vector<PathState> primary_paths;
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
@@ -180,33 +182,31 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
   uint64_t primary = 0;
   const SampleStreams streams(st.seed, st.spp, st.sampler);
   const bool thin_lens = camera.model() == CameraModel::thin_lens, pinhole = camera.model() == CameraModel::pinhole;
-  // Each lane's pixel (clamped to the image: lanes past it are traced as invalid rays) and
-  // its keys, in the tile's 4x2-block order, for all the samples.
+  // Each lane's pixel (clamped to the image: lanes past it are traced as invalid rays), its
+  // keys and its path (its pixel's slot, or none past the image), in the tile's 4x2-block
+  // order, for all the samples. A pinhole ray is valid by construction (the camera checked its
+  // eye; its direction is unit length), so its paths hold for every sample; other cameras'
+  // rays are checked per sample below.
   uint64_t pixel_keys[kTile * kTile], lens_keys[kTile * kTile];
   float base_x[kTile * kTile], base_y[kTile * kTile];
+  uint32_t slots[kTile * kTile];  // the slot a lane's path takes when its ray is valid
+  w.primary.resize(kTile * kTile);
+  w.primary_paths.resize(kTile * kTile);
+  bool partial = false;  // some lane lies past the image
   for (int by = 0, at = 0; by < kTile; by += 2)
     for (int bx = 0; bx < kTile; bx += 4)
       for (int lane = 0; lane < 8; ++lane, ++at) {
-        const int x = std::min(x0 + bx + lane % 4, st.width - 1), y = std::min(y0 + by + lane / 4, st.height - 1);
+        const int lx = bx + lane % 4, ly = by + lane / 4;
+        const int x = std::min(x0 + lx, st.width - 1), y = std::min(y0 + ly, st.height - 1);
         const uint64_t pixel = uint64_t(y) * uint64_t(st.width) + uint64_t(x);
         pixel_keys[at] = streams.pixel_key(pixel);
         if (thin_lens) lens_keys[at] = streams.lens_key(pixel);
         base_x[at] = float(x);
         base_y[at] = float(y);
-      }
-  // Every lane's path: its pixel's slot, or none past the image. A pinhole ray is valid by
-  // construction (the camera checked its eye; its direction is unit length), so its paths
-  // hold for every sample; other cameras' rays are checked per sample below.
-  const bool partial = x0 + kTile > st.width || y0 + kTile > st.height;
-  w.primary.resize(kTile * kTile);
-  w.primary_paths.resize(kTile * kTile);
-  for (int by = 0, at = 0; by < kTile; by += 2)
-    for (int bx = 0; bx < kTile; bx += 4)
-      for (int lane = 0; lane < 8; ++lane, ++at) {
-        const int lx = bx + lane % 4, ly = by + lane / 4;
         const bool inside = x0 + lx < st.width && y0 + ly < st.height;
-        w.primary_paths[size_t(at)] =
-            inside ? PathState{uint32_t(ly * kTile + lx), Vec3f{1.0f}} : PathState{kInvalidId, {}};
+        slots[at] = inside ? uint32_t(ly * kTile + lx) : kInvalidId;
+        w.primary_paths[size_t(at)] = inside ? PathState{slots[at], Vec3f{1.0f}} : PathState{kInvalidId, {}};
+        partial = partial || !inside;
         primary += uint64_t(pinhole && inside) * uint64_t(st.spp);
       }
   for (int s = 0; s < st.spp; ++s) {
@@ -225,16 +225,15 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
       camera.generate8(px, py, thin_lens ? lens : nullptr, &w.primary[at]);
       if (pinhole && !partial) continue;
       for (size_t k = at; k < at + 8; ++k) {
-        const int lx = int(k / 8 % (kTile / 4)) * 4 + int(k % 4), ly = int(k / 8 / (kTile / 4)) * 2 + int(k % 8 / 4);
         Ray& r = w.primary[k];
-        if (x0 + lx >= st.width || y0 + ly >= st.height) {
+        if (slots[k] == kInvalidId) {
           r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
           continue;
         }
         if (pinhole) continue;
         // No ray (outside a fisheye's image circle): the pixel stays black.
         const bool valid = valid_ray(r);
-        w.primary_paths[k].slot = valid ? uint32_t(ly * kTile + lx) : kInvalidId;
+        w.primary_paths[k].slot = valid ? slots[k] : kInvalidId;
         primary += valid;
       }
     }
@@ -264,18 +263,18 @@ uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatc
     if (colour.emplace(key(x, y), Vec3f{}).second) wanted.push_back({x, y});
   };
   auto trace_wanted = [&] {
-    w.rays.clear();
-    w.paths.clear();
+    w.primary.clear();
+    w.primary_paths.clear();
     for (size_t i = 0; i < wanted.size(); ++i) {
       const auto [x, y] = wanted[i];
       const uint64_t id = uint64_t(uint32_t(y)) * (uint64_t(st.width) * uint64_t(scale) + 1) + uint64_t(uint32_t(x));
       const Ray r = camera.generate(float(x) / float(scale), float(y) / float(scale), lens_sample(st.seed, id, 0));
-      w.rays.push_back(r);
-      w.paths.push_back({valid_ray(r) ? uint32_t(i) : kInvalidId, Vec3f{1.0f}});
+      w.primary.push_back(r);
+      w.primary_paths.push_back({valid_ray(r) ? uint32_t(i) : kInvalidId, Vec3f{1.0f}});
       primary += valid_ray(r);
     }
     shaded.assign(wanted.size(), Vec3f{});
-    shade(scene, backend, shade_batch, st.max_depth, w.rays, w.paths, w, shaded, n);
+    shade(scene, backend, shade_batch, st.max_depth, w.primary, w.primary_paths, w, shaded, n);
     for (size_t i = 0; i < wanted.size(); ++i) colour[key(wanted[i].first, wanted[i].second)] = shaded[i];
     wanted.clear();
   };

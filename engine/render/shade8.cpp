@@ -322,31 +322,21 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
     // Spheres, planes, polygons and one quadric on 8 lanes (sphere_point, plane_point,
     // quadric_point: Scene::surface's own code); several quadrics through Scene::surface.
     const ShapeInputs shapes = analytic ? shape_inputs(s, hit_rows[1], analytic) : ShapeInputs{};
-    if (shapes.sphere | shapes.flat) {
-      const PointLanes<float8> ps = sphere_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
-      const PointLanes<float8> pp = plane_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b);
-      const mask8 sphere = simd::mask_from_bits(shapes.sphere), flat = simd::mask_from_bits(shapes.flat);
-      const auto pick = [&](const V8& s_, const V8& f_, const V8& other) {
-        return select<float8>(sphere, s_, select<float8>(flat, f_, other));
-      };
-      p = {pick(ps.position, pp.position, p.position),
-           pick(ps.geometric_normal, pp.geometric_normal, p.geometric_normal),
-           pick(ps.shading_normal, pp.shading_normal, p.shading_normal)};
-      material = simd::as_int(xsimd::select(sphere | flat, simd::as_float(shapes.material), simd::as_float(material)));
-    }
-    if (shapes.one_quadric) {  // one quadric's lanes on 8 lanes too (quadric_point)
-      const PointLanes<float8> pq = quadric_point<float8>(org, dir, hit_rows[0], shapes.one_quadric->quadric);
-      const mask8 take = simd::mask_from_bits(shapes.quadric);
-      p = {select<float8>(take, pq.position, p.position), select<float8>(take, pq.geometric_normal, p.geometric_normal),
-           select<float8>(take, pq.shading_normal, p.shading_normal)};
-      material = simd::as_int(xsimd::select(take, simd::as_float(shapes.material), simd::as_float(material)));
-    }
+    // The lanes `lanes` take the points `q` and the materials `mat`.
+    const auto take = [&](uint32_t lanes, const PointLanes<float8>& q, const int8& mat) {
+      const mask8 on = simd::mask_from_bits(lanes);
+      p = {select<float8>(on, q.position, p.position), select<float8>(on, q.geometric_normal, p.geometric_normal),
+           select<float8>(on, q.shading_normal, p.shading_normal)};
+      material = simd::as_int(xsimd::select(on, simd::as_float(mat), simd::as_float(material)));
+    };
+    if (shapes.sphere)
+      take(shapes.sphere, sphere_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b), shapes.material);
+    if (shapes.flat) take(shapes.flat, plane_point<float8>(org, dir, hit_rows[0], shapes.a, shapes.b), shapes.material);
+    if (shapes.one_quadric)  // one quadric's lanes on 8 lanes too (quadric_point)
+      take(shapes.quadric, quadric_point<float8>(org, dir, hit_rows[0], shapes.one_quadric->quadric), shapes.material);
     if (const uint32_t quadric = shapes.one_quadric ? 0u : shapes.quadric) {  // several quadrics: Scene::surface
       const AnalyticInputs a = analytic_inputs(scene, rays, hits, base, quadric);
-      const mask8 take = simd::mask_from_bits(quadric);
-      p = {select<float8>(take, a.p.position, p.position), select<float8>(take, a.p.geometric_normal, p.geometric_normal),
-           select<float8>(take, a.p.shading_normal, p.shading_normal)};
-      material = simd::as_int(xsimd::select(take, simd::as_float(a.material), simd::as_float(material)));
+      take(quadric, a.p, a.material);
     }
     fix_degenerate_normal<float8>(p, org, dir, hit_rows[0]);  // as Scene::surface (a no-op on its own points)
     m = material_inputs(s, material, hit);

@@ -69,7 +69,8 @@ void shade_ray(const ShadeScene& s, const Ray& ray, const Hit& hit, const PathSt
       }
       ++l;
     }
-    if (bounce && may_bounce(m)) out.bounces.push_back({index, sp.position, h.ng, h.d, h.origin, h.back, sp.material});
+    if (bounce && s.bounces[sp.material])
+      out.bounces.push_back({index, sp.position, h.ng, h.d, h.origin, h.back, sp.material});
   }
 }
 
