@@ -52,6 +52,47 @@ struct SlabRay {
   }
 };
 
+/// SlabRay of 8 rays at once, from their origins and directions in SoA, with the same bits
+/// lane by lane: the same IEEE quotients and products, the same finiteness test, and the
+/// same largest |org / dir| (among finite, non-negative values, where max has one answer).
+/// What the ray-stream traversal's entry loop takes instead of eight scalar SlabRays (six
+/// divisions each). Lanes of invalid rays hold values never to be read.
+struct SlabRays8 {
+  simd::Spill<7> rows;   ///< inv x, y, z, oi x, y, z, pad
+  uint32_t exact = 0;    ///< lanes whose SlabRay::exact is set
+  uint32_t negative[3];  ///< per axis, the lanes whose direction has its sign bit set
+
+  SlabRays8(const Vec3x8& org, const Vec3x8& dir) {
+    const float8 one(1.0f), zero(0.0f), huge(std::numeric_limits<float>::max());
+    const float8 d[3] = {dir.x, dir.y, dir.z}, o[3] = {org.x, org.y, org.z};
+    float8 inv[3], oi[3], m = zero;
+    mask8 exact_lanes(false);
+    for (int a = 0; a < 3; ++a) {
+      inv[a] = one / d[a];
+      oi[a] = o[a] * inv[a];
+      exact_lanes = exact_lanes | !(xsimd::abs(inv[a]) <= huge) | !(xsimd::abs(oi[a]) <= huge);
+      m = xsimd::max(m, xsimd::select(d[a] != zero, xsimd::abs(o[a] / d[a]), zero));
+      negative[a] = simd::movemask(simd::sign_mask(d[a]));
+    }
+    const float8 pad = xsimd::select(exact_lanes, zero, m * float8(0x1p-23f));
+    rows = simd::Spill<7>(inv[0], inv[1], inv[2], oi[0], oi[1], oi[2], pad);
+    exact = simd::movemask(exact_lanes);
+  }
+
+  /// Lane l as SlabRay(ray l).
+  SlabRay lane(int l) const {
+    SlabRay s;
+    for (int a = 0; a < 3; ++a) {
+      s.inv[a] = rows.lanes[a][l];
+      s.oi[a] = rows.lanes[3 + a][l];
+      s.near[a] = (negative[a] >> l & 1u) ? 24 + 8 * a : 8 * a;
+    }
+    s.pad = rows.lanes[6][l];
+    s.exact = exact >> l & 1u;
+    return s;
+  }
+};
+
 /// One ray prepared for the single-ray traversal: SlabRay's figures broadcast, and the near
 /// and far planes of each axis chosen once from the ray's octant (madmann91/bvh, tinybvh).
 /// The octant follows the sign bit, so -0 counts as negative and its inverse -inf pairs with

@@ -131,11 +131,9 @@ class StreamTraversal {
     if (bvh_.empty()) return;
     const size_t n = rays.size();
     prepare(n, s);
-    uint32_t count = 0;
-    for (size_t i = 0; i < n; ++i) {
-      if (!valid_ray(rays[i])) continue;
-      if (!enter(rays[i], i, hits[i].t, s, count)) t_.closest(rays[i], 0, hits[i], inst);
-    }
+    const uint32_t count = enter_all(
+        rays, s, [](size_t) { return false; }, [&](size_t i) { return hits[i].t; },
+        [&](size_t i) { t_.closest(rays[i], 0, hits[i], inst); });
     traverse<false>(
         bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_closest(f, s, rays, hits, inst); },
         [&](uint32_t i, int32_t ref) {
@@ -150,11 +148,9 @@ class StreamTraversal {
     if (bvh_.empty()) return;
     const size_t n = rays.size();
     prepare(n, s);
-    uint32_t count = 0;
-    for (size_t i = 0; i < n; ++i) {
-      if (out[i] || !valid_ray(rays[i])) continue;
-      if (!enter(rays[i], i, rays[i].tfar, s, count)) out[i] = t_.any(rays[i], 0);
-    }
+    const uint32_t count = enter_all(
+        rays, s, [&](size_t i) { return out[i] != 0; }, [&](size_t i) { return rays[i].tfar; },
+        [&](size_t i) { out[i] = t_.any(rays[i], 0); });
     const auto done = [&](uint32_t i) {
       out[i] = 1;
       s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
@@ -192,11 +188,8 @@ class StreamTraversal {
     Scratch& s = scratch(0);
     const size_t n = rays.size();
     prepare(n, s);
-    uint32_t count = 0;
-    for (size_t i = 0; i < n; ++i) {
-      if ((skip && skip[i]) || !valid_ray(rays[i])) continue;
-      if (!enter(rays[i], i, tfar_of(i), s, count)) alone(uint32_t(i));
-    }
+    const uint32_t count = enter_all(
+        rays, s, [&](size_t i) { return skip && skip[i]; }, tfar_of, [&](size_t i) { alone(uint32_t(i)); });
     traverse<kAny>(tree.nodes.data(), true, count, s, at_instance, alone_from);
   }
 
@@ -267,17 +260,41 @@ class StreamTraversal {
     s.frames.clear();
   }
 
-  /// Adds valid ray i to the stream (ids[count++]) with `tfar` (its own, or its closest hit
-  /// so far) when it takes the one-FMA slab form; false for a ray to be traced alone
-  /// (SlabRay::exact).
-  static bool enter(const Ray& r, size_t i, float tfar, Scratch& s, uint32_t& count) noexcept {
-    StreamRay& q = s.rays[i];
-    q.slab = SlabRay(r);
-    if (q.slab.exact) return false;
-    q.tnear = r.tnear + 0.0f;
-    q.tfar = tfar;
-    s.ids[count++] = uint32_t(i);
-    return true;
+  /// Enters the valid rays of `rays` that `skip(i)` does not exclude into the stream (ids
+  /// [0, count), in order), ray i with tfar_of(i) (its own tfar, or its closest hit so far);
+  /// a ray that needs the exact slab form (SlabRay::exact) goes to `alone(i)` instead.
+  /// Returns the count. Eight rays at a time: one transpose loads them, valid_lanes decides
+  /// rp::valid_ray and SlabRays8 works out their slab figures (the scalar routines' bits), so
+  /// that a stream entering each instance it meets costs a few vector divisions per 8 rays.
+  template <class Skip, class TfarOf, class Alone>
+  static uint32_t enter_all(std::span<const Ray> rays, Scratch& s, Skip&& skip, TfarOf&& tfar_of,
+                            Alone&& alone) noexcept {
+    const size_t n = rays.size();
+    uint32_t count = 0;
+    const auto take = [&](size_t i, const SlabRay& slab, float tnear) {
+      if (slab.exact) return alone(i);
+      s.rays[i] = {slab, tnear + 0.0f, tfar_of(i)};
+      s.ids[count++] = uint32_t(i);
+    };
+    size_t base = 0;
+    for (; base + 8 <= n; base += 8) {
+      float8 m[8];
+      simd::load_rows8(&rays[base].org.x, m);
+      simd::transpose8x8(m);
+      const Vec3x8 org{m[0], m[1], m[2]}, dir{m[4], m[5], m[6]};
+      uint32_t lanes = valid_lanes(org, dir, m[3], m[7]);
+      for (uint32_t b = lanes; b; b &= b - 1)
+        if (skip(base + size_t(std::countr_zero(b)))) lanes &= ~(b & (~b + 1));
+      if (!lanes) continue;
+      const SlabRays8 slab(org, dir);
+      for (uint32_t b = lanes; b; b &= b - 1) {
+        const int l = std::countr_zero(b);
+        take(base + size_t(l), slab.lane(l), rays[base + size_t(l)].tnear);
+      }
+    }
+    for (size_t i = base; i < n; ++i)
+      if (!skip(i) && valid_ray(rays[i])) take(i, SlabRay(rays[i]), rays[i].tnear);
+    return count;
   }
 
   /// The traversal loop shared by both queries and both levels, over the tree of `nodes`

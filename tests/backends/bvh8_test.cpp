@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <functional>
 #include <random>
@@ -562,6 +563,47 @@ TEST(Kernels, SlabTestsAreConservativeAgainstTheScalarSlab) {
     }
   }
   EXPECT_GT(hits, 5000);
+}
+
+// The ray-stream traversal works its rays' slab figures out 8 at a time; they must be the
+// scalar SlabRay's bits, since a stream ray that leaves the stream (SingleRay from them) must
+// test boxes exactly as the single-ray traversal does. Random rays, and the cases SlabRay
+// treats apart: +-0 components, directions small enough that 1/d or org/d overflows, origins
+// far out, and components of either sign.
+TEST(Kernels, SlabRays8EqualsSlabRayLaneByLane) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> pick(0, 9);
+  const float specials[] = {0.0f, -0.0f, 0x1p-130f, -0x1p-130f, 0x1p-127f, 1e-30f, -1e-20f, 0x1p31f, 3.0f, -0.5f};
+  int exact = 0;
+  for (int iter = 0; iter < 4000; ++iter) {
+    Ray rays[8];
+    for (Ray& r : rays) {
+      r = {{u(rng) * 100.0f, u(rng), u(rng) * 0x1p30f}, 0.0f, {u(rng), u(rng), u(rng)}, 1.0f};
+      for (int a = 0; a < 3; ++a)
+        if (pick(rng) < 3) r.dir[a] = specials[pick(rng)];
+    }
+    simd::Spill<6> rows;
+    for (int l = 0; l < 8; ++l)
+      for (int a = 0; a < 3; ++a) {
+        rows.lanes[a][l] = rays[l].org[a];
+        rows.lanes[3 + a][l] = rays[l].dir[a];
+      }
+    const SlabRays8 eight({rows.load(0), rows.load(1), rows.load(2)}, {rows.load(3), rows.load(4), rows.load(5)});
+    for (int l = 0; l < 8; ++l) {
+      const SlabRay want(rays[l]), got = eight.lane(l);
+      exact += want.exact;
+      ASSERT_EQ(got.exact, want.exact) << "iter " << iter << " lane " << l;
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(got.near[a], want.near[a]) << "iter " << iter << " lane " << l << " axis " << a;
+        ASSERT_EQ(std::bit_cast<uint32_t>(got.inv[a]), std::bit_cast<uint32_t>(want.inv[a])) << "iter " << iter;
+        ASSERT_EQ(std::bit_cast<uint32_t>(got.oi[a]), std::bit_cast<uint32_t>(want.oi[a])) << "iter " << iter;
+      }
+      ASSERT_EQ(std::bit_cast<uint32_t>(got.pad), std::bit_cast<uint32_t>(want.pad))
+          << "iter " << iter << " lane " << l << ": pad " << got.pad << " against " << want.pad;
+    }
+  }
+  EXPECT_GT(exact, 1000);  // the exact form's cases were met
 }
 
 }  // namespace
