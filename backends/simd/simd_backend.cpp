@@ -78,15 +78,24 @@ class SimdBackend final : public Backend {
                    {"depth", double(bvh_.stats.depth)},  {"sah_cost", bvh_.stats.sah_cost},
                    {"prims", double(bvh_.stats.prims)}};
     if (!scene.instances().empty()) {
-      size_t mesh_prims = 0;
-      for (const Bvh8& m : level_.meshes) mesh_prims += m.stats.prims;
+      size_t mesh_prims = 0, mesh_nodes = 0, mesh_leaves = 0;
+      uint32_t mesh_depth = 0;
+      for (const Bvh8& m : level_.meshes) {
+        mesh_prims += m.stats.prims;
+        mesh_nodes += m.stats.nodes;
+        mesh_leaves += m.stats.leaves;
+        mesh_depth = std::max(mesh_depth, m.stats.depth);
+      }
       info_.stats.insert(info_.stats.end(), {{"instances", double(level_.tree.stats.prims)},
                                              {"instance_nodes", double(level_.tree.stats.nodes)},
                                              {"instance_depth", double(level_.tree.stats.depth)},
                                              {"world_bytes", double(bvh_.stats.bytes)},
                                              {"instance_bytes", double(level_.tree.stats.bytes)},
                                              {"mesh_trees", double(level_.meshes.size())},
-                                             {"mesh_prims", double(mesh_prims)}});
+                                             {"mesh_prims", double(mesh_prims)},
+                                             {"mesh_nodes", double(mesh_nodes)},
+                                             {"mesh_leaves", double(mesh_leaves)},
+                                             {"mesh_depth", double(mesh_depth)}});
     }
   }
 

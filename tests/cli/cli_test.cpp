@@ -671,6 +671,9 @@ TEST_F(Cli, RendersAndDescribesAGltfWithInstances) {
       << r.output;
   EXPECT_NE(r.output.find("top level     mesh level"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("instances=3"), std::string::npos) << r.output;
+  // The simd mesh level's own tree: one instanced mesh of 2 triangles is one leaf under one node.
+  EXPECT_NE(r.output.find("mesh_trees=1  mesh_prims=2  mesh_nodes=1  mesh_leaves=1  mesh_depth=1"), std::string::npos)
+      << r.output;
 }
 
 TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
