@@ -381,12 +381,14 @@ class GltfReader {
       colour = {light.color[0], light.color[1], light.color[2]};
     }
     const Vec3f power = Vec3f(colour * light.intensity);
+    // The extension's three types; any other is a broken file, not a light to guess at.
+    if (light.type != "directional" && light.type != "point" && light.type != "spot")
+      fail(lp + ".type", cat(in_quotes(light.type), " is not a KHR_lights_punctual type (directional, point, spot)"));
     try {
       if (light.type == "directional") {
         scene_.add_light(DirectionalLight{Vec3f(normalize(to_world.vector({0, 0, -1}))), power});
       } else {
-        if (light.type != "point")
-          warning(lp, cat("a ", in_quotes(light.type), " light is placed as a point light"));
+        if (light.type == "spot") warning(lp, "a \"spot\" light is placed as a point light");
         scene_.add_light(PointLight{Vec3f(to_world.point({0, 0, 0})), power});
       }
     } catch (const Error& e) {

@@ -192,10 +192,12 @@ TEST(GltfErrors, EveryHostileFileIsRefusedWithOneLineNamingTheFileAndTheJsonPath
   // its exact message.
   const std::string up = test::to_root();
   const std::map<std::string, std::string> want = {
-      {"bad-offset.gltf", "$.accessors[0]: 3 elements of 12 bytes, 12 apart from byte 8, do not fit in bufferViews[0]'s 36 bytes"},
+      {"bad-offset.gltf",
+       "$.accessors[0]: 3 elements of 12 bytes, 12 apart from byte 8, do not fit in bufferViews[0]'s 36 bytes"},
       {"bad-stride.gltf", "$.bufferViews[0].byteStride: 8 is outside [12, 252] for 12-byte elements"},
       {"bad-count.gltf",
-       "$.accessors[0]: 4000000000 elements of 12 bytes, 12 apart from byte 0, do not fit in bufferViews[0]'s 36 bytes"},
+       "$.accessors[0]: 4000000000 elements of 12 bytes, 12 apart from byte 0, do not fit in bufferViews[0]'s 36 "
+       "bytes"},
       {"bad-view-length.gltf", "$.bufferViews[0]: 1000 bytes from byte 0 do not fit in buffer 0's 42 bytes"},
       {"bad-index.gltf", "$.meshes[0].primitives[0].indices: index 3 (element 1) is out of range (3 vertices)"},
       {"bad-cycle.gltf", "$.nodes[1].children[0]: node 0 is its own ancestor (a cycle)"},
@@ -208,15 +210,22 @@ TEST(GltfErrors, EveryHostileFileIsRefusedWithOneLineNamingTheFileAndTheJsonPath
        "$.buffers[0].uri: \"folder.bin\": hostile/folder.bin: cannot read: not a regular file (a directory)"},
       {"bad-sparse.gltf", "$.accessors[0].sparse: sparse accessors are not supported"},
       {"bad-draco.gltf",
-       "$.meshes[0].primitives[0].extensions.KHR_draco_mesh_compression: Draco-compressed primitives are not supported"},
+       "$.meshes[0].primitives[0].extensions.KHR_draco_mesh_compression: Draco-compressed primitives are not "
+       "supported"},
       {"bad-required-draco.gltf",
-       "$.extensionsRequired[0]: \"KHR_draco_mesh_compression\" is not supported (its geometry cannot be read without it)"},
+       "$.extensionsRequired[0]: \"KHR_draco_mesh_compression\" is not supported (its geometry cannot be read without "
+       "it)"},
       {"bad-matrix.gltf", "$.nodes[0].matrix: not an affine transform (its last row is not 0 0 0 1)"},
-      {"bad-far.gltf", "$.nodes[0]: mesh 'mesh 0': vertex 0 (2e+09, 0, 0) is outside the supported coordinate range "
-                       "|x| <= 1073741824 (2^30)"},
+      {"bad-far.gltf",
+       "$.nodes[0]: mesh 'mesh 0': vertex 0 (2e+09, 0, 0) is outside the supported coordinate range "
+       "|x| <= 1073741824 (2^30)"},
       {"bad-quaternion.gltf", "$.nodes[0].rotation: a zero quaternion is no rotation"},
       {"bad-no-scene.gltf", "$.scenes: the file has no scene"},
-      {"bad-missing-node.gltf", "$.nodes[0].children[0]: 7 names no node (1 nodes)"}};
+      {"bad-missing-node.gltf", "$.nodes[0].children[0]: 7 names no node (1 nodes)"},
+      {"bad-light-type.gltf",
+       "$.extensions.KHR_lights_punctual.lights[0].type: \"area\" is not a KHR_lights_punctual type (directional, "
+       "point, "
+       "spot)"}};
   fs::create_directories(scratch() / "hostile" / "folder.bin");
   size_t checked = 0;
   for (const test::GltfCase& c : test::hostile_gltf_cases()) {

@@ -444,6 +444,15 @@ inline std::vector<GltfCase> hostile_gltf_cases() {
     b.model.defaultScene = -1;
   });
   add("bad-missing-node.gltf", [](GltfBuilder& b) { b.model.nodes[0].children = {7}; });
+  add("bad-light-type.gltf", [](GltfBuilder& b) {
+    tinygltf::Light area;
+    area.type = "area";
+    b.model.lights = {area};
+    tinygltf::Value::Object o;
+    o["light"] = tinygltf::Value(0);
+    b.model.nodes[0].extensions["KHR_lights_punctual"] = tinygltf::Value(o);
+    b.model.extensionsUsed.push_back("KHR_lights_punctual");
+  });
   return cases;
 }
 
