@@ -105,22 +105,26 @@ class StreamTraversal {
 
   /// Closest hits of one stream (at most kMaxStream rays).
   void intersect_stream(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
+    // Each ray's t is its tfar until a primitive is found. An invalid ray never enters a
+    // stream (enter_all decides validity), so it stays without a primitive and ends a miss;
+    // validity is checked here only before the planes, and only in a scene with planes.
     for (size_t i = 0; i < rays.size(); ++i) {
       hits[i] = Hit{};
-      if (valid_ray(rays[i])) hits[i].t = rays[i].tfar;  // the ray's tfar until a primitive is found
+      hits[i].t = rays[i].tfar;
     }
     closest_tree(rays, hits, scratch(0), kNoInstance);
     if (const InstanceQueries<Kernel>* in = t_.instances()) closest_instances(*in, rays, hits);
+    const bool planes = !t_.scene().planes().empty();
     for (size_t i = 0; i < rays.size(); ++i) {
-      if (!valid_ray(rays[i])) continue;
       if (!hits[i].hit()) hits[i] = Hit{};
-      t_.scene().intersect_planes(rays[i], hits[i]);
+      if (planes && valid_ray(rays[i])) t_.scene().intersect_planes(rays[i], hits[i]);
     }
   }
 
   /// Any hits of one stream.
   void occluded_stream(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
-    for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && t_.scene().occluded_by_planes(rays[i]);
+    // Planes first: in a scene without any, validity is left to enter_all.
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = t_.scene().occluded_by_planes(rays[i]) && valid_ray(rays[i]);
     any_tree(rays, out, scratch(0));
     if (const InstanceQueries<Kernel>* in = t_.instances()) any_instances(*in, rays, out);
   }

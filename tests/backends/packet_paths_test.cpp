@@ -189,6 +189,7 @@ TEST_P(PacketPaths, MixedSpansSplitAndRecombineWithTheSameAnswers) {
     if (i % 89 == 0) rays[i].dir = Vec3f{0.0f, -1.0f, 0.0f};
     if (i % 79 == 0) rays[i].dir.z = 0x1p-140f;  // its inverse overflows: the exact slab form
     if (i % 83 == 0) rays[i].tnear = rays[i].tfar + 1.0f;
+    if (i % 101 == 0) rays[i].org.x = 2e9f;      // beyond the coordinate range (invalid), yet it would meet the plane
     if (i % 7 == 0) rays[i].dir = -rays[i].dir;  // another octant inside a coherent group
   }
   int near_ties = 0;
