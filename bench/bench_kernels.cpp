@@ -1,4 +1,4 @@
-// BM_Kernel/<slab8|moller_trumbore8|sphere8>: the simd backend's 8-wide kernels per call, on
+// BM_Kernel/<slab8|moller_trumbore8|certified8|watertight8|sphere8>: the simd backend's 8-wide kernels per call, on
 // seeded random inputs, with the fraction of lanes that hit as a counter. This file is built
 // for AVX2+FMA; main() registers these benchmarks only when the CPU has both.
 
@@ -7,6 +7,7 @@
 #include <random>
 
 #include "backends/simd/kernels.h"
+#include "backends/simd/packet.h"
 #include "engine/geometry/sphere.h"
 
 namespace rp::bvh8 {
@@ -99,10 +100,18 @@ void BM_MollerTrumbore8(benchmark::State& state) {
       });
 }
 
+/// The watertight variant's test x8 (certified.h): Möller–Trumbore with the bound on its edge
+/// decisions, Woop's test for the lanes it leaves uncertain.
+void BM_Certified8(benchmark::State& state) {
+  triangle_kernel(
+      state, [](const Ray& r) { return CertifiedKernel::Single(r); },
+      [](const CertifiedKernel::Single& k, const LeafView& tv) { return k.block(tv, float8(100.0f)); });
+}
+
 /// Watertight x8, the per-ray shear and axis permutation prepared once per ray.
 void BM_Watertight8(benchmark::State& state) {
   triangle_kernel(
-      state, [](const Ray& r) { return WatertightRays(&r, 1); },
+      state, [](const Ray& r) { return WatertightRays(r); },
       [](const WatertightRays& w, const LeafView& tv) { return watertight8(w, tv.v0, tv.v1, tv.v2, float8(100.0f)); });
 }
 
@@ -133,6 +142,7 @@ void BM_Sphere8(benchmark::State& state) {
 void register_kernel_benchmarks() {
   benchmark::RegisterBenchmark("BM_Kernel/slab8", BM_Slab8);
   benchmark::RegisterBenchmark("BM_Kernel/moller_trumbore8", BM_MollerTrumbore8);
+  benchmark::RegisterBenchmark("BM_Kernel/certified8", BM_Certified8);
   benchmark::RegisterBenchmark("BM_Kernel/watertight8", BM_Watertight8);
   benchmark::RegisterBenchmark("BM_Kernel/sphere8", BM_Sphere8);
 }

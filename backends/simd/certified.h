@@ -11,21 +11,26 @@
 /// B bounds, for each edge, the error of Möller–Trumbore's value plus the error Woop's test
 /// makes on the same quantity. A lane is certain of its edges when all three values lie
 /// farther than B from 0 (both tests then see the sign of every exact E, so both pass the
-/// edges or both miss), or when one lies below -3.5B (both see that edge negative and, as the
-/// three exact values sum to |den|, another positive: mixed signs, a miss in both). A lane
-/// inside the triangle must also have its t farther from tnear than the sum of both tests' t
-/// errors, so that both compare it alike (a ray leaving a surface meets its own triangle
-/// there). Every other lane is decided by Woop's test itself. So every lane's hit or miss is
-/// Woop's, but for one case: a lane inside whose t lies within those errors of tfar is
-/// compared with tfar by Möller–Trumbore. Such a hit is a near-tie with the hit that set tfar
-/// (or lies at the end of the ray's segment), never a ray through a mesh; deciding it by
-/// Woop's test would make which test reported a hit, and so the bits of its t, depend on the
-/// order in which a traversal met the leaves, where now every path gives the same bits. So
-/// two triangles sharing an edge, however each lane was decided, reach the decisions of Woop's
-/// watertight test, which computes a shared edge's function from the same floats for both and
-/// never lets a ray through. (A property test compares every lane with the unfiltered test on
-/// rays aimed at shared edges and vertices, near them, and leaving a surface.) Only t, u, v of
-/// a certain hit come from Möller–Trumbore.
+/// edges or both miss), or when one lies below -3.5B (both see that edge negative and, as
+/// the three exact values sum to |den|, another positive: mixed signs, a miss in both).
+/// Every other lane, a ray within
+/// about B of the triangle's border or nearly parallel to it, is decided by Woop's test
+/// itself. So every lane's edge decisions are Woop's: two triangles sharing an edge, however
+/// each lane was decided, reach the decisions of Woop's watertight test, which computes a
+/// shared edge's function from the same floats for both and never lets a ray through. (A
+/// property test compares every lane with the unfiltered test on rays aimed at shared edges
+/// and vertices, near them, and leaving a surface.)
+///
+/// The distance of a certain lane, and so its comparisons with tnear and tfar, are
+/// Möller–Trumbore's, as are its u, v. That is not a leak: a ray whose t lies within rounding
+/// of tnear or tfar has its hit at the end of its segment (a ray leaving its own surface, or a
+/// near-tie with the hit that set tfar), where both tests decide by a rounded t and
+/// Möller–Trumbore's is the more accurate one (tested against a double reference, and on rays
+/// leaving a surface its decision agrees with the reference's at least as often as Woop's). A
+/// rigorous bound on both tests' t error, tried first, was some thousands of u X wide: wider
+/// than the renderer's ray-origin offset on large triangles, it sent 8.6% of Sponza's shadow
+/// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
+/// of a reported t independent of the order in which a traversal met the leaves.
 ///
 /// The bound, per lane, with max-abs norms, u = 2^-24, c = v0 - o and r = c x d as
 /// Möller–Trumbore computes them, M = |c|, R' = |r| + 2^-20 M D, D = |d| (= |d_kz|) and X the
@@ -35,22 +40,13 @@
 ///
 /// Möller–Trumbore's errors, each rounded difference, product and FMA of its factoring traced
 /// (r and Ng = e2 x e1 per component within 6.5u M D and 8u X^2): U and V within
-/// u X (20.2 M D + 14 R'), |den| within 52.7u D X^2, T = Ng.c within 52.7u M X^2, W within
-/// u X (53.2 X D + 40.7 M D + 35.1 R'). Woop's, in the units of E: a vertex's sheared
-/// coordinates err by at most s = u (4.5 (M + X) + 1.1 P / D) and lie within P / D of 0,
-/// P = R' + 2.01 X D >= |(p - o) x d|; an edge function errs by at most
-/// 2.01 (2 P s + s^2 D) + 4.5u P^2 / D <= u (36 R' M + 54 R' X + 36.4 X D M + 72.4 X^2 D)
-/// (R' / D <= 2.01 M). The sum, u (36 R' M + 89 R' X + 77 X D M + 126 X^2 D), is below each
-/// term of B's product (38, 94, 83.6, 206.8) with room for the bound's own rounding.
-///
-/// t, for a lane inside (each edge value above B, so |den| >= 3B): both tests' denominators
-/// exceed den_lo = |den| (1 - 2^-22) - 3.5B. Möller–Trumbore's t errs by at most
-/// 63.2u X^2 (M + |t| D) / (D den_lo) + 2.2u |t| (|t| of the exact t within 1.2 times the
-/// computed one's bound); Woop's t is the average of the vertices' depths z_i weighted by its
-/// edge functions, so it errs by at most sum |dE_i| |z_i - t| / det <= 6.1 B X / (D den_lo),
-/// plus the depths' roundings 6u (M + X) / D and 4u |t|. With the comparisons' own roundings
-/// the sum stays below [B (6.9 X + 0.47 |t| D) + 14u (M + X + |t| D) |den|] / (D den_lo), so a
-/// lane inside is certain when |t - tnear| exceeds that.
+/// u X (20.2 M D + 14 R'), |den| within 52.7u D X^2, W within u X (53.2 X D + 40.7 M D +
+/// 35.1 R'). Woop's, in the units of E: a vertex's sheared coordinates err by at most
+/// s = u (4.5 (M + X) + 1.1 P / D) and lie within P / D of 0, P = R' + 2.01 X D >=
+/// |(p - o) x d|; an edge function errs by at most 2.01 (2 P s + s^2 D) + 4.5u P^2 / D <=
+/// u (36 R' M + 54 R' X + 36.4 X D M + 72.4 X^2 D) (R' / D <= 2.01 M). The sum,
+/// u (36 R' M + 89 R' X + 77 X D M + 126 X^2 D), is below each term of B's product (38, 94,
+/// 83.6, 206.8) with room for the bound's own rounding.
 ///
 /// No term underflows, which could hide an error: valid rays have D >= 2^-26, and X >= 2^-32.
 /// Lanes past a leaf's end are NaN: every comparison is false, the lane counts as certain,
@@ -66,6 +62,9 @@
 
 namespace rp::bvh8 {
 
+/// The |den| (in units of X^2 D) below which a hit's t is left to Woop's test.
+inline constexpr float kThin = 0x1p-12f;
+
 /// Max-abs norm of each lane.
 RP_SIMD_INLINE float8 max_abs(const Vec3x8& a) {
   return xsimd::max(xsimd::abs(a.x), xsimd::max(xsimd::abs(a.y), xsimd::abs(a.z)));
@@ -80,56 +79,65 @@ RP_SIMD_INLINE float8 edge_bound8(const Vec3x8& e1, const Vec3x8& e2) {
   return xsimd::max(float8(0x1p-32f), xsimd::max(max_abs(e1), max_abs(e2)) * float8(1.0f + 0x1p-22f));
 }
 
-/// Rays for the certified test: one ray broadcast or the 8 of a packet, with the per-ray
-/// figures of the bounds.
+/// One ray for the certified test, broadcast, with the per-ray factors of the bound.
 struct CertifiedRays {
   Vec3x8 org, dir;
   float8 tnear;
-  float8 d;          ///< D = |dir|
-  float8 d_m;  ///< 2^-20 D
-  float8 d_x;  ///< 2.2 D, the factor of X in the edge bound
-  float8 d_t;  ///< 0.47 D, the factor of |t| B in the t bound
+  float8 d_m;  ///< 2^-20 D, D = |dir|
+  float8 d_x;  ///< 2.2 D, the factor of X in the bound
 
   CertifiedRays() = default;
   /// The 8 rays of a packet.
   RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn)
-      : org(o), dir(dir_), tnear(tn), d(max_abs(dir_)), d_m(d * float8(0x1p-20f)), d_x(d * float8(2.2f)),
-        d_t(d * float8(0.47f)) {}
-  /// One ray in every lane (no 8-wide work: the ray-stream traversal sets one up per leaf).
-  RP_SIMD_INLINE explicit CertifiedRays(const Ray& r)
-      : CertifiedRays(r, max_component(abs(r.dir))) {}
+      : org(o), dir(dir_), tnear(tn), d_m(max_abs(dir_) * float8(0x1p-20f)), d_x(max_abs(dir_) * float8(2.2f)) {}
+  /// One ray in every lane.
+  RP_SIMD_INLINE explicit CertifiedRays(const Ray& r) : CertifiedRays(r, max_component(abs(r.dir))) {}
 
  private:
-  RP_SIMD_INLINE CertifiedRays(const Ray& r, float d_)
-      : org(r.org), dir(r.dir), tnear(r.tnear), d(d_), d_m(d_ * 0x1p-20f), d_x(d_ * 2.2f), d_t(d_ * 0.47f) {}
+  RP_SIMD_INLINE CertifiedRays(const Ray& r, float d)
+      : org(r.org), dir(r.dir), tnear(r.tnear), d_m(d * 0x1p-20f), d_x(d * 2.2f) {}
 };
 
-/// Möller–Trumbore on triangles v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with
-/// edge bound `x`: its answer in `h` (the bits of moller_trumbore8); returns the lanes whose
-/// decisions its bounds leave uncertain (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const float8& x, TriHit8& h) {
-  const MtTerms m = mt_terms(r.org, r.dir, v0, e1, e2, ng);
-  h = mt_answer(m, r.tnear, tfar);
-  const mask8 edges = mt_edges(m);
+/// A triangle's factors of the bound, from its edge bound X (edge_bound8): X itself, 94u X and
+/// 2^-12 X^2 / 2.2 (kThin). Computed once per triangle where many rays meet it.
+struct EdgeFactors {
+  float8 x, x94, x_thin;
+  EdgeFactors() = default;
+  RP_SIMD_INLINE explicit EdgeFactors(const float8& x_)
+      : x(x_), x94(x_ * float8(94.0f * 0x1p-24f)), x_thin(x_ * x_ * float8(kThin / 2.2f)) {}
+};
 
+/// Möller–Trumbore on rays (org, dir, tnear), whose bound factors are d_m, d_x
+/// (CertifiedRays), and triangles v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma)
+/// with edge factors `f`: its answer in `h` (the bits of moller_trumbore8); returns the lanes
+/// it leaves to Woop's test: those whose edge decisions its bound leaves uncertain, and the
+/// hits nearly in the triangle's plane (see the top of this file).
+RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
+                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
+                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  h = mt_answer(m, tnear, tfar);
   const float8 mc = max_abs(m.c);
-  const float8 rr = xsimd::fma(mc, r.d_m, max_abs(m.r));  // R' = R + 2^-20 M D
-  const float8 b = (rr + x * r.d_x) * xsimd::fma(mc, float8(38.0f * 0x1p-24f), x * float8(94.0f * 0x1p-24f));
+  const float8 rr = xsimd::fma(mc, d_m, max_abs(m.r));  // R' = R + 2^-20 M D
+  const float8 b = xsimd::fma(f.x, d_x, rr) * xsimd::fma(mc, float8(38.0f * 0x1p-24f), f.x94);
   const float8 w = m.abs_den - (m.u + m.v);
-  const float8 least = xsimd::min(xsimd::abs(m.u), xsimd::min(xsimd::abs(m.v), xsimd::abs(w)));
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
-  // Not sure of the edges: some value within B of 0, and none below -3.5B. A NaN lane (past a
-  // leaf's end; no other lane can have one) compares false: certain, Möller–Trumbore's miss.
-  const mask8 unsure_edges = (least <= b) & (lowest >= b * float8(-3.5f));
-  // t, where the ray passes inside: |t - t_exact| D (|den| - 3.5B) <= rhs for both tests. Only
-  // tnear is checked (see the top of this file on tfar).
-  const float8 at = xsimd::abs(h.t);
-  const float8 rhs = xsimd::fma(b, xsimd::fma(at, r.d_t, x * float8(6.9f)),
-                                xsimd::fma(at, r.d, mc + x) * (m.abs_den * float8(14.0f * 0x1p-24f)));
-  const float8 den_d = xsimd::fms(m.abs_den, float8(1.0f - 0x1p-22f), b * float8(3.5f)) * r.d;
-  const mask8 unsure_t = edges & ~(xsimd::abs(h.t - r.tnear) * den_d > rhs);  // NaN: unsure
-  return simd::movemask(unsure_edges | unsure_t);
+  const float8 least = xsimd::min(xsimd::abs(m.u), xsimd::min(xsimd::abs(m.v), xsimd::abs(w)));
+  // Not sure of the edges: some value within B of 0 and none below -3.5B, that is
+  // max(least, -lowest / 3.5) <= B (the product rounded down, so that no lane below -3.5B
+  // is missed). A NaN lane (past a leaf's end; no other lane can have one) compares false:
+  // certain, Möller–Trumbore's miss.
+  const float8 reach = xsimd::max(least, lowest * float8(-(1.0f - 0x1p-22f) / 3.5f));
+  // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
+  // test too: see the top of this file.
+  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d_x);
+  return simd::movemask((reach <= b) | thin);
+}
+
+/// The same for one ray broadcast (CertifiedRays).
+RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
+                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
+  return certified_mt8(r.org, r.dir, r.tnear, r.d_m, r.d_x, tfar, v0, e1, e2, ng, f, h);
 }
 
 /// Woop's answers (watertight8: the bits of the scalar routine) for the lanes `unsure`.
@@ -153,19 +161,12 @@ struct Settled {
   out.w = watertight8(WatertightRays(ray), lv.v0, lv.v1, lv.v2, float8(tfar));
 }
 
-/// Woop's per-ray set-up of a packet's 8 rays, made the first time a lane needs Woop's test.
-struct LazyWatertightRays {
-  WatertightRays rays;
-  bool ready = false;
-};
-
-/// The same for the 8 rays of a packet (`rays`, as the packet was loaded from) against one
-/// triangle (a, b, c).
-[[gnu::noinline, gnu::cold]] inline void settle_packet(std::span<const Ray> rays, LazyWatertightRays& wr,
-                                                       const float8& tfar, const Vec3f& a, const Vec3f& b,
-                                                       const Vec3f& c, Settled& out) {
-  if (!wr.ready) wr = {WatertightRays(rays.data(), rays.size()), true};
-  out.w = watertight8(wr.rays, Vec3x8(a), Vec3x8(b), Vec3x8(c), tfar);
+/// The same for the 8 rays of a packet (SoA, as loaded) against one triangle (a, b, c). Woop's
+/// set-up of the rays is made here, 8 lanes at once, each time: keeping it in the packet made
+/// the large-packet traversal's working set twice as large.
+[[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Vec3f& a,
+                                                       const Vec3f& b, const Vec3f& c, Settled& out) {
+  out.w = watertight8(WatertightRays(p.org, p.dir, p.tnear), Vec3x8(a), Vec3x8(b), Vec3x8(c), tfar);
 }
 
 }  // namespace rp::bvh8

@@ -486,40 +486,26 @@ struct WatertightRays {
       is_y[j] = simd::mask_from_bits(h.k[j] == 1 ? 0xffu : 0u);
     }
   }
-  /// The lanes of `rays` (n = 1: that ray in every lane; missing lanes repeat lane 0, the
-  /// caller masks them).
-  WatertightRays(const Ray* rays, size_t n) {
-    if (n == 1) {
-      *this = WatertightRays(rays[0]);
-      return;
-    }
-    simd::Spill<10> s;
-    auto& [ox, oy, oz, dx, dy, dz, fx, fy, fz, tn] = s.lanes;
-    uint32_t x_bits[3] = {0, 0, 0}, y_bits[3] = {0, 0, 0};  // lane i: axis k_j is x / is y
-    for (size_t i = 0; i < 8; ++i) {
-      const Ray& r = rays[i < n ? i : 0];
-      const Shear h = shear(r.dir);
-      fx[i] = h.sx;
-      fy[i] = h.sy;
-      fz[i] = h.sz;
-      for (int j = 0; j < 3; ++j) {
-        x_bits[j] |= uint32_t(h.k[j] == 0) << i;
-        y_bits[j] |= uint32_t(h.k[j] == 1) << i;
-      }
-      ox[i] = r.org.x; oy[i] = r.org.y; oz[i] = r.org.z;
-      dx[i] = r.dir.x; dy[i] = r.dir.y; dz[i] = r.dir.z;
-      tn[i] = r.tnear;
-    }
-    org = {s.load(0), s.load(1), s.load(2)};
-    dir = {s.load(3), s.load(4), s.load(5)};
-    for (int j = 0; j < 3; ++j) {
-      is_x[j] = simd::mask_from_bits(x_bits[j]);
-      is_y[j] = simd::mask_from_bits(y_bits[j]);
-    }
-    sx = s.load(6);
-    sy = s.load(7);
-    sz = s.load(8);
-    tnear = s.load(9);
+  /// 8 rays in SoA, each lane with its own axes and shear, chosen and computed as the scalar
+  /// `shear` does: kz the first axis of largest |component|, (kx, ky) the next two in cyclic
+  /// order, swapped when dir[kz] < 0; IEEE divisions, so each lane has the scalar bits.
+  RP_SIMD_INLINE WatertightRays(const Vec3x8& o, const Vec3x8& d, const float8& tn) : org(o), dir(d), tnear(tn) {
+    const float8 ax = xsimd::abs(d.x), ay = xsimd::abs(d.y), az = xsimd::abs(d.z);
+    const mask8 x_ge_y = ax >= ay;
+    const mask8 z_is_x = x_ge_y & (ax >= az), z_is_y = ~x_ge_y & (ay >= az), z_is_z = ~(z_is_x | z_is_y);
+    is_x[2] = z_is_x;
+    is_y[2] = z_is_y;
+    const float8 d_z = axis(d, 2);
+    const mask8 swap = d_z < float8(0.0f);
+    // Unswapped, kx follows kz cyclically (kz = x: kx = y; kz = y: kx = z; kz = z: kx = x) and
+    // ky follows kx.
+    is_x[0] = (z_is_z & ~swap) | (z_is_y & swap);
+    is_y[0] = (z_is_x & ~swap) | (z_is_z & swap);
+    is_x[1] = (z_is_y & ~swap) | (z_is_z & swap);
+    is_y[1] = (z_is_z & ~swap) | (z_is_x & swap);
+    sx = axis(d, 0) / d_z;
+    sy = axis(d, 1) / d_z;
+    sz = float8(1.0f) / d_z;
   }
 
   /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz): two blends, no branch on

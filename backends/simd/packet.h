@@ -71,9 +71,8 @@ struct CertifiedKernel {
     RP_SIMD_INLINE TriHit8 block(const LeafView& lv, const float8& tfar) const {
       TriHit8 h;
       const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
-      if (const uint32_t unsure =
-              certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1), edge_bound8(e1, e2), h))
-          [[unlikely]] {
+      if (const uint32_t unsure = certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1),
+                                                EdgeFactors(edge_bound8(e1, e2)), h)) [[unlikely]] {
         Settled s;
         settle_single(lv.leaf, ray, tfar.get(0), s);
         s.merge_into(h, unsure);
@@ -83,7 +82,7 @@ struct CertifiedKernel {
   };
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
-    float8 x;       ///< the triangle's edge bound (edge_bound8)
+    EdgeFactors f;  ///< the triangle's factors of the bound (edge_bound8)
     Vec3f a, b, c;  ///< the corners, for Woop's test
     Triangle() = default;
     Triangle(const Leaf& leaf, uint32_t k) : a(leaf.vertex(k, 0)), b(leaf.vertex(k, 1)), c(leaf.vertex(k, 2)) {
@@ -91,21 +90,21 @@ struct CertifiedKernel {
       e1 = Vec3x8(a - b);  // as MtKernel::Triangle
       e2 = Vec3x8(c - a);
       ng = simd::cross_fma(e2, e1);
-      x = edge_bound8(e1, e2);
+      f = EdgeFactors(edge_bound8(e1, e2));
     }
   };
   struct Packet {
-    std::span<const Ray> rays;  ///< the packet's rays (alive while it is traced)
-    CertifiedRays r;
-    mutable LazyWatertightRays woop;  ///< Woop's set-up of the rays, made when first needed
+    const RayPacket* p = nullptr;
+    float8 d_m, d_x;  ///< the rays' factors of the bound (CertifiedRays)
     Packet() = default;
-    Packet(const RayPacket& packet, std::span<const Ray> rays_)
-        : rays(rays_), r(packet.org, packet.dir, packet.tnear) {}
-    TriHit8 test(const Triangle& t, const float8& tfar) const {
+    Packet(const RayPacket& packet, std::span<const Ray>)
+        : p(&packet), d_m(max_abs(packet.dir) * float8(0x1p-20f)), d_x(max_abs(packet.dir) * float8(2.2f)) {}
+    RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar) const {
       TriHit8 h;
-      if (const uint32_t unsure = certified_mt8(r, tfar, t.v0, t.e1, t.e2, t.ng, t.x, h)) [[unlikely]] {
+      if (const uint32_t unsure =
+              certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) [[unlikely]] {
         Settled s;
-        settle_packet(rays, woop, tfar, t.a, t.b, t.c, s);
+        settle_packet(*p, tfar, t.a, t.b, t.c, s);
         s.merge_into(h, unsure);
       }
       return h;

@@ -15,6 +15,7 @@
 #include "backends/registry.h"
 #include "backends/simd/bvh8.h"
 #include "backends/simd/kernels.h"
+#include "backends/simd/packet.h"
 #include "engine/geometry/slab.h"
 #include "engine/geometry/triangle.h"
 #include "tests/backends/kernel_support.h"
@@ -478,7 +479,7 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
     Ray r{org, 0.0f, target - org, iter % 4 ? 100.0f : 0.9f};
     if (iter % 13 == 0) r.dir.x = -0.0f;
     const LeafView lv(Leaf(words.data()));
-    const TriHit8 h = watertight8(WatertightRays(&r, 1), lv.v0, lv.v1, lv.v2, float8(r.tfar));
+    const TriHit8 h = watertight8(WatertightRays(r), lv.v0, lv.v1, lv.v2, float8(r.tfar));
     for (int l = 0; l < 8; ++l) {
       if (l >= int(n)) {
         ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << n;
@@ -490,12 +491,34 @@ TEST(Kernels, Watertight8MatchesScalarBitForBit) {
       ++hits;
       exact_zero += s.u == 0.0f || s.v == 0.0f || s.u + s.v == 1.0f;
       expect_same_bits(lane_of(h, l), s);
-      // 8 rays (the same one) against the triangle broadcast: the packet form.
-      const Ray eight[8] = {r, r, r, r, r, r, r, r};
-      const TriHit8 p = watertight8(WatertightRays(eight, 8), Vec3x8(v[0][l]), Vec3x8(v[1][l]), Vec3x8(v[2][l]),
-                                float8(r.tfar));
-      EXPECT_EQ(simd::movemask(p.hit), 0xffu);
-      EXPECT_EQ(std::bit_cast<uint32_t>(simd::reduce_min(p.t)), std::bit_cast<uint32_t>(s.t));
+      // 8 rays against the triangle broadcast (the packet form): this ray and seven others
+      // aimed at the same point from origins moved and mirrored, so that the lanes take every
+      // dominant axis and sign, with ties between components (|dx| = |dy|, |dy| = |dz|).
+      Ray eight[8];
+      for (int j = 0; j < 8; ++j) {
+        eight[j] = r;
+        const Vec3f d = r.dir;
+        const Vec3f dj = j == 0   ? d
+                         : j == 1 ? Vec3f{-d.y, d.z, d.x}
+                         : j == 2 ? Vec3f{d.z, -d.x, -d.y}
+                         : j == 3 ? Vec3f{d.x, d.x, d.z}
+                         : j == 4 ? Vec3f{-d.y, -d.y, d.y}
+                         : j == 5 ? Vec3f{d.x, d.z, -d.z}
+                         : j == 6 ? -d
+                                  : Vec3f{-0.0f, d.y, d.z};
+        eight[j].dir = dj;
+        eight[j].org = target - dj;
+      }
+      RayPacket packet;
+      float8 tfar;
+      ASSERT_EQ(load_packet(eight, packet, tfar), 0xffu);
+      const TriHit8 p = watertight8(WatertightRays(packet.org, packet.dir, packet.tnear), Vec3x8(v[0][l]),
+                                    Vec3x8(v[1][l]), Vec3x8(v[2][l]), tfar);
+      for (int j = 0; j < 8; ++j) {
+        const Intersection<float> sj = intersect_triangle_watertight(eight[j], v[0][l], v[1][l], v[2][l]);
+        ASSERT_EQ(lane_of(p, j).hit, sj.hit) << "iter " << iter << " ray " << j;
+        if (sj.hit) expect_same_bits(lane_of(p, j), sj);
+      }
     }
   }
   EXPECT_GT(hits, 1000);
