@@ -105,7 +105,9 @@ void BM_MollerTrumbore8(benchmark::State& state) {
 void BM_Certified8(benchmark::State& state) {
   triangle_kernel(
       state, [](const Ray& r) { return CertifiedKernel::Single(r); },
-      [](const CertifiedKernel::Single& k, const LeafView& tv) { return k.block(tv, float8(100.0f)); });
+      [](const CertifiedKernel::Single& k, const LeafView& tv) {
+        return k.block(CertifiedKernel::Block(tv), float8(100.0f));
+      });
 }
 
 /// Watertight x8, the per-ray shear and axis permutation prepared once per ray.

@@ -458,12 +458,12 @@ class LargePacketTraversal {
       int m = leaf_packets(w, members, gb, e, which, lanes);
       if (!m) continue;
       const Leaf leaf = t_.bvh().leaf(e.ref);
-      std::optional<LeafView> lv;  // read once, for the first packet that takes the leaf by rays
+      std::optional<typename Kernel::Block> kb;  // read once, for the first packet that takes the leaf by rays
       if (t_.analytic_leaf(leaf) == kInvalidId)
         m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
           Packet& q = w.packets[size_t(i)];
-          if (!lv) lv.emplace(leaf);
-          t_.leaf_by_rays(leaf, *lv, here, q.p, packet_rays(rays, i), q.h, inst);
+          if (!kb) kb.emplace(LeafView(leaf));
+          t_.leaf_by_rays(leaf, *kb, here, q.p, packet_rays(rays, i), q.h, inst);
         });
       for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
         const uint32_t id = leaf.prim(k);
@@ -517,12 +517,12 @@ class LargePacketTraversal {
       }
       int m = leaf_packets(w, members, gb, e, which, lanes);
       const Leaf leaf = t_.bvh().leaf(e.ref);
-      std::optional<LeafView> lv;  // as in closest_group
+      std::optional<typename Kernel::Block> kb;  // as in closest_group
       if (t_.analytic_leaf(leaf) == kInvalidId)
         m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
           const Packet& q = w.packets[size_t(i)];
-          if (!lv) lv.emplace(leaf);
-          if (const uint32_t found = t_.leaf_any_by_rays(leaf, *lv, here, q.p, packet_rays(rays, i), q.h.tfar))
+          if (!kb) kb.emplace(LeafView(leaf));
+          if (const uint32_t found = t_.leaf_any_by_rays(leaf, *kb, here, q.p, packet_rays(rays, i), q.h.tfar))
             occlude(i, found);
         });
       for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {

@@ -403,11 +403,11 @@ class StreamTraversal {
   void leaf_closest(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<Hit> hits,
                     uint32_t inst) const noexcept {
     const Leaf leaf = bvh_.leaf(f.ref);
-    const LeafView lv(leaf);
+    const typename Kernel::Block kb{LeafView(leaf)};
     for (uint32_t k = 0; k < f.count; ++k) {
       const uint32_t i = s.ids[f.begin + k];
       float tfar = hits[i].t;
-      if (Traversal<Kernel>::leaf_single(leaf, lv, typename Kernel::Single(rays[i]), tfar, hits[i], inst))
+      if (Traversal<Kernel>::leaf_single(leaf, kb, typename Kernel::Single(rays[i]), tfar, hits[i], inst))
         s.rays[i].tfar = tfar;
     }
   }
@@ -417,12 +417,12 @@ class StreamTraversal {
   void leaf_any(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<const uint8_t> out,
                 Done&& done) const noexcept {
     const Leaf leaf = bvh_.leaf(f.ref);
-    const LeafView lv(leaf);
+    const typename Kernel::Block kb{LeafView(leaf)};
     const uint32_t slots = (1u << leaf.n) - 1;
     for (uint32_t k = 0; k < f.count; ++k) {
       const uint32_t i = s.ids[f.begin + k];
       if (out[i]) continue;
-      if (simd::movemask(typename Kernel::Single(rays[i]).block(lv, float8(rays[i].tfar)).hit) & slots) done(i);
+      if (simd::movemask(typename Kernel::Single(rays[i]).block(kb, float8(rays[i].tfar)).hit) & slots) done(i);
     }
   }
 

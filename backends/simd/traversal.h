@@ -206,7 +206,7 @@ class Traversal {
             best = {ah.t, id, ah.u, ah.v};
           }
         } else {
-          leaf_single(leaf, LeafView(leaf), kr, tfar, best, inst);
+          leaf_single(leaf, typename Kernel::Block(LeafView(leaf)), kr, tfar, best, inst);
         }
       }
       for (;;) {  // pop, skipping subtrees entered beyond the current hit
@@ -224,9 +224,10 @@ class Traversal {
   /// hit so far is `best`, searching up to `tfar` (best.t, or the ray's tfar before any hit):
   /// takes a closer hit, or one at the same t with a lower (prim_id, instance) (the rule at
   /// the top of this file; `inst` places the leaf's triangles). True when it took one.
-  RP_SIMD_INLINE static bool leaf_single(const Leaf& leaf, const LeafView& lv, const typename Kernel::Single& kr,
-                                         float& tfar, Hit& best, uint32_t inst = kNoInstance) {
-    const TriHit8 h = kr.block(lv, float8(tfar));
+  RP_SIMD_INLINE static bool leaf_single(const Leaf& leaf, const typename Kernel::Block& kb,
+                                         const typename Kernel::Single& kr, float& tfar, Hit& best,
+                                         uint32_t inst = kNoInstance) {
+    const TriHit8 h = kr.block(kb, float8(tfar));
     const uint32_t bits = simd::movemask(h.hit) & ((1u << leaf.n) - 1);
     if (!bits) return false;
     const float tmin =
@@ -262,7 +263,7 @@ class Traversal {
       const Leaf leaf = bvh_.leaf(ref);
       if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
         if (scene_.intersect_analytic(id, r).hit) return true;
-      } else if (simd::movemask(kr.block(LeafView(leaf), tfar8).hit) & ((1u << leaf.n) - 1)) {
+      } else if (simd::movemask(kr.block(typename Kernel::Block(LeafView(leaf)), tfar8).hit) & ((1u << leaf.n) - 1)) {
         return true;
       }
     }
@@ -325,7 +326,7 @@ class Traversal {
                     std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     const Leaf leaf = bvh_.leaf(ref);
     if (by_rays(mask, leaf.n) && analytic_leaf(leaf) == kInvalidId) {
-      leaf_by_rays(leaf, LeafView(leaf), mask, p, rays, h, inst);
+      leaf_by_rays(leaf, typename Kernel::Block(LeafView(leaf)), mask, p, rays, h, inst);
       return;
     }
     for (uint32_t k = 0; k < leaf.n; ++k) {
@@ -343,26 +344,26 @@ class Traversal {
   /// time against the packet: at most n / 2 lanes.
   static bool by_rays(uint32_t mask, uint32_t n) { return 2u * uint32_t(std::popcount(mask)) <= n; }
 
-  /// The triangles of `leaf` (read into `lv`, once for every lane and packet that takes it
+  /// The triangles of `leaf` (read into `kb`, once for every lane and packet that takes it
   /// this way) against each lane of `mask` in turn, by the single-ray test: the same hits and
   /// bits as a triangle at a time.
-  void leaf_by_rays(const Leaf& leaf, const LeafView& lv, uint32_t mask, const RayPacket& p, std::span<const Ray> rays,
-                    PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
+  void leaf_by_rays(const Leaf& leaf, const typename Kernel::Block& kb, uint32_t mask, const RayPacket& p,
+                    std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     h.each_lane(mask, [&](int lane, Hit& hit) {
       float tfar = hit.t;
-      leaf_single(leaf, lv, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit, inst);
+      leaf_single(leaf, kb, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit, inst);
     });
   }
 
-
   /// The lanes of `mask` that a triangle of `leaf` occludes, each lane against the leaf's
   /// triangles in one single-ray test, as leaf_by_rays does for closest hits.
-  uint32_t leaf_any_by_rays(const Leaf& leaf, const LeafView& lv, uint32_t mask, const RayPacket& p,
+  uint32_t leaf_any_by_rays(const Leaf& leaf, const typename Kernel::Block& kb, uint32_t mask, const RayPacket& p,
                             std::span<const Ray> rays, const float8& tfar) const noexcept {
     uint32_t found = 0;
     for (uint32_t b = mask; b; b &= b - 1) {
       const int lane = std::countr_zero(b);
-      const TriHit8 m = typename Kernel::Single(p, lane, rays[size_t(lane)]).block(lv, simd::broadcast_lane(tfar, lane));
+      const TriHit8 m =
+          typename Kernel::Single(p, lane, rays[size_t(lane)]).block(kb, simd::broadcast_lane(tfar, lane));
       if (simd::movemask(m.hit) & ((1u << leaf.n) - 1)) found |= b & (~b + 1);
     }
     return found;

@@ -119,9 +119,8 @@ std::vector<Ray> hard_rays(std::mt19937& rng, const Fan& f, double scale) {
 }
 
 /// The lanes the kernel sends to Woop's test; Möller–Trumbore's answer in `raw`.
-uint32_t slow_lanes(const CertifiedRays& r, const float8& tfar, const LeafView& lv, TriHit8& raw) {
-  const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
-  return certified_mt8(r, tfar, lv.v0, e1, e2, simd::cross_fma(e2, e1), EdgeFactors(edge_bound8(e1, e2)), raw);
+uint32_t slow_lanes(const CertifiedRays& r, const float8& tfar, const CertifiedKernel::Block& b, TriHit8& raw) {
+  return certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, raw);
 }
 
 /// The longest |coordinate| of triangle l's edges.
@@ -206,8 +205,8 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
       }
       const CertifiedKernel::Single kernel(r);
       TriHit8 raw;
-      const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), lv, raw);
-      const TriHit8 h = kernel.block(lv, float8(r.tfar));
+      const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), CertifiedKernel::Block(lv), raw);
+      const TriHit8 h = kernel.block(CertifiedKernel::Block(lv), float8(r.tfar));
       for (int l = 0; l < 8; ++l) {
         if (l >= f.k) {
           ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << f.k;
@@ -264,7 +263,7 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
       const CertifiedKernel::Packet packet(p, eight);
       for (int j = 0; j < 8; ++j) {
         const Ray& r = eight[size_t(j)];
-        const TriHit8 one = CertifiedKernel::Single(r).block(lv, float8(r.tfar));
+        const TriHit8 one = CertifiedKernel::Single(r).block(CertifiedKernel::Block(lv), float8(r.tfar));
         for (int l = 0; l < f.k; ++l) {
           const Intersection<float> a = lane_of(packet.test(CertifiedKernel::Triangle(leaf, uint32_t(l)), tfar), j);
           ASSERT_EQ(a.hit, lane_of(one, l).hit) << "iter " << iter << " ray " << j << " triangle " << l;
@@ -310,7 +309,7 @@ TEST(Certified, HitDistanceIsAsAccurateAsTheWatertightTest) {
     const CertifiedKernel::Single kernel(r);
     TriHit8 raw;
     const LeafView lv(leaf);
-    const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), lv, raw);
+    const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), CertifiedKernel::Block(lv), raw);
     const Intersection<float> w = woop(r, f, l);
     const Rayd rd{Vec3d(r.org), 0.0, Vec3d(r.dir), std::numeric_limits<double>::infinity()};
     const Intersection<double> ref =
@@ -357,7 +356,8 @@ TEST(Certified, NeedleHitsAreAsAccurateAsTheWatertightTest) {
     const Vec3d target = (Vec3d(v[0][0]) + Vec3d(v[1][0]) + Vec3d(v[2][0])) / 3.0;
     const Vec3f org(target + random_unit(rng) * (1.0 + 9.0 * u01(rng)));
     const Ray r{org, 0.0f, Vec3f(target) - org, std::numeric_limits<float>::infinity()};
-    const Intersection<float> h = lane_of(CertifiedKernel::Single(r).block(lv, float8(r.tfar)), 0);
+    const Intersection<float> h =
+        lane_of(CertifiedKernel::Single(r).block(CertifiedKernel::Block(lv), float8(r.tfar)), 0);
     const Intersection<float> w = intersect_triangle_watertight(r, v[0][0], v[1][0], v[2][0]);
     ASSERT_EQ(h.hit, w.hit) << "iter " << iter;
     const Rayd rd{Vec3d(r.org), 0.0, Vec3d(r.dir), std::numeric_limits<double>::infinity()};
@@ -387,20 +387,21 @@ Counts counts;
 
 /// The watertight variant's kernel, counting what its filter leaves to the slow path.
 struct CountingKernel {
+  using Block = CertifiedKernel::Block;
   using Triangle = CertifiedKernel::Triangle;
   using Packet = CertifiedKernel::Packet;
   struct Single {
     CertifiedKernel::Single k;
     explicit Single(const Ray& r) : k(r) {}
     Single(const RayPacket& p, int lane, const Ray& r) : k(p, lane, r) {}
-    TriHit8 block(const LeafView& lv, const float8& tfar) const {
+    TriHit8 block(const Block& b, const float8& tfar) const {
       TriHit8 raw;
-      const uint32_t slow = slow_lanes(k.r, tfar, lv, raw);
-      counts.lanes += lv.leaf.n;
+      const uint32_t slow = slow_lanes(k.r, tfar, b, raw);
+      counts.lanes += b.leaf.n;
       counts.slow += uint64_t(std::popcount(slow));
       counts.blocks += 1;
       counts.slow_blocks += slow != 0;
-      return k.block(lv, tfar);
+      return k.block(b, tfar);
     }
   };
 };
