@@ -474,7 +474,7 @@ class LargePacketTraversal {
         const typename Kernel::Triangle tri(leaf, k);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
-          Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar), lanes[j], id, inst);
+          Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar, lanes[j]), lanes[j], id, inst);
         }
       }
     }
@@ -537,7 +537,7 @@ class LargePacketTraversal {
             for (uint32_t b = lanes[j]; b; b &= b - 1)
               if (t_.scene().intersect_analytic(id, r[size_t(std::countr_zero(b))]).hit) found |= b & -b;
           } else {
-            found = simd::movemask(q.kp.test(tri, q.h.tfar).hit) & lanes[j];
+            found = simd::movemask(q.kp.test(tri, q.h.tfar, lanes[j]).hit) & lanes[j];
           }
           if (!found) continue;
           occlude(which[j], found);

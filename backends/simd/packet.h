@@ -58,7 +58,8 @@ struct MtKernel {
     const RayPacket* p = nullptr;
     Packet() = default;
     Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet) {}
-    TriHit8 test(const Triangle& t, const float8& tfar) const {
+    /// The answers of the lanes `lanes` (the caller ignores the others).
+    TriHit8 test(const Triangle& t, const float8& tfar, uint32_t /*lanes*/) const {
       return moller_trumbore8(p->org, p->dir, t.v0, t.e1, t.e2, t.ng, p->tnear, tfar);
     }
   };
@@ -110,10 +111,13 @@ struct CertifiedKernel {
     Packet() = default;
     Packet(const RayPacket& packet, std::span<const Ray>)
         : p(&packet), d_m(max_abs(packet.dir) * float8(0x1p-20f)), d_x(max_abs(packet.dir) * float8(2.2f)) {}
-    RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar) const {
+    /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
+    /// go to Woop's test).
+    RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
       TriHit8 h;
       if (const uint32_t unsure =
-              certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) [[unlikely]] {
+              certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h) & lanes)
+          [[unlikely]] {
         Settled s;
         settle_packet(*p, tfar, t.a, t.b, t.c, s);
         s.merge_into(h, unsure);

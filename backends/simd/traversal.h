@@ -335,7 +335,7 @@ class Traversal {
         analytic_packet(id, rays, mask, h);
         continue;
       }
-      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar), mask, id, inst);
+      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar, mask), mask, id, inst);
     }
   }
 
@@ -410,7 +410,7 @@ class Traversal {
         for (uint32_t b = mask; b; b &= b - 1)
           if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
       } else {
-        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(leaf, k), tfar).hit) & mask;
+        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(leaf, k), tfar, mask).hit) & mask;
       }
       done |= hit;
       mask &= ~hit;
