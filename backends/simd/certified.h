@@ -103,6 +103,11 @@ struct CertifiedRays {
 struct EdgeFactors {
   float8 x, x94, x_thin;
   EdgeFactors() = default;
+  /// Lane k of `f` in every lane.
+  RP_SIMD_INLINE EdgeFactors(const EdgeFactors& f, int k)
+      : x(simd::broadcast_lane(f.x, k)),
+        x94(simd::broadcast_lane(f.x94, k)),
+        x_thin(simd::broadcast_lane(f.x_thin, k)) {}
   RP_SIMD_INLINE explicit EdgeFactors(const float8& x_)
       : x(x_), x94(x_ * float8(94.0f * 0x1p-24f)), x_thin(x_ * x_ * float8(kThin / 2.2f)) {}
 };
@@ -161,12 +166,13 @@ struct Settled {
   out.w = watertight8(WatertightRays(ray), lv.v0, lv.v1, lv.v2, float8(tfar));
 }
 
-/// The same for the 8 rays of a packet (SoA, as loaded) against one triangle (a, b, c). Woop's
+/// The same for the 8 rays of a packet (SoA, as loaded) against triangle k of `leaf`. Woop's
 /// set-up of the rays is made here, 8 lanes at once, each time: keeping it in the packet made
 /// the large-packet traversal's working set twice as large.
-[[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Vec3f& a,
-                                                       const Vec3f& b, const Vec3f& c, Settled& out) {
-  out.w = watertight8(WatertightRays(p.org, p.dir, p.tnear), Vec3x8(a), Vec3x8(b), Vec3x8(c), tfar);
+[[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Leaf& leaf,
+                                                       uint32_t k, Settled& out) {
+  out.w = watertight8(WatertightRays(p.org, p.dir, p.tnear), Vec3x8(leaf.vertex(k, 0)), Vec3x8(leaf.vertex(k, 1)),
+                      Vec3x8(leaf.vertex(k, 2)), tfar);
 }
 
 }  // namespace rp::bvh8

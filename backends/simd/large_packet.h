@@ -458,7 +458,7 @@ class LargePacketTraversal {
       int m = leaf_packets(w, members, gb, e, which, lanes);
       if (!m) continue;
       const Leaf leaf = t_.bvh().leaf(e.ref);
-      std::optional<typename Kernel::Block> kb;  // read once, for the first packet that takes the leaf by rays
+      std::optional<typename Kernel::Block> kb;  // the leaf read once, when first needed
       if (t_.analytic_leaf(leaf) == kInvalidId)
         m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
           Packet& q = w.packets[size_t(i)];
@@ -471,7 +471,8 @@ class LargePacketTraversal {
           for (int j = 0; j < m; ++j) t_.analytic_packet(id, packet_rays(rays, which[j]), lanes[j], w.packets[which[j]].h);
           continue;
         }
-        const typename Kernel::Triangle tri(leaf, k);  // set up once for every packet
+        if (!kb) kb.emplace(LeafView(leaf));
+        const typename Kernel::Triangle tri(*kb, k);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar, lanes[j]), lanes[j], id, inst);
@@ -528,7 +529,9 @@ class LargePacketTraversal {
       for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
         const uint32_t id = leaf.prim(k);
         const bool analytic = id >= t_.bvh().first_analytic;
-        const typename Kernel::Triangle tri = analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(leaf, k);
+        if (!analytic && !kb) kb.emplace(LeafView(leaf));
+        const typename Kernel::Triangle tri =
+            analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(*kb, k);
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           uint32_t found = 0;

@@ -46,13 +46,12 @@ struct MtKernel {
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
     Triangle() = default;
-    Triangle(const Leaf& leaf, uint32_t k) {
-      const Vec3f a = leaf.vertex(k, 0), b = leaf.vertex(k, 1), c = leaf.vertex(k, 2);
-      v0 = Vec3x8(a);
-      e1 = Vec3x8(a - b);  // as rp::intersect_triangle_mt_normal
-      e2 = Vec3x8(c - a);
-      ng = simd::cross_fma(e2, e1);
-    }
+    /// Triangle k of a leaf's Block, in every lane.
+    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k)
+        : v0(b.v0.broadcast(int(k))),
+          e1(b.e1.broadcast(int(k))),
+          e2(b.e2.broadcast(int(k))),
+          ng(b.ng.broadcast(int(k))) {}
   };
   struct Packet {
     const RayPacket* p = nullptr;
@@ -95,15 +94,18 @@ struct CertifiedKernel {
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
     EdgeFactors f;  ///< the triangle's factors of the bound (edge_bound8)
-    Vec3f a, b, c;  ///< the corners, for Woop's test
+    const float* leaf = nullptr;  ///< the leaf's words, where Woop's test reads the corners
+    uint32_t k = 0;
     Triangle() = default;
-    Triangle(const Leaf& leaf, uint32_t k) : a(leaf.vertex(k, 0)), b(leaf.vertex(k, 1)), c(leaf.vertex(k, 2)) {
-      v0 = Vec3x8(a);
-      e1 = Vec3x8(a - b);  // as MtKernel::Triangle
-      e2 = Vec3x8(c - a);
-      ng = simd::cross_fma(e2, e1);
-      f = EdgeFactors(edge_bound8(e1, e2));
-    }
+    /// Triangle k of a leaf's Block, in every lane.
+    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
+        : v0(b.v0.broadcast(int(k_))),
+          e1(b.e1.broadcast(int(k_))),
+          e2(b.e2.broadcast(int(k_))),
+          ng(b.ng.broadcast(int(k_))),
+          f(b.f, int(k_)),
+          leaf(b.leaf.words),
+          k(k_) {}
   };
   struct Packet {
     const RayPacket* p = nullptr;
@@ -119,7 +121,7 @@ struct CertifiedKernel {
               certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h) & lanes)
           [[unlikely]] {
         Settled s;
-        settle_packet(*p, tfar, t.a, t.b, t.c, s);
+        settle_packet(*p, tfar, Leaf(t.leaf), t.k, s);
         s.merge_into(h, unsure);
       }
       return h;

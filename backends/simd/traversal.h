@@ -325,17 +325,21 @@ class Traversal {
   void leaf_closest(int32_t ref, uint32_t mask, const RayPacket& p, const PacketSetup<Kernel>& ps,
                     std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
     const Leaf leaf = bvh_.leaf(ref);
-    if (by_rays(mask, leaf.n) && analytic_leaf(leaf) == kInvalidId) {
-      leaf_by_rays(leaf, typename Kernel::Block(LeafView(leaf)), mask, p, rays, h, inst);
+    if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
+      analytic_packet(id, rays, mask, h);
+      return;
+    }
+    const typename Kernel::Block kb{LeafView(leaf)};
+    if (by_rays(mask, leaf.n)) {
+      leaf_by_rays(leaf, kb, mask, p, rays, h, inst);
       return;
     }
     for (uint32_t k = 0; k < leaf.n; ++k) {
       const uint32_t id = leaf.prim(k);
-      if (id >= bvh_.first_analytic) {
-        analytic_packet(id, rays, mask, h);
-        continue;
-      }
-      update(h, ps.kp.test(typename Kernel::Triangle(leaf, k), h.tfar, mask), mask, id, inst);
+      if (id >= bvh_.first_analytic)
+        analytic_packet(id, rays, mask, h);  // (leaves keep them apart)
+      else
+        update(h, ps.kp.test(typename Kernel::Triangle(kb, k), h.tfar, mask), mask, id, inst);
     }
   }
 
@@ -403,14 +407,20 @@ class Traversal {
                     const float8& tfar) const noexcept {
     const Leaf leaf = bvh_.leaf(ref);
     uint32_t done = 0;
+    if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
+      for (uint32_t b = mask; b; b &= b - 1)
+        if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) done |= b & -b;
+      return done;
+    }
+    const typename Kernel::Block kb{LeafView(leaf)};
     for (uint32_t k = 0; k < leaf.n && mask; ++k) {
       const uint32_t id = leaf.prim(k);
       uint32_t hit = 0;
-      if (id >= bvh_.first_analytic) {
+      if (id >= bvh_.first_analytic) {  // (leaves keep them apart)
         for (uint32_t b = mask; b; b &= b - 1)
           if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
       } else {
-        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(leaf, k), tfar, mask).hit) & mask;
+        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(kb, k), tfar, mask).hit) & mask;
       }
       done |= hit;
       mask &= ~hit;

@@ -266,7 +266,7 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
         const TriHit8 one = CertifiedKernel::Single(r).block(CertifiedKernel::Block(lv), float8(r.tfar));
         for (int l = 0; l < f.k; ++l) {
           const Intersection<float> a =
-              lane_of(packet.test(CertifiedKernel::Triangle(leaf, uint32_t(l)), tfar, 0xffu), j);
+              lane_of(packet.test(CertifiedKernel::Triangle(CertifiedKernel::Block(lv), uint32_t(l)), tfar, 0xffu), j);
           ASSERT_EQ(a.hit, lane_of(one, l).hit) << "iter " << iter << " ray " << j << " triangle " << l;
           if (a.hit) expect_same_bits(a, lane_of(one, l));
         }
