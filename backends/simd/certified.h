@@ -1,7 +1,7 @@
 #pragma once
 /// The triangle test of the watertight variant: Möller–Trumbore ×8 (the default variant's
-/// kernel) with a forward error bound on each of its decisions, and the watertight test of
-/// Woop, Benthin and Wald (2013) for the lanes whose decisions the bound leaves uncertain.
+/// kernel) with a forward error bound on each of its edge decisions, and the watertight test
+/// of Woop, Benthin and Wald (2013) for the lanes whose decisions the bound leaves uncertain.
 /// AVX2+FMA translation units only.
 ///
 /// Why the combination is watertight. For an edge p-q and a ray (o, d), let E be the exact
@@ -13,9 +13,8 @@
 /// farther than B from 0 (both tests then see the sign of every exact E, so both pass the
 /// edges or both miss), or when one lies below -3.5B (both see that edge negative and, as
 /// the three exact values sum to |den|, another positive: mixed signs, a miss in both).
-/// Every other lane, a ray within
-/// about B of the triangle's border or nearly parallel to it, is decided by Woop's test
-/// itself. So every lane's edge decisions are Woop's: two triangles sharing an edge, however
+/// Every other lane, a ray within about B of the triangle's border or nearly parallel to it,
+/// is decided by Woop's test itself. So every lane's edge decisions are Woop's: two triangles sharing an edge, however
 /// each lane was decided, reach the decisions of Woop's watertight test, which computes a
 /// shared edge's function from the same floats for both and never lets a ray through. (A
 /// property test compares every lane with the unfiltered test on rays aimed at shared edges
@@ -31,6 +30,14 @@
 /// than the renderer's ray-origin offset on large triangles, it sent 8.6% of Sponza's shadow
 /// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
 /// of a reported t independent of the order in which a traversal met the leaves.
+///
+/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a hit with
+/// |den| < 2^-12 X^2 D (kThin) goes to Woop's test too. Möller–Trumbore's t is Ng.c / Ng.d, and
+/// on a needle (or a ray nearly in the triangle's plane) Ng is the cross product of nearly
+/// parallel edges, relatively far less accurate than the edges; Woop's t is the average of the
+/// vertices' depths weighted by its edge functions and does not depend on Ng. (Tested on
+/// needles and near-degenerate triangles against the double test: without the guard the
+/// kernel's t is wrong more often than Woop's.)
 ///
 /// The bound, per lane, with max-abs norms, u = 2^-24, c = v0 - o and r = c x d as
 /// Möller–Trumbore computes them, M = |c|, R' = |r| + 2^-20 M D, D = |d| (= |d_kz|) and X the
@@ -87,7 +94,7 @@ struct CertifiedRays {
   float8 d_x;  ///< 2.2 D, the factor of X in the bound
 
   CertifiedRays() = default;
-  /// The 8 rays of a packet.
+  /// From SoA vectors (a packet's lane, broadcast).
   RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn)
       : org(o), dir(dir_), tnear(tn), d_m(max_abs(dir_) * float8(0x1p-20f)), d_x(max_abs(dir_) * float8(2.2f)) {}
   /// One ray in every lane.

@@ -463,8 +463,8 @@ inline Shear shear(const Vec3f& dir) {
 
 /// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8
 /// lanes: one ray broadcast, or the 8 rays of a packet, each with its own axis permutation.
-/// The constants are computed per lane by the scalar code of rp::intersect_triangle_watertight,
-/// so each lane gets that routine's bits.
+/// The constants are those of rp::intersect_triangle_watertight, by the same choice of axes and
+/// the same IEEE divisions, so each lane gets that routine's bits.
 struct WatertightRays {
   Vec3x8 org, dir;
   mask8 is_x[3], is_y[3];  ///< per lane: axis kx, ky, kz (index 0, 1, 2) is x / is y (else z)

@@ -24,8 +24,8 @@ namespace rp::bvh8 {
 /// edges computed from the leaf's vertices. Block: a leaf's triangles as the test takes them
 /// (edges and normals), made once from the leaf's LeafView for every ray tested against it
 /// (a ray stream brings 9-33 rays to each leaf it visits on bunny, dragon and Sponza);
-/// Single: one ray against a Block; Triangle: one primitive of a leaf in every lane, with
-/// its normal computed once; Packet: the 8 rays of a packet against one Triangle.
+/// Single: one ray against a Block; Triangle: one primitive of a leaf in every lane (its lane
+/// of the leaf's Block, broadcast); Packet: the 8 rays of a packet against one Triangle.
 struct MtKernel {
   struct Block {
     Vec3x8 v0, e1, e2, ng;
@@ -65,8 +65,8 @@ struct MtKernel {
 };
 
 /// The triangle test of the watertight variant as it runs: Möller–Trumbore with a bound on
-/// the error of each decision, and Woop, Benthin and Wald's test for the lanes the bound leaves
-/// uncertain (certified.h: why every lane's hit or miss is that test's).
+/// the error of each edge decision, and Woop, Benthin and Wald's test for the lanes the bound
+/// leaves uncertain (certified.h: why every lane's edge decisions are that test's).
 struct CertifiedKernel {
   struct Block {
     Vec3x8 v0, e1, e2, ng;
