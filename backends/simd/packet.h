@@ -68,12 +68,12 @@ struct MtKernel {
 /// the error of each edge decision, and Woop, Benthin and Wald's test for the lanes the bound
 /// leaves uncertain (certified.h: why every lane's edge decisions are that test's).
 struct CertifiedKernel {
-  struct Block {
-    Vec3x8 v0, e1, e2, ng;
+  /// MtKernel's Block, with the triangles' factors of the bound and the leaf for Woop's test.
+  struct Block : MtKernel::Block {
     EdgeFactors f;  ///< the triangles' factors of the bound (edge_bound8)
     Leaf leaf;      ///< for Woop's test
     RP_SIMD_INLINE explicit Block(const LeafView& lv)
-        : v0(lv.v0), e1(lv.e1()), e2(lv.e2()), ng(simd::cross_fma(e2, e1)), f(edge_bound8(e1, e2)), leaf(lv.leaf) {}
+        : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.leaf) {}
   };
   struct Single {
     CertifiedRays r;
@@ -91,28 +91,23 @@ struct CertifiedKernel {
       return h;
     }
   };
-  struct Triangle {
-    Vec3x8 v0, e1, e2, ng;
-    EdgeFactors f;  ///< the triangle's factors of the bound (edge_bound8)
+  /// MtKernel's Triangle, with its factors of the bound and where Woop's test reads it.
+  struct Triangle : MtKernel::Triangle {
+    EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
     const float* leaf = nullptr;  ///< the leaf's words, where Woop's test reads the corners
     uint32_t k = 0;
     Triangle() = default;
     /// Triangle k of a leaf's Block, in every lane.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
-        : v0(b.v0.broadcast(int(k_))),
-          e1(b.e1.broadcast(int(k_))),
-          e2(b.e2.broadcast(int(k_))),
-          ng(b.ng.broadcast(int(k_))),
-          f(b.f, int(k_)),
-          leaf(b.leaf.words),
-          k(k_) {}
+        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf.words), k(k_) {}
   };
   struct Packet {
     const RayPacket* p = nullptr;
     float8 d_m, d_x;  ///< the rays' factors of the bound (CertifiedRays)
     Packet() = default;
-    Packet(const RayPacket& packet, std::span<const Ray>)
-        : p(&packet), d_m(max_abs(packet.dir) * float8(0x1p-20f)), d_x(max_abs(packet.dir) * float8(2.2f)) {}
+    Packet(const RayPacket& packet, std::span<const Ray>) : Packet(packet, max_abs(packet.dir)) {}
+    /// The rays of `packet`, whose directions' max-norms are `d`.
+    Packet(const RayPacket& packet, const float8& d) : p(&packet), d_m(d * float8(0x1p-20f)), d_x(d * float8(2.2f)) {}
     /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
     /// go to Woop's test).
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
