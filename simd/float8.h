@@ -237,12 +237,6 @@ inline void transpose8x8(float8 m[8]) {
   m[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
 }
 
-/// Eight consecutive 32-byte records (8 floats each) from unaligned memory, as the rows of
-/// an 8x8 matrix (to be transposed by transpose8x8).
-inline void load_rows8(const float* records, float8 m[8]) {
-  for (int i = 0; i < 8; ++i) m[i] = float8::load_unaligned(records + 8 * i);
-}
-
 /// The bits of each lane as an integer, and back.
 inline int8 as_int(const float8& v) { return _mm256_castps_si256(v); }
 inline float8 as_float(const int8& v) { return _mm256_castsi256_ps(v); }
@@ -273,6 +267,16 @@ inline void load_records4(const float* records, float8 out[4], size_t stride = 4
   out[1] = _mm256_shuffle_ps(t0, t2, 0xee);
   out[2] = _mm256_shuffle_ps(t1, t3, 0x44);
   out[3] = _mm256_shuffle_ps(t1, t3, 0xee);
+}
+
+/// Eight consecutive 32-byte records (8 floats each, unaligned) as 8 rows: lane i of out[k] is
+/// float k of record i (eight rays' fields as SoA rows). Two load_records4, each record read
+/// as two 16-byte halves straight into the shuffles: loading the records as whole rows into
+/// an array first made GCC copy them through the stack 16 bytes at a time and read them back
+/// 32 at a time, which no store can forward.
+inline void load_transposed8x8(const float* records, float8 out[8]) {
+  load_records4(records, out, 8);
+  load_records4(records + 4, out + 4, 8);
 }
 
 /// Records of 3 floats (or 3 words: bits move unchanged) in an array of `count`: lane l of

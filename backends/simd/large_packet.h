@@ -364,33 +364,49 @@ class LargePacketTraversal {
   }
 
   /// Pushes the children of node `n` that the members of entry `e` may reach, nearest last.
+  /// `e` may be the stack's slot `sp` (the entry just popped): it is read before any push.
+  /// The kids are sorted as slot numbers and ranges, and each entry written to the stack a
+  /// field at a time: entries built whole and copied were read back 16 bytes at a time from
+  /// 4-byte stores, which no store can forward.
   static void push_children(const Work& w, const uint8_t* members, const GroupBeam& gb, const Bvh8Node& n,
                             const Entry& e, Entry* stack, int& sp) {
+    const int e_first = e.first, e_last = e.last;
     const uint32_t candidates = gb.beam.cull(n, gb.tfar_max);
     if (!candidates) return;
     alignas(32) float key[8];
     near_first_keys(n, gb.sx, gb.sy, gb.sz).store_aligned(key);
-    Entry kids[8];
+    uint8_t kid[8], kid_first[8], kid_last[8];
     float kid_key[8];
     int k = 0;
     for (uint32_t bits = candidates; bits; bits &= bits - 1) {
       const int c = std::countr_zero(bits);
       if (n.child[c] == kEmpty) continue;
       const Vec3f lo{n.lo_x[c], n.lo_y[c], n.lo_z[c]}, hi{n.hi_x[c], n.hi_y[c], n.hi_z[c]};
-      int first = e.first, last = e.last;
+      int first = e_first, last = e_last;
       bound_range(w, members, gb, lo, hi, first, last);
       if (first > last) continue;
-      const Entry kid{n.child[c], uint8_t(first), uint8_t(last), lo, hi};
       int j = k++;
       for (; j > 0 && kid_key[j - 1] < key[c]; --j) {  // descending keys: the nearest ends up last
-        kids[j] = kids[j - 1];
+        kid[j] = kid[j - 1];
+        kid_first[j] = kid_first[j - 1];
+        kid_last[j] = kid_last[j - 1];
         kid_key[j] = kid_key[j - 1];
       }
-      kids[j] = kid;
+      kid[j] = uint8_t(c);
+      kid_first[j] = uint8_t(first);
+      kid_last[j] = uint8_t(last);
       kid_key[j] = key[c];
     }
     RP_DCHECK(sp + k <= kStackSize);
-    for (int j = 0; j < k; ++j) stack[sp++] = kids[j];
+    for (int j = 0; j < k; ++j) {
+      Entry& to = stack[sp++];
+      const int c = kid[j];
+      to.ref = n.child[c];
+      to.first = kid_first[j];
+      to.last = kid_last[j];
+      to.lo = {n.lo_x[c], n.lo_y[c], n.lo_z[c]};
+      to.hi = {n.hi_x[c], n.hi_y[c], n.hi_z[c]};
+    }
   }
 
   /// The members of entry `e` (a leaf) whose live lanes hit its box, and those lanes.
@@ -440,7 +456,7 @@ class LargePacketTraversal {
     uint8_t which[kMaxPackets];
     uint32_t lanes[kMaxPackets];
     while (sp > 0) {
-      const Entry e = stack[--sp];
+      const Entry& e = stack[--sp];              // read in place (push_children reads it before pushing)
       if (e.last - e.first < kPacketFallback) {  // few packets left: each continues on its own
         for (int k = e.first; k <= e.last; ++k) {
           Packet& q = w.packets[members[k]];
@@ -501,7 +517,7 @@ class LargePacketTraversal {
     uint8_t which[kMaxPackets];
     uint32_t lanes[kMaxPackets];
     while (sp > 0 && live_packets > 0) {
-      const Entry e = stack[--sp];
+      const Entry& e = stack[--sp];  // read in place (push_children reads it before pushing)
       if (e.last - e.first < kPacketFallback) {
         for (int k = e.first; k <= e.last; ++k) {
           Packet& q = w.packets[members[k]];

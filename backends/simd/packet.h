@@ -144,8 +144,7 @@ inline uint32_t load_packet(std::span<const Ray> rays, RayPacket& p, float8& tfa
   uint32_t active = 0;
   if (rays.size() >= 8) {
     float8 m[8];
-    simd::load_rows8(&rays[0].org.x, m);
-    simd::transpose8x8(m);
+    simd::load_transposed8x8(&rays[0].org.x, m);
     active = valid_lanes({m[0], m[1], m[2]}, {m[4], m[5], m[6]}, m[3], m[7]);
     const mask8 on = simd::mask_from_bits(active);
     const float8 zero(0.0f), one(1.0f);

@@ -283,8 +283,7 @@ class StreamTraversal {
     size_t base = 0;
     for (; base + 8 <= n; base += 8) {
       float8 m[8];
-      simd::load_rows8(&rays[base].org.x, m);
-      simd::transpose8x8(m);
+      simd::load_transposed8x8(&rays[base].org.x, m);
       const Vec3x8 org{m[0], m[1], m[2]}, dir{m[4], m[5], m[6]};
       uint32_t lanes = valid_lanes(org, dir, m[3], m[7]);
       for (uint32_t b = lanes; b; b &= b - 1)

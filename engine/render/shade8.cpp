@@ -299,8 +299,7 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
             bool bounce, MeshRange& range, ShadeOut& out) {
   const Scene& scene = s.scene;
   float8 ray_rows[8];
-  simd::load_rows8(&rays[base].org.x, ray_rows);
-  simd::transpose8x8(ray_rows);
+  simd::load_transposed8x8(&rays[base].org.x, ray_rows);
   const V8 org{ray_rows[0], ray_rows[1], ray_rows[2]}, dir{ray_rows[4], ray_rows[5], ray_rows[6]};
   const V8 weight{path_rows[1], path_rows[2], path_rows[3]};
   alignas(32) uint32_t slot[8];

@@ -657,20 +657,27 @@ void expect_vec3_op(const char* name, const std::function<Vec3x8(const Vec3Case&
   EXPECT_EQ(bad.count(), 0);
 }
 
+/// transpose8x8 on rows in registers, and load_transposed8x8 from eight records in memory
+/// (unaligned): lane i of row j is word j of record i, every bit pattern kept.
 TEST(Transpose8x8, MovesEveryBitToItsTransposedPlace) {
   std::mt19937 rng(81);
   for (int round = 0; round < 100; ++round) {
     alignas(32) uint32_t in[64];
     for (uint32_t& b : in) b = rng();  // every bit pattern: NaNs, -0, denormals included
-    float records[64];
-    std::memcpy(records, in, sizeof in);
-    float8 m[8];
-    load_rows8(records, m);
+    float records[65];
+    std::memcpy(records + 1, in, sizeof in);  // 4 bytes past a 32-byte boundary at best
+    float8 m[8], loaded[8];
+    for (int i = 0; i < 8; ++i) m[i] = float8::load_aligned(reinterpret_cast<const float*>(in + 8 * i));
     transpose8x8(m);
+    load_transposed8x8(records + 1, loaded);
     for (int j = 0; j < 8; ++j) {
-      alignas(32) uint32_t out[8];
+      alignas(32) uint32_t out[8], from_memory[8];
       std::memcpy(out, &m[j], 32);
-      for (int i = 0; i < 8; ++i) ASSERT_EQ(out[i], in[8 * i + j]) << "row " << j << " lane " << i;
+      std::memcpy(from_memory, &loaded[j], 32);
+      for (int i = 0; i < 8; ++i) {
+        ASSERT_EQ(out[i], in[8 * i + j]) << "row " << j << " lane " << i;
+        ASSERT_EQ(from_memory[i], in[8 * i + j]) << "loaded row " << j << " lane " << i;
+      }
     }
   }
 }
