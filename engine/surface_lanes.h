@@ -64,17 +64,25 @@ PointLanes<F> quadric_point(const Vec3<F>& org, const Vec3<F>& dir, const F& t, 
   return {at, n, n};
 }
 
-/// Where rounding leaves the geometric normal without a direction (a point computed at a tiny
-/// shape's centre from far away), both normals face the ray, and a non-finite position
-/// becomes org + t dir.
+/// fix_degenerate_normal's fix of the lanes `bad`, out of line: few hits need it.
 template <class F>
-void fix_degenerate_normal(PointLanes<F>& p, const Vec3<F>& org, const Vec3<F>& dir, const F& t) {
-  const auto bad = !(dot(p.geometric_normal, p.geometric_normal) > F(0.5f));
-  if (!Lanes<F>::any(bad)) return;  // the usual case: nothing to fix
+[[gnu::noinline]] void face_the_ray(PointLanes<F>& p, const Vec3<F>& org, const Vec3<F>& dir, const F& t,
+                                    typename Lanes<F>::Mask bad) {
   const Vec3<F> facing = -unit(dir);
   p.geometric_normal = select<F>(bad, facing, p.geometric_normal);
   p.shading_normal = select<F>(bad, facing, p.shading_normal);
   p.position = select<F>(bad && !finite3(p.position), org + dir * t, p.position);
+}
+
+/// Where rounding leaves the geometric normal without a direction (a point computed at a tiny
+/// shape's centre from far away), both normals face the ray, and a non-finite position
+/// becomes org + t dir. The test is inline (GCC had called the whole of it out of line from
+/// the 8-wide shading, passing the points through memory, for a test that almost never fails).
+template <class F>
+[[gnu::always_inline]] inline void fix_degenerate_normal(PointLanes<F>& p, const Vec3<F>& org, const Vec3<F>& dir,
+                                                         const F& t) {
+  const auto bad = !(dot(p.geometric_normal, p.geometric_normal) > F(0.5f));
+  if (Lanes<F>::any(bad)) face_the_ray<F>(p, org, dir, t, bad);
 }
 
 /// The world point and normals of a hit on an instance's triangle (Scene::instance_surface)

@@ -54,19 +54,54 @@ struct SampleStreams {
   uint64_t pixel_key(uint64_t pixel) const { return mix(pixel_seed ^ pixel); }
   uint64_t lens_key(uint64_t pixel) const { return mix(lens_seed ^ pixel); }
 
-  Vec2f pixel(uint64_t key, const Stratum& s) const {
-    if (sampler == Sampler::uniform) return {(float(s.x) + 0.5f) / float(grid), (float(s.y) + 0.5f) / float(grid)};
-    const uint64_t h = mix(key ^ uint64_t(s.sample));
-    const float jx = to_unit(h), jy = to_unit(mix(h));
-    if (sampler == Sampler::random) return {jx, jy};
-    if (spp == 1) return {0.5f, 0.5f};
-    if (s.free) return {jx, jy};
-    return {(float(s.x) + jx) / float(grid), (float(s.y) + jy) / float(grid)};
+  /// Where sample `s` lies in its pixel, the pixel's hashed position (jx, jy) aside: the
+  /// centre of its grid cell (uniform), the pixel centre (one sample), or (jx, jy) itself
+  /// (random, or past the grid) or placed in its cell (stratified).
+  enum class Place { cell_centre, pixel_centre, jitter, in_cell };
+  Place place(const Stratum& s) const {
+    if (sampler == Sampler::uniform) return Place::cell_centre;
+    if (sampler == Sampler::random) return Place::jitter;
+    if (spp == 1) return Place::pixel_centre;
+    return s.free ? Place::jitter : Place::in_cell;
   }
-  Vec2f lens(uint64_t key, int sample) const {
+  static Vec2f jitter(uint64_t key, int sample) {
     const uint64_t h = mix(key ^ uint64_t(sample));
     return {to_unit(h), to_unit(mix(h))};
   }
+
+  Vec2f pixel(uint64_t key, const Stratum& s) const {
+    float x[1], y[1];
+    pixel8<1>(&key, s, x, y);
+    return {x[0], y[0]};
+  }
+  /// pixel() of N pixels (their keys) at once: the hashes a pixel at a time, the rest in
+  /// loops over the pixels with one operation each, which the compiler vectorises (the same
+  /// IEEE operations, so the same values).
+  template <int N>
+  void pixel8(const uint64_t* keys, const Stratum& s, float* x, float* y) const {
+    const Place at = place(s);
+    if (at == Place::cell_centre || at == Place::pixel_centre) {
+      const float g = at == Place::cell_centre ? float(grid) : 1.0f;
+      const float cx = at == Place::cell_centre ? float(s.x) : 0.0f, cy = at == Place::cell_centre ? float(s.y) : 0.0f;
+      for (int k = 0; k < N; ++k) {
+        x[k] = (cx + 0.5f) / g;
+        y[k] = (cy + 0.5f) / g;
+      }
+      return;
+    }
+    for (int k = 0; k < N; ++k) {
+      const Vec2f j = jitter(keys[k], s.sample);
+      x[k] = j.x;
+      y[k] = j.y;
+    }
+    if (at == Place::jitter) return;
+    const float g = float(grid), cx = float(s.x), cy = float(s.y);
+    for (int k = 0; k < N; ++k) {
+      x[k] = (cx + x[k]) / g;
+      y[k] = (cy + y[k]) / g;
+    }
+  }
+  Vec2f lens(uint64_t key, int sample) const { return jitter(key, sample); }
 };
 
 struct Counters {
@@ -215,10 +250,10 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
     for (size_t at = 0; at < size_t(kTile * kTile); at += 8) {
       float px[8], py[8];
       Vec2f lens[8];
+      streams.pixel8<8>(&pixel_keys[at], stratum, px, py);
       for (int lane = 0; lane < 8; ++lane) {
-        const Vec2f j = streams.pixel(pixel_keys[at + size_t(lane)], stratum);
-        px[lane] = base_x[at + size_t(lane)] + j.x;
-        py[lane] = base_y[at + size_t(lane)] + j.y;
+        px[lane] += base_x[at + size_t(lane)];
+        py[lane] += base_y[at + size_t(lane)];
       }
       if (thin_lens)
         for (int lane = 0; lane < 8; ++lane) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);

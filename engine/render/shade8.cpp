@@ -53,25 +53,56 @@ struct MeshRange {
   }
 };
 
-/// Gathers them as vectors when every hit lies in one mesh (broadcasts them when every hit
-/// is on one triangle, as a packet's rays on a large triangle are), else reads them lane by
-/// lane. The same bits each way: only the hit lanes are read.
+/// The lanes `lanes` of mesh `mesh` (its triangles from `begin`), gathered as vectors into
+/// `in` (every lane of it when `all`, else only those): the index triples, then each
+/// corner's position and normal, read as 16-byte records and transposed. Written in place: a
+/// TriangleInputs returned and copied went through the stack 16 bytes at a time and was read
+/// back 32 at a time, which no store can forward.
+void mesh_inputs(const Scene& scene, uint32_t mesh, uint32_t begin, const float8& prim, uint32_t lanes, bool all,
+                 TriangleInputs& in) {
+  const TriangleMesh& m = scene.meshes()[mesh];
+  const mask8 on = simd::mask_from_bits(lanes);
+  const auto put = [&](V8& to, const V8& v) { to = all ? v : select<float8>(on, v, to); };
+  const int8 local =
+      simd::as_int(xsimd::select(on, simd::as_float(simd::as_int(prim) - int8(int32_t(begin))), float8(0.0f)));
+  alignas(32) int32_t triangle[8], corner[3][8];
+  local.store_aligned(triangle);
+  float8 rows[3];
+  simd::gather_records3(reinterpret_cast<const float*>(m.indices.data()), m.triangle_count(), triangle, rows);
+  for (int k = 0; k < 3; ++k) simd::as_int(rows[k]).store_aligned(corner[k]);
+  const uint32_t vertices = uint32_t(m.positions.size());
+  for (int k = 0; k < 3; ++k) {
+    simd::gather_records3(&m.positions[0].x, vertices, corner[k], rows);
+    put(in.c[k], {rows[0], rows[1], rows[2]});
+    if (!m.normals.empty()) {
+      simd::gather_records3(&m.normals[0].x, vertices, corner[k], rows);
+      put(in.n[k], {rows[0], rows[1], rows[2]});
+    } else {
+      put(in.n[k], V8(Vec3f{0.0f}));
+    }
+  }
+  const mask8 normals = simd::mask_from_bits(m.normals.empty() ? 0u : lanes);
+  in.has_normals = all ? normals : (in.has_normals || normals);
+  const int8 material = m.face_materials.empty()
+                            ? int8(int32_t(m.material))
+                            : simd::gather(reinterpret_cast<const int32_t*>(m.face_materials.data()), local);
+  in.material = all ? material : simd::as_int(xsimd::select(on, simd::as_float(material), simd::as_float(in.material)));
+}
+
+/// Broadcasts them when every hit is on one triangle (as a packet's rays on a large triangle
+/// are), else gathers them mesh by mesh (mesh_inputs; one mesh for most groups). The same
+/// bits each way: only the hit lanes are read.
 TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t hit, MeshRange& range) {
-  TriangleInputs in;
   alignas(32) uint32_t ids[8];
   simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
   const uint32_t first = ids[std::countr_zero(hit)];
-  const uint32_t mesh = range.of(scene, first);
-  const uint32_t begin = range.begin, end = range.end;
-  bool one_mesh = true, one_triangle = true;
-  for (uint32_t b = hit; b; b &= b - 1) {
-    const uint32_t id = ids[std::countr_zero(b)];
-    one_mesh = one_mesh && id >= begin && id < end;
-    one_triangle = one_triangle && id == first;
-  }
+  bool one_triangle = true;
+  for (uint32_t b = hit; b; b &= b - 1) one_triangle = one_triangle && ids[std::countr_zero(b)] == first;
+  TriangleInputs in;  // one object returned (so no copy)
   if (one_triangle) {
+    const uint32_t mesh = range.of(scene, first);
     const TriangleMesh& m = scene.meshes()[mesh];
-    const uint32_t local = first - begin;
+    const uint32_t local = first - range.begin;
     const uint32_t* idx = &m.indices[3 * size_t(local)];
     for (int k = 0; k < 3; ++k) {
       in.c[k] = V8(m.positions[idx[k]]);
@@ -81,61 +112,13 @@ TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t 
     in.material = int8(int32_t(m.face_materials.empty() ? m.material : m.face_materials[local]));
     return in;
   }
-  if (one_mesh) {
-    const TriangleMesh& m = scene.meshes()[mesh];
-    const mask8 on = simd::mask_from_bits(hit);
-    const int8 local = simd::as_int(xsimd::select(on, simd::as_float(simd::as_int(prim) - int8(int32_t(begin))), float8(0.0f)));
-    alignas(32) int32_t triangle[8], corner[3][8];
-    local.store_aligned(triangle);
-    float8 rows[3];
-    simd::gather_records3(reinterpret_cast<const float*>(m.indices.data()), m.triangle_count(), triangle, rows);
-    for (int k = 0; k < 3; ++k) simd::as_int(rows[k]).store_aligned(corner[k]);
-    const uint32_t vertices = uint32_t(m.positions.size());
-    for (int k = 0; k < 3; ++k) {
-      simd::gather_records3(&m.positions[0].x, vertices, corner[k], rows);
-      in.c[k] = {rows[0], rows[1], rows[2]};
-      if (!m.normals.empty()) {
-        simd::gather_records3(&m.normals[0].x, vertices, corner[k], rows);
-        in.n[k] = {rows[0], rows[1], rows[2]};
-      } else {
-        in.n[k] = {float8(0.0f), float8(0.0f), float8(0.0f)};
-      }
-    }
-    in.has_normals = simd::mask_from_bits(m.normals.empty() ? 0u : 0xffu);
-    in.material = m.face_materials.empty()
-                      ? int8(int32_t(m.material))
-                      : simd::gather(reinterpret_cast<const int32_t*>(m.face_materials.data()), local);
-    return in;
+  for (uint32_t left = hit; left;) {
+    const uint32_t mesh = range.of(scene, ids[std::countr_zero(left)]);
+    const uint32_t lanes =
+        left & simd::movemask(simd::bits_below(prim, range.end)) & ~simd::movemask(simd::bits_below(prim, range.begin));
+    mesh_inputs(scene, mesh, range.begin, prim, lanes, left == hit, in);  // the first mesh writes every lane
+    left &= ~lanes;
   }
-  simd::Spill<18> s;  // c[0..2], n[0..2] as x, y, z rows
-  alignas(32) int32_t material[8] = {};
-  uint32_t normals = 0;
-  for (int lane = 0; lane < 8; ++lane) {
-    for (auto& row : s.lanes) row[lane] = 0.0f;
-    if (!(hit >> lane & 1u)) continue;
-    const PrimLocation at = scene.locate(ids[lane]);
-    const TriangleMesh& m = scene.meshes()[at.shape];
-    const uint32_t* idx = &m.indices[3 * size_t(at.local)];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3f c = m.positions[idx[k]];
-      s.lanes[3 * k][lane] = c.x;
-      s.lanes[3 * k + 1][lane] = c.y;
-      s.lanes[3 * k + 2][lane] = c.z;
-      if (m.normals.empty()) continue;
-      const Vec3f n = m.normals[idx[k]];
-      s.lanes[9 + 3 * k][lane] = n.x;
-      s.lanes[9 + 3 * k + 1][lane] = n.y;
-      s.lanes[9 + 3 * k + 2][lane] = n.z;
-    }
-    normals |= uint32_t(!m.normals.empty()) << lane;
-    material[lane] = int32_t(m.face_materials.empty() ? m.material : m.face_materials[at.local]);
-  }
-  for (int k = 0; k < 3; ++k) {
-    in.c[k] = {s.load(3 * k), s.load(3 * k + 1), s.load(3 * k + 2)};
-    in.n[k] = {s.load(9 + 3 * k), s.load(9 + 3 * k + 1), s.load(9 + 3 * k + 2)};
-  }
-  in.has_normals = simd::mask_from_bits(normals);
-  in.material = int8::load_aligned(material);
   return in;
 }
 
@@ -343,11 +326,15 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
     emitted = h.emitted;
   }
   // Colours lane by lane: the sky for a miss, the unlit terms for a hit.
+  alignas(32) float e[3][8];
+  emitted.x.store_aligned(e[0]);
+  emitted.y.store_aligned(e[1]);
+  emitted.z.store_aligned(e[2]);
   for (uint32_t b = live; b; b &= b - 1) {
     const int lane = std::countr_zero(b);
     Vec3f& c = out.colour[slot[lane]];
     if (hit >> lane & 1u) {
-      c += lane_of(emitted, lane);
+      c += Vec3f{e[0][lane], e[1][lane], e[2][lane]};
     } else {
       c += mul(lane_of(weight, lane), sky(rays[base + size_t(lane)].dir));
     }
