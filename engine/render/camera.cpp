@@ -85,13 +85,15 @@ Ray Camera::generate(float px, float py, Vec2f lens) const {
   return {eye_, 0.0f, w_, inf};
 }
 
-void Camera::generate8(const float px[8], const float py[8], const Vec2f* lens, Ray out[8]) const {
+void Camera::generate_rays(std::span<const float> px, std::span<const float> py, const Vec2f* lens,
+                           std::span<Ray> out) const {
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  size_t i = 0;
   if (model_ == CameraModel::pinhole && avx2) {
-    generate8_pinhole(px, py, out);
-    return;
+    i = px.size() - px.size() % 8;
+    pinhole_rays8(px.data(), py.data(), i, out.data());
   }
-  for (int i = 0; i < 8; ++i) out[i] = generate(px[i], py[i], lens ? lens[i] : Vec2f{0.5f, 0.5f});
+  for (; i < px.size(); ++i) out[i] = generate(px[i], py[i], lens ? lens[i] : Vec2f{0.5f, 0.5f});
 }
 
 std::optional<Vec2f> Camera::project(const Vec3f& direction) const {

@@ -3,6 +3,7 @@
 /// panorama, an equidistant fisheye and a thin lens for depth of field.
 
 #include <optional>
+#include <span>
 
 #include "engine/lanes.h"
 #include "engine/ray.h"
@@ -40,10 +41,11 @@ class Camera {
   /// the point on the lens (thin lens only). Directions are unit length; tnear = 0, tfar = +inf.
   Ray generate(float px, float py, Vec2f lens = {0.5f, 0.5f}) const;
 
-  /// generate() for 8 image positions at once (lens[i] for position i, or none for a camera
-  /// that ignores it): the same rays, bit for bit. Pinhole rays are made 8 lanes at a time
-  /// where the CPU has AVX2 and FMA (camera8.cpp); the other models ray by ray.
-  void generate8(const float px[8], const float py[8], const Vec2f* lens, Ray out[8]) const;
+  /// generate() for the image positions (px[i], py[i]) (lens[i] for position i, or none for a
+  /// camera that ignores it) into out[i]: the same rays, bit for bit. Pinhole rays are made 8
+  /// lanes at a time where the CPU has AVX2 and FMA (camera8.cpp); the other models, and the
+  /// last px.size() % 8 pinhole rays, ray by ray. The spans have one size.
+  void generate_rays(std::span<const float> px, std::span<const float> py, const Vec2f* lens, std::span<Ray> out) const;
 
   /// The pinhole direction through image position (px, py), in lanes (engine/lanes.h).
   template <class F>
@@ -62,8 +64,9 @@ class Camera {
   CameraModel model() const { return model_; }
 
  private:
-  /// generate8 for a pinhole camera on an AVX2+FMA CPU (camera8.cpp).
-  void generate8_pinhole(const float px[8], const float py[8], Ray out[8]) const;
+  /// generate_rays for a pinhole camera on an AVX2+FMA CPU (camera8.cpp): the first
+  /// n - n % 8 rays, 8 at a time.
+  void pinhole_rays8(const float* px, const float* py, size_t n, Ray* out) const;
 
   Vec3f eye_, u_, v_, w_;
   float xm_, ym_;  ///< half extents of the image window at distance 1: aspect*tan(fov/2), tan(fov/2)

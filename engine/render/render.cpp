@@ -246,20 +246,22 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
       }
   for (int s = 0; s < st.spp; ++s) {
     const SampleStreams::Stratum stratum = streams.stratum(s);
-    // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet.
-    for (size_t at = 0; at < size_t(kTile * kTile); at += 8) {
-      float px[8], py[8];
-      Vec2f lens[8];
-      streams.pixel8<8>(&pixel_keys[at], stratum, px, py);
-      for (int lane = 0; lane < 8; ++lane) {
-        px[lane] += base_x[at + size_t(lane)];
-        py[lane] += base_y[at + size_t(lane)];
-      }
-      if (thin_lens)
-        for (int lane = 0; lane < 8; ++lane) lens[lane] = streams.lens(lens_keys[at + size_t(lane)], s);
-      camera.generate8(px, py, thin_lens ? lens : nullptr, &w.primary[at]);
-      if (pinhole && !partial) continue;
-      for (size_t k = at; k < at + 8; ++k) {
+    // Primary rays: 4x2 blocks, lane = x + 4y, so every group of 8 is one packet. The tile's
+    // image positions are all worked out before its rays (the camera's vector loads of them
+    // then read stores long done, not the last few, which no store can forward to them).
+    constexpr size_t kLanes = kTile * kTile;
+    float px[kLanes], py[kLanes];
+    Vec2f lens[kLanes];
+    streams.pixel8<int(kLanes)>(pixel_keys, stratum, px, py);
+    for (size_t k = 0; k < kLanes; ++k) {
+      px[k] += base_x[k];
+      py[k] += base_y[k];
+    }
+    if (thin_lens)
+      for (size_t k = 0; k < kLanes; ++k) lens[k] = streams.lens(lens_keys[k], s);
+    camera.generate_rays(px, py, thin_lens ? lens : nullptr, w.primary);
+    if (!pinhole || partial)
+      for (size_t k = 0; k < kLanes; ++k) {
         Ray& r = w.primary[k];
         if (slots[k] == kInvalidId) {
           r = {{}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  // past the image: invalid, traced as a miss
@@ -271,7 +273,6 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
         w.primary_paths[k].slot = valid ? slots[k] : kInvalidId;
         primary += valid;
       }
-    }
     shade(scene, backend, shade_batch, st.max_depth, w.primary, w.primary_paths, w, tile, n);
   }
   const float inv = 1.0f / float(st.spp);

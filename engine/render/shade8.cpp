@@ -96,8 +96,7 @@ TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t 
   alignas(32) uint32_t ids[8];
   simd::as_int(prim).store_aligned(reinterpret_cast<int32_t*>(ids));
   const uint32_t first = ids[std::countr_zero(hit)];
-  bool one_triangle = true;
-  for (uint32_t b = hit; b; b &= b - 1) one_triangle = one_triangle && ids[std::countr_zero(b)] == first;
+  const bool one_triangle = (simd::movemask(simd::bits_equal(prim, first)) & hit) == hit;
   TriangleInputs in;  // one object returned (so no copy)
   if (one_triangle) {
     const uint32_t mesh = range.of(scene, first);
@@ -127,8 +126,7 @@ MaterialLanes<float8> material_inputs(const ShadeScene& s, const int8& id, uint3
   alignas(32) int32_t ids[8];
   id.store_aligned(ids);
   const int32_t first = ids[std::countr_zero(hit)];
-  bool same = true;
-  for (uint32_t b = hit; b; b &= b - 1) same = same && ids[std::countr_zero(b)] == first;
+  const bool same = (simd::movemask(simd::bits_equal(simd::as_float(id), uint32_t(first))) & hit) == hit;
   using R = ShadeScene::Row;
   const int8 safe =
       same ? int8(first)
