@@ -61,10 +61,11 @@ Part render_part(const Comm& comm, const TileRenderer& tiles, int per_request, c
           std::array<Vec3f, kTilePixels> pixels;
           TileCounts counts;
           char record[kTileRecord];
+          TileRenderer::Scratch scratch;
           for (int k; (k = source->next()) >= 0;) {
             const int t = order(k);
             try {
-              tiles.render(t, pixels, counts);
+              tiles.render(t, pixels, counts, scratch);
             } catch (...) {
               source->cancel();  // this rank's other threads stop at their next tile, and the other ranks soon
               throw;

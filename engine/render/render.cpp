@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/combinable.h>
+#include <tbb/concurrent_queue.h>
 #include <tbb/parallel_for.h>
 
 #include <array>
@@ -122,7 +123,8 @@ struct Tracer {
   }
 };
 
-/// Per-tile scratch, allocated once per tile (never per ray) and reused for every batch.
+/// A thread's scratch (TileRenderer::Scratch), reused from tile to tile and batch to batch:
+/// its arrays keep their size.
 struct ShadeWork {
   /// A batch's first rays and paths (a tile's primary rays, kept for all its samples), then
   /// each bounce's.
@@ -134,8 +136,7 @@ struct ShadeWork {
   /// Per light: the shadow rays of this batch, and the lit contributions waiting for them.
   /// Rays towards one light from one tile share an endpoint (or, for a directional light, a
   /// direction) and go to the backend as one coherent span.
-  std::vector<std::vector<Ray>> shadow_rays;
-  std::vector<std::vector<Pending>> pending;
+  std::vector<ShadowQueue> shadow;
   std::vector<BounceHit> bounces;
 };
 
@@ -176,20 +177,16 @@ void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_ba
            std::span<const Ray> primary, std::span<const PathState> primary_paths, ShadeWork& w, std::span<Vec3f> out,
            Counters& n) {
   const size_t n_lights = scene.shadow_tfar.size();
-  w.shadow_rays.resize(n_lights);
-  w.pending.resize(n_lights);
+  w.shadow.resize(n_lights);
   std::span<const Ray> rays = primary;
   std::span<const PathState> paths = primary_paths;
   for (int depth = 0; !rays.empty(); ++depth) {
     const Coherence coherence = depth == 0 ? Coherence::coherent : Coherence::incoherent;
     w.hits.resize(rays.size());
     backend.intersect(rays, w.hits, coherence);
-    for (size_t l = 0; l < n_lights; ++l) {
-      w.shadow_rays[l].clear();
-      w.pending[l].clear();
-    }
+    for (ShadowQueue& q : w.shadow) q.reset(rays.size());
     w.bounces.clear();
-    ShadeOut sink{out, w.shadow_rays, w.pending, w.bounces};
+    ShadeOut sink{out, w.shadow, w.bounces};
     shade_batch(scene, rays, w.hits, paths, depth < max_depth, sink);
     w.next_rays.clear();
     w.next_paths.clear();
@@ -197,12 +194,14 @@ void shade(const ShadeScene& scene, const Tracer& backend, ShadeBatchFn shade_ba
     // Contributions are added light by light, in batch order: a fixed order for the tile,
     // whatever the thread count.
     for (size_t l = 0; l < n_lights; ++l) {
-      if (w.shadow_rays[l].empty()) continue;
-      w.occluded.resize(w.shadow_rays[l].size());
-      backend.occluded(w.shadow_rays[l], w.occluded, coherence);
-      n.shadow += w.shadow_rays[l].size();
-      for (size_t k = 0; k < w.pending[l].size(); ++k)
-        if (!w.occluded[k]) out[w.pending[l][k].slot] += w.pending[l][k].contribution;
+      const ShadowQueue& q = w.shadow[l];
+      if (!q.count) continue;
+      w.occluded.resize(q.count);
+      backend.occluded(q.batch_rays(), w.occluded, coherence);
+      n.shadow += q.count;
+      const std::span<const Pending> pending = q.batch_pending();
+      for (size_t k = 0; k < pending.size(); ++k)
+        if (!w.occluded[k]) out[pending[k].slot] += pending[k].contribution;
     }
     std::swap(w.rays, w.next_rays);
     std::swap(w.paths, w.next_paths);
@@ -417,11 +416,15 @@ const RenderSettings& TileRenderer::settings() const { return impl_->settings; }
 int TileRenderer::tiles_x() const { return impl_->tiles_x; }
 int TileRenderer::tiles_y() const { return impl_->tiles_y; }
 
-void TileRenderer::render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts,
+struct TileRenderer::Scratch::Work : ShadeWork {};
+TileRenderer::Scratch::Scratch() : work_(new Work) {}
+TileRenderer::Scratch::~Scratch() = default;
+
+void TileRenderer::render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts, Scratch& scratch,
                           std::vector<TraceLog::Call>* log) const {
   const Impl& m = *impl_;
   const Tracer tracer{m.backend, log};
-  ShadeWork w;
+  ShadeWork& w = *scratch.work_;
   Counters n;
   const int x0 = index % m.tiles_x * kTile, y0 = index / m.tiles_x * kTile;
   std::fill(pixels.begin(), pixels.end(), Vec3f{});
@@ -473,18 +476,25 @@ RenderResult render(const Scene& scene, const Backend& backend, const Camera& ca
   const int n_tiles = tiles.tile_count();
   if (log) log->tiles.assign(size_t(n_tiles), {});
   tbb::combinable<TileCounts> counts;
+  // The threads' working memory, reused from one range of tiles to the next: taken from a
+  // pool and given back, so that no two calls share one even on one thread.
+  tbb::concurrent_queue<std::unique_ptr<TileRenderer::Scratch>> scratches;
   std::atomic<int> tiles_done{0};
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tiles.tiles_y(), 1, 0, tiles.tiles_x(), 1),
                     [&](const tbb::blocked_range2d<int>& r) {
                       std::array<Vec3f, kTilePixels> pixels;
+                      std::unique_ptr<TileRenderer::Scratch> scratch;
+                      if (!scratches.try_pop(scratch)) scratch = std::make_unique<TileRenderer::Scratch>();
                       for (int ty = r.rows().begin(); ty < r.rows().end(); ++ty)
                         for (int tx = r.cols().begin(); tx < r.cols().end(); ++tx) {
                           const int index = ty * tiles.tiles_x() + tx;
-                          tiles.render(index, pixels, counts.local(), log ? &log->tiles[size_t(index)] : nullptr);
+                          tiles.render(index, pixels, counts.local(), *scratch,
+                                       log ? &log->tiles[size_t(index)] : nullptr);
                           tiles.place(index, pixels, img);
                           const int done = ++tiles_done;
                           if (progress) progress(double(done) / double(n_tiles));
                         }
+                      scratches.push(std::move(scratch));
                     });
   TileCounts total;
   counts.combine_each([&](const TileCounts& c) { total += c; });

@@ -90,6 +90,22 @@ class TileRenderer {
   TileRenderer(const TileRenderer&) = delete;
   TileRenderer& operator=(const TileRenderer&) = delete;
 
+  /// A thread's working memory for render(): its arrays keep their size from tile to tile.
+  /// One per thread (two calls at once must not share one); it holds nothing a tile's pixels
+  /// depend on.
+  class Scratch {
+   public:
+    Scratch();
+    ~Scratch();
+    Scratch(const Scratch&) = delete;
+    Scratch& operator=(const Scratch&) = delete;
+
+   private:
+    friend class TileRenderer;
+    struct Work;
+    std::unique_ptr<Work> work_;
+  };
+
   const RenderSettings& settings() const;
   int tiles_x() const;
   int tiles_y() const;
@@ -97,8 +113,9 @@ class TileRenderer {
 
   /// Renders tile `index` (in [0, tile_count())) into `pixels`, row-major within the tile
   /// (those past the image's right or bottom edge are left black), adds its rays to
-  /// `counts`, and records its calls to the backend in `log` when one is given. Thread-safe.
-  void render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts,
+  /// `counts`, and records its calls to the backend in `log` when one is given. Thread-safe
+  /// (each thread with its own `scratch`).
+  void render(int index, std::span<Vec3f, kTilePixels> pixels, TileCounts& counts, Scratch& scratch,
               std::vector<TraceLog::Call>* log = nullptr) const;
   /// Copies the part of tile `index`'s `pixels` that lies inside the image into `image`
   /// (settings' size, rgb allocated).

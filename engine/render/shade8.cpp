@@ -143,7 +143,7 @@ MaterialLanes<float8> material_inputs(const ShadeScene& s, const int8& id, uint3
 /// Appends the lanes `lit` of shadow rays (origin, tnear 0, to_light, tfar) and their waiting
 /// contributions, in lane order.
 void append_light(const V8& origin, const V8& to_light, float tfar, const float8& slot, const V8& contribution,
-                  uint32_t lit, std::vector<Ray>& rays, std::vector<Pending>& pending) {
+                  uint32_t lit, ShadowQueue& q) {
   if (!lit) return;
   static_assert(sizeof(Ray) == 32 && sizeof(Pending) == 16);
   float8 r[8] = {origin.x, origin.y, origin.z, float8(0.0f), to_light.x, to_light.y, to_light.z, float8(tfar)};
@@ -151,14 +151,13 @@ void append_light(const V8& origin, const V8& to_light, float tfar, const float8
   const float8 p[4] = {slot, contribution.x, contribution.y, contribution.z};
   alignas(32) float records[32];
   simd::store_records4(p, records);
-  const size_t at = rays.size(), n = size_t(std::popcount(lit));
-  rays.resize(at + n);
-  pending.resize(at + n);
-  size_t k = at;
-  for (uint32_t b = lit; b; b &= b - 1, ++k) {
+  Ray* rays = q.rays.data() + q.count;
+  Pending* pending = q.pending.data() + q.count;
+  q.count += size_t(std::popcount(lit));
+  for (uint32_t b = lit; b; b &= b - 1) {
     const int lane = std::countr_zero(b);
-    r[lane].store_unaligned(&rays[k].org.x);
-    std::memcpy(static_cast<void*>(&pending[k]), records + 4 * lane, sizeof(Pending));
+    r[lane].store_unaligned(&(rays++)->org.x);
+    std::memcpy(static_cast<void*>(pending++), records + 4 * lane, sizeof(Pending));
   }
 }
 
@@ -343,14 +342,14 @@ void shade8(const ShadeScene& s, std::span<const Ray> rays, std::span<const Hit>
     V8 to_light;
     const LightTerm<float8> t = point_light_term<float8>(h, m, weight, pl, to_light);
     append_light(h.origin, to_light, s.shadow_tfar[l], path_rows[0], t.contribution, simd::movemask(t.lit) & hit,
-                 out.shadow_rays[l], out.pending[l]);
+                 out.shadow[l]);
     ++l;
   }
   for (const DirectionalLight& dl : scene.directional_lights()) {
     const LightTerm<float8> t = directional_light_term<float8>(h, m, weight, dl);
     const V8 to_light{float8(-dl.direction.x), float8(-dl.direction.y), float8(-dl.direction.z)};
     append_light(h.origin, to_light, s.shadow_tfar[l], path_rows[0], t.contribution, simd::movemask(t.lit) & hit,
-                 out.shadow_rays[l], out.pending[l]);
+                 out.shadow[l]);
     ++l;
   }
   if (!bounce || !s.any_bounce) return;

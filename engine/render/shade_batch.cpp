@@ -56,16 +56,14 @@ void shade_ray(const ShadeScene& s, const Ray& ray, const Hit& hit, const PathSt
       Vec3f to;
       const LightTerm<float> t = point_light_term<float>(h, ml, ps.weight, pl, to);
       if (t.lit) {
-        out.shadow_rays[l].push_back({h.origin, 0.0f, to, s.shadow_tfar[l]});
-        out.pending[l].push_back({ps.slot, t.contribution});
+        out.shadow[l].push({h.origin, 0.0f, to, s.shadow_tfar[l]}, {ps.slot, t.contribution});
       }
       ++l;
     }
     for (const DirectionalLight& dl : scene.directional_lights()) {
       const LightTerm<float> t = directional_light_term<float>(h, ml, ps.weight, dl);
       if (t.lit) {
-        out.shadow_rays[l].push_back({h.origin, 0.0f, -dl.direction, s.shadow_tfar[l]});
-        out.pending[l].push_back({ps.slot, t.contribution});
+        out.shadow[l].push({h.origin, 0.0f, -dl.direction, s.shadow_tfar[l]}, {ps.slot, t.contribution});
       }
       ++l;
     }

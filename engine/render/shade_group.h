@@ -61,12 +61,35 @@ struct ShadeScene {
   std::vector<int32_t> shape_material;
 };
 
-/// Where the shading of one batch goes. The per-light vectors are appended to.
+/// One light's shadow rays from a batch and the contributions waiting for them, in batch
+/// order. The records are written in place: the arrays keep the size of the largest batch
+/// so far and `count` says how many are this batch's, so appending one initialises nothing
+/// it then overwrites.
+struct ShadowQueue {
+  std::vector<Ray> rays;
+  std::vector<Pending> pending;
+  size_t count = 0;
+  /// Empties the queue for a batch of n rays (each gives at most one shadow ray per light).
+  void reset(size_t n) {
+    if (rays.size() < n) {
+      rays.resize(n);
+      pending.resize(n);
+    }
+    count = 0;
+  }
+  void push(const Ray& r, const Pending& p) {
+    rays[count] = r;
+    pending[count++] = p;
+  }
+  std::span<const Ray> batch_rays() const { return {rays.data(), count}; }
+  std::span<const Pending> batch_pending() const { return {pending.data(), count}; }
+};
+
+/// Where the shading of one batch goes.
 struct ShadeOut {
-  std::span<Vec3f> colour;                      ///< by path slot
-  std::vector<std::vector<Ray>>& shadow_rays;   ///< per light
-  std::vector<std::vector<Pending>>& pending;   ///< per light, one per shadow ray
-  std::vector<BounceHit>& bounces;              ///< appended in batch order (only when `bounce`)
+  std::span<Vec3f> colour;          ///< by path slot
+  std::span<ShadowQueue> shadow;    ///< per light, reset for the batch: appended to
+  std::vector<BounceHit>& bounces;  ///< appended in batch order (only when `bounce`)
 };
 
 /// Shades rays[i] with hit hits[i] for path paths[i], for every i in batch order; `bounce`:

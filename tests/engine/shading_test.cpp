@@ -132,13 +132,18 @@ struct Shaded {
   std::vector<BounceHit> bounces;
 };
 
+/// The shading of batch b by fn, the queues' records copied out (only this batch's).
 Shaded shade(ShadeBatchFn fn, const ShadeScene& s, const Batch& b, bool bounce) {
   Shaded out;
   out.colour.assign(b.rays.size(), Vec3f{0.25f});
-  out.shadow.resize(s.shadow_tfar.size());
-  out.pending.resize(s.shadow_tfar.size());
-  ShadeOut sink{out.colour, out.shadow, out.pending, out.bounces};
+  std::vector<ShadowQueue> queues(s.shadow_tfar.size());
+  for (ShadowQueue& q : queues) q.reset(b.rays.size());
+  ShadeOut sink{out.colour, queues, out.bounces};
   fn(s, b.rays, b.hits, b.paths, bounce, sink);
+  for (const ShadowQueue& q : queues) {
+    out.shadow.emplace_back(q.batch_rays().begin(), q.batch_rays().end());
+    out.pending.emplace_back(q.batch_pending().begin(), q.batch_pending().end());
+  }
   return out;
 }
 
