@@ -130,6 +130,7 @@ struct ShadeWork {
   /// each bounce's.
   std::vector<Ray> primary, rays, next_rays;
   std::vector<PathState> primary_paths;
+  std::vector<Vec2f> lens;  ///< a tile's lens positions (thin lens)
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
@@ -226,6 +227,7 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
   uint32_t slots[kTile * kTile];  // the slot a lane's path takes when its ray is valid
   w.primary.resize(kTile * kTile);
   w.primary_paths.resize(kTile * kTile);
+  if (thin_lens) w.lens.resize(kTile * kTile);
   bool partial = false;  // some lane lies past the image
   for (int by = 0, at = 0; by < kTile; by += 2)
     for (int bx = 0; bx < kTile; bx += 4)
@@ -250,15 +252,14 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
     // then read stores long done, not the last few, which no store can forward to them).
     constexpr size_t kLanes = kTile * kTile;
     float px[kLanes], py[kLanes];
-    Vec2f lens[kLanes];
     streams.pixel8<int(kLanes)>(pixel_keys, stratum, px, py);
     for (size_t k = 0; k < kLanes; ++k) {
       px[k] += base_x[k];
       py[k] += base_y[k];
     }
     if (thin_lens)
-      for (size_t k = 0; k < kLanes; ++k) lens[k] = streams.lens(lens_keys[k], s);
-    camera.generate_rays(px, py, thin_lens ? lens : nullptr, w.primary);
+      for (size_t k = 0; k < kLanes; ++k) w.lens[k] = streams.lens(lens_keys[k], s);
+    camera.generate_rays(px, py, thin_lens ? w.lens.data() : nullptr, w.primary);
     if (!pinhole || partial)
       for (size_t k = 0; k < kLanes; ++k) {
         Ray& r = w.primary[k];
