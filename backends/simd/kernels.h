@@ -417,8 +417,11 @@ RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, co
 /// they never hit or go to the watertight test's fallback (callers mask them out as well).
 struct LeafView {
   Vec3x8 v0, v1, v2;
-  Leaf leaf;  ///< the leaf read
-  RP_SIMD_INLINE explicit LeafView(const Leaf& l) : leaf(l) {
+  /// The leaf read (Leaf(words) is it again). Not a copy of the Leaf: one built field by field
+  /// on the stack and copied whole was read back 16 bytes at a time from its 4- and 8-byte
+  /// stores, which no store can forward, at every leaf.
+  const float* words;
+  RP_SIMD_INLINE explicit LeafView(const Leaf& l) : words(l.words) {
     const uint32_t chunks = (l.v + 7) / 8;
     if (chunks == 1) read<1>(l);
     else if (chunks == 2) read<2>(l);

@@ -70,10 +70,9 @@ struct MtKernel {
 struct CertifiedKernel {
   /// MtKernel's Block, with the triangles' factors of the bound and the leaf for Woop's test.
   struct Block : MtKernel::Block {
-    EdgeFactors f;  ///< the triangles' factors of the bound (edge_bound8)
-    Leaf leaf;      ///< for Woop's test
-    RP_SIMD_INLINE explicit Block(const LeafView& lv)
-        : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.leaf) {}
+    EdgeFactors f;      ///< the triangles' factors of the bound (edge_bound8)
+    const float* leaf;  ///< the leaf's words, where Woop's test reads the corners (LeafView::words)
+    RP_SIMD_INLINE explicit Block(const LeafView& lv) : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.words) {}
   };
   struct Single {
     CertifiedRays r;
@@ -85,7 +84,7 @@ struct CertifiedKernel {
       TriHit8 h;
       if (const uint32_t unsure = certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h)) [[unlikely]] {
         Settled s;
-        settle_single(b.leaf, ray, tfar.get(0), s);
+        settle_single(Leaf(b.leaf), ray, tfar.get(0), s);
         s.merge_into(h, unsure);
       }
       return h;
@@ -99,7 +98,7 @@ struct CertifiedKernel {
     Triangle() = default;
     /// Triangle k of a leaf's Block, in every lane.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
-        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf.words), k(k_) {}
+        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_) {}
   };
   struct Packet {
     const RayPacket* p = nullptr;

@@ -398,7 +398,7 @@ struct CountingKernel {
     TriHit8 block(const Block& b, const float8& tfar) const {
       TriHit8 raw;
       const uint32_t slow = slow_lanes(k.r, tfar, b, raw);
-      counts.lanes += b.leaf.n;
+      counts.lanes += Leaf(b.leaf).n;
       counts.slow += uint64_t(std::popcount(slow));
       counts.blocks += 1;
       counts.slow_blocks += slow != 0;
