@@ -29,6 +29,8 @@ struct Lanes<float> {
   using Mask = bool;
   static float select(bool c, float a, float b) { return c ? a : b; }
   static float sqrt(float x) { return std::sqrt(x); }
+  static float floor(float x) { return std::floor(x); }
+  static float abs(float x) { return std::abs(x); }
   static bool finite(float x) { return std::isfinite(x); }
   static float pow(float x, float y) { return pow_nonneg(x, y); }
   static Vec3f offset(const Vec3f& p, const Vec3f& n) { return offset_ray_origin(p, n); }

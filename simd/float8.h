@@ -269,6 +269,15 @@ inline void load_records4(const float* records, float8 out[4], size_t stride = 4
   out[3] = _mm256_shuffle_ps(t1, t3, 0xee);
 }
 
+/// Eight (x, y) pairs of floats at p (16 floats, unaligned) as a row of the x and a row of the
+/// y: lane i of x is p[2i], of y p[2i + 1]. Bits move unchanged.
+inline void load_pairs8(const float* p, float8& x, float8& y) {
+  const __m256 a = _mm256_loadu_ps(p), b = _mm256_loadu_ps(p + 8);
+  const __m256 even = _mm256_shuffle_ps(a, b, 0x88), odd = _mm256_shuffle_ps(a, b, 0xdd);  // x0 x1 x4 x5 | x2 x3 x6 x7
+  x = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(even), 0xd8));
+  y = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(odd), 0xd8));
+}
+
 /// Eight consecutive 32-byte records (8 floats each, unaligned) as 8 rows: lane i of out[k] is
 /// float k of record i (eight rays' fields as SoA rows). Two load_records4, each record read
 /// as two 16-byte halves straight into the shuffles: loading the records as whole rows into

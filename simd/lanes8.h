@@ -20,6 +20,8 @@ struct Lanes<simd::float8> {
   using Mask = simd::mask8;
   static F select(const Mask& c, const F& a, const F& b) { return xsimd::select(c, a, b); }
   static F sqrt(const F& x) { return xsimd::sqrt(x); }
+  static F floor(const F& x) { return xsimd::floor(x); }
+  static F abs(const F& x) { return xsimd::abs(x); }
   /// std::isfinite: |x| <= FLT_MAX, false for NaN and +-inf.
   static Mask finite(const F& x) { return xsimd::abs(x) <= F(std::numeric_limits<float>::max()); }
   static F pow(const F& x, const F& y) { return simd::pow8(x, y); }

@@ -44,54 +44,18 @@ Camera::Camera(const CameraDesc& d, int width, int height) : model_(d.model), wi
 }
 
 Ray Camera::generate(float px, float py, Vec2f lens) const {
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  const float sx = px / float(width_) * 2.0f - 1.0f, sy = 1.0f - py / float(height_) * 2.0f;  // [-1, 1], y up
-  switch (model_) {
-    case CameraModel::pinhole:
-      return {eye_, 0.0f, pinhole_direction<float>(px, py), inf};
-    case CameraModel::panoramic: {
-      const float phi = sx * float(kPi);
-      return {eye_, 0.0f, normalize(w_ * std::cos(phi) + u_ * std::sin(phi) + v_ * (sy * ym_)), inf};
-    }
-    case CameraModel::fisheye: {
-      const float circle = 0.5f * float(std::min(width_, height_));
-      const float x = (px - 0.5f * float(width_)) / circle, y = (0.5f * float(height_) - py) / circle;
-      const float r = std::sqrt(x * x + y * y);
-      if (r > 1.0f) return {eye_, 1.0f, w_, 0.0f};  // outside the image circle: no ray
-      const float theta = r * fisheye_half_, psi = std::atan2(y, x);
-      const Vec3f d = w_ * std::cos(theta) + (u_ * std::cos(psi) + v_ * std::sin(psi)) * std::sin(theta);
-      return {eye_, 0.0f, normalize(d), inf};
-    }
-    case CameraModel::thin_lens: {
-      const Vec3f d = normalize(w_ + u_ * (sx * xm_) + v_ * (sy * ym_));
-      if (aperture_ == 0.0f) return {eye_, 0.0f, d, inf};
-      const Vec3f focus_point = eye_ + d * (focus_ / dot(d, w_));
-      // Concentric square-to-disk mapping (Shirley and Chiu 1997).
-      const float a = 2.0f * lens.x - 1.0f, b = 2.0f * lens.y - 1.0f;
-      float r = 0.0f, t = 0.0f;
-      if (a != 0.0f || b != 0.0f) {
-        if (std::abs(a) > std::abs(b)) {
-          r = a;
-          t = float(kPi) / 4.0f * (b / a);
-        } else {
-          r = b;
-          t = float(kPi) / 2.0f - float(kPi) / 4.0f * (a / b);
-        }
-      }
-      const Vec3f origin = eye_ + (u_ * std::cos(t) + v_ * std::sin(t)) * (r * aperture_);
-      return {origin, 0.0f, normalize(focus_point - origin), inf};
-    }
-  }
-  return {eye_, 0.0f, w_, inf};
+  Ray r;
+  ray_lanes<float>(px, py, lens.x, lens.y, r.org, r.tnear, r.dir, r.tfar);
+  return r;
 }
 
 void Camera::generate_rays(std::span<const float> px, std::span<const float> py, const Vec2f* lens,
                            std::span<Ray> out) const {
   static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   size_t i = 0;
-  if (model_ == CameraModel::pinhole && avx2) {
+  if (avx2) {
     i = px.size() - px.size() % 8;
-    pinhole_rays8(px.data(), py.data(), i, out.data());
+    rays8(px.data(), py.data(), lens, i, out.data());
   }
   for (; i < px.size(); ++i) out[i] = generate(px[i], py[i], lens ? lens[i] : Vec2f{0.5f, 0.5f});
 }

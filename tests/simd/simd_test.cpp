@@ -682,6 +682,26 @@ TEST(Transpose8x8, MovesEveryBitToItsTransposedPlace) {
   }
 }
 
+/// Eight (x, y) pairs, unaligned: lane i of the x row is word 2i, of the y row word 2i + 1.
+TEST(LoadPairs8, SplitsEightPairsIntoTwoRows) {
+  std::mt19937 rng(85);
+  for (int round = 0; round < 100; ++round) {
+    uint32_t in[17];
+    for (uint32_t& b : in) b = rng();
+    float words[17];
+    std::memcpy(words, in, sizeof in);
+    float8 x, y;
+    load_pairs8(words + 1, x, y);
+    alignas(32) uint32_t xs[8], ys[8];
+    std::memcpy(xs, &x, 32);
+    std::memcpy(ys, &y, 32);
+    for (int i = 0; i < 8; ++i) {
+      ASSERT_EQ(xs[i], in[1 + 2 * i]) << "x lane " << i;
+      ASSERT_EQ(ys[i], in[2 + 2 * i]) << "y lane " << i;
+    }
+  }
+}
+
 /// Eight records of 4 and of 5 words (rp::Hit's 20 bytes), in an array sized exactly: lane i of
 /// row k is word k of record i, every bit pattern kept.
 TEST(LoadRecords4, GivesEachLaneTheFirstFourWordsOfItsRecordAtAnyStride) {
