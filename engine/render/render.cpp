@@ -130,7 +130,7 @@ struct ShadeWork {
   /// each bounce's.
   std::vector<Ray> primary, rays, next_rays;
   std::vector<PathState> primary_paths;
-  std::vector<Vec2f> lens;  ///< a tile's lens positions (thin lens)
+  std::vector<Vec2f> lens;  ///< a tile's lens positions (thin lens; adaptive sampling: every camera)
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
   std::vector<PathState> paths, next_paths;
@@ -298,16 +298,26 @@ uint64_t adaptive_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatc
   auto want = [&](int x, int y) {
     if (colour.emplace(key(x, y), Vec3f{}).second) wanted.push_back({x, y});
   };
+  std::vector<float> px, py;
   auto trace_wanted = [&] {
-    w.primary.clear();
-    w.primary_paths.clear();
-    for (size_t i = 0; i < wanted.size(); ++i) {
+    const size_t m = wanted.size();
+    px.resize(m);
+    py.resize(m);
+    w.lens.resize(m);
+    for (size_t i = 0; i < m; ++i) {
       const auto [x, y] = wanted[i];
       const uint64_t id = uint64_t(uint32_t(y)) * (uint64_t(st.width) * uint64_t(scale) + 1) + uint64_t(uint32_t(x));
-      const Ray r = camera.generate(float(x) / float(scale), float(y) / float(scale), lens_sample(st.seed, id, 0));
-      w.primary.push_back(r);
-      w.primary_paths.push_back({valid_ray(r) ? uint32_t(i) : kInvalidId, Vec3f{1.0f}});
-      primary += valid_ray(r);
+      px[i] = float(x) / float(scale);
+      py[i] = float(y) / float(scale);
+      w.lens[i] = lens_sample(st.seed, id, 0);
+    }
+    w.primary.resize(m);
+    camera.generate_rays(px, py, w.lens.data(), w.primary);
+    w.primary_paths.clear();
+    for (size_t i = 0; i < m; ++i) {
+      const bool valid = valid_ray(w.primary[i]);
+      w.primary_paths.push_back({valid ? uint32_t(i) : kInvalidId, Vec3f{1.0f}});
+      primary += valid;
     }
     shaded.assign(wanted.size(), Vec3f{});
     shade(scene, backend, shade_batch, st.max_depth, w.primary, w.primary_paths, w, shaded, n);
