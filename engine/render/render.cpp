@@ -72,14 +72,14 @@ struct SampleStreams {
 
   Vec2f pixel(uint64_t key, const Stratum& s) const {
     float x[1], y[1];
-    pixel8<1>(&key, s, x, y);
+    pixels<1>(&key, s, x, y);
     return {x[0], y[0]};
   }
   /// pixel() of N pixels (their keys) at once: the hashes a pixel at a time, the rest in
   /// loops over the pixels with one operation each, which the compiler vectorises (the same
   /// IEEE operations, so the same values).
   template <int N>
-  void pixel8(const uint64_t* keys, const Stratum& s, float* x, float* y) const {
+  void pixels(const uint64_t* keys, const Stratum& s, float* x, float* y) const {
     const Place at = place(s);
     if (at == Place::cell_centre || at == Place::pixel_centre) {
       const float g = at == Place::cell_centre ? float(grid) : 1.0f;
@@ -252,7 +252,7 @@ uint64_t sample_tile(const ShadeScene& scene, const Tracer& backend, ShadeBatchF
     // then read stores long done, not the last few, which no store can forward to them).
     constexpr size_t kLanes = kTile * kTile;
     float px[kLanes], py[kLanes];
-    streams.pixel8<int(kLanes)>(pixel_keys, stratum, px, py);
+    streams.pixels<int(kLanes)>(pixel_keys, stratum, px, py);
     for (size_t k = 0; k < kLanes; ++k) {
       px[k] += base_x[k];
       py[k] += base_y[k];
