@@ -38,7 +38,6 @@
 #include <array>
 #include <bit>
 #include <limits>
-#include <optional>
 #include <span>
 
 #include "backends/simd/traversal.h"
@@ -474,21 +473,19 @@ class LargePacketTraversal {
       int m = leaf_packets(w, members, gb, e, which, lanes);
       if (!m) continue;
       const Leaf leaf = t_.bvh().leaf(e.ref);
-      std::optional<typename Kernel::Block> kb;  // the leaf read once, when first needed
-      if (t_.analytic_leaf(leaf) == kInvalidId)
-        m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
-          Packet& q = w.packets[size_t(i)];
-          if (!kb) kb.emplace(LeafView(leaf));
-          t_.leaf_by_rays(leaf, *kb, here, q.p, packet_rays(rays, i), q.h, inst);
-        });
+      if (const uint32_t id = t_.analytic_leaf(leaf); id != kInvalidId) {
+        for (int j = 0; j < m; ++j)
+          t_.analytic_packet(id, packet_rays(rays, which[j]), lanes[j], w.packets[which[j]].h);
+        continue;
+      }
+      const typename Kernel::Block kb{LeafView(leaf)};  // the leaf read once
+      m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
+        Packet& q = w.packets[size_t(i)];
+        t_.leaf_by_rays(leaf, kb, here, q.p, packet_rays(rays, i), q.h, inst);
+      });
       for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
         const uint32_t id = leaf.prim(k);
-        if (id >= t_.bvh().first_analytic) {
-          for (int j = 0; j < m; ++j) t_.analytic_packet(id, packet_rays(rays, which[j]), lanes[j], w.packets[which[j]].h);
-          continue;
-        }
-        if (!kb) kb.emplace(LeafView(leaf));
-        const typename Kernel::Triangle tri(*kb, k);  // set up once for every packet
+        const typename Kernel::Triangle tri(kb, k);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar, lanes[j]), lanes[j], id, inst);
@@ -533,31 +530,25 @@ class LargePacketTraversal {
         continue;
       }
       int m = leaf_packets(w, members, gb, e, which, lanes);
+      if (!m) continue;
       const Leaf leaf = t_.bvh().leaf(e.ref);
-      std::optional<typename Kernel::Block> kb;  // as in closest_group
-      if (t_.analytic_leaf(leaf) == kInvalidId)
-        m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
-          const Packet& q = w.packets[size_t(i)];
-          if (!kb) kb.emplace(LeafView(leaf));
-          if (const uint32_t found = t_.leaf_any_by_rays(leaf, *kb, here, q.p, packet_rays(rays, i), q.h.tfar))
-            occlude(i, found);
-        });
+      if (const uint32_t id = t_.analytic_leaf(leaf); id != kInvalidId) {
+        for (int j = 0; j < m; ++j)
+          if (const uint32_t found = t_.analytic_any(id, packet_rays(rays, which[j]), lanes[j]))
+            occlude(which[j], found);
+        continue;
+      }
+      const typename Kernel::Block kb{LeafView(leaf)};  // the leaf read once
+      m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
+        const Packet& q = w.packets[size_t(i)];
+        if (const uint32_t found = t_.leaf_any_by_rays(leaf, kb, here, q.p, packet_rays(rays, i), q.h.tfar))
+          occlude(i, found);
+      });
       for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
-        const uint32_t id = leaf.prim(k);
-        const bool analytic = id >= t_.bvh().first_analytic;
-        if (!analytic && !kb) kb.emplace(LeafView(leaf));
-        const typename Kernel::Triangle tri =
-            analytic ? typename Kernel::Triangle() : typename Kernel::Triangle(*kb, k);
+        const typename Kernel::Triangle tri(kb, k);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
-          uint32_t found = 0;
-          if (analytic) {
-            const std::span<const Ray> r = packet_rays(rays, which[j]);
-            for (uint32_t b = lanes[j]; b; b &= b - 1)
-              if (t_.scene().intersect_analytic(id, r[size_t(std::countr_zero(b))]).hit) found |= b & -b;
-          } else {
-            found = simd::movemask(q.kp.test(tri, q.h.tfar, lanes[j]).hit) & lanes[j];
-          }
+          const uint32_t found = simd::movemask(q.kp.test(tri, q.h.tfar, lanes[j]).hit) & lanes[j];
           if (!found) continue;
           occlude(which[j], found);
           lanes[j] &= ~found;

@@ -334,13 +334,8 @@ class Traversal {
       leaf_by_rays(leaf, kb, mask, p, rays, h, inst);
       return;
     }
-    for (uint32_t k = 0; k < leaf.n; ++k) {
-      const uint32_t id = leaf.prim(k);
-      if (id >= bvh_.first_analytic)
-        analytic_packet(id, rays, mask, h);  // (leaves keep them apart)
-      else
-        update(h, ps.kp.test(typename Kernel::Triangle(kb, k), h.tfar, mask), mask, id, inst);
-    }
+    for (uint32_t k = 0; k < leaf.n; ++k)
+      update(h, ps.kp.test(typename Kernel::Triangle(kb, k), h.tfar, mask), mask, leaf.prim(k), inst);
   }
 
   /// True when testing a leaf of n triangles one lane of `mask` at a time (each lane against
@@ -406,22 +401,11 @@ class Traversal {
   uint32_t leaf_any(int32_t ref, uint32_t mask, const PacketSetup<Kernel>& ps, std::span<const Ray> rays,
                     const float8& tfar) const noexcept {
     const Leaf leaf = bvh_.leaf(ref);
-    uint32_t done = 0;
-    if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {
-      for (uint32_t b = mask; b; b &= b - 1)
-        if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) done |= b & -b;
-      return done;
-    }
+    if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) return analytic_any(id, rays, mask);
     const typename Kernel::Block kb{LeafView(leaf)};
+    uint32_t done = 0;
     for (uint32_t k = 0; k < leaf.n && mask; ++k) {
-      const uint32_t id = leaf.prim(k);
-      uint32_t hit = 0;
-      if (id >= bvh_.first_analytic) {  // (leaves keep them apart)
-        for (uint32_t b = mask; b; b &= b - 1)
-          if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) hit |= b & -b;
-      } else {
-        hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(kb, k), tfar, mask).hit) & mask;
-      }
+      const uint32_t hit = simd::movemask(ps.kp.test(typename Kernel::Triangle(kb, k), tfar, mask).hit) & mask;
       done |= hit;
       mask &= ~hit;
     }
@@ -521,6 +505,14 @@ class Traversal {
     if (leaf.n != 1 || !bvh_.has_analytic) return kInvalidId;
     const uint32_t id = leaf.prim(0);
     return id >= bvh_.first_analytic ? id : kInvalidId;
+  }
+
+  /// The lanes of `mask` whose rays analytic primitive `id` occludes, by its scalar routine.
+  uint32_t analytic_any(uint32_t id, std::span<const Ray> rays, uint32_t mask) const noexcept {
+    uint32_t found = 0;
+    for (uint32_t b = mask; b; b &= b - 1)
+      if (scene_.intersect_analytic(id, rays[size_t(std::countr_zero(b))]).hit) found |= b & -b;
+    return found;
   }
 
   /// Analytic primitive `id` against the lanes of `mask`, by its scalar routine.
