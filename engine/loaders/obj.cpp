@@ -131,11 +131,25 @@ void check_obj_numbers(const std::string& path, std::string_view text) {
     const bool v = l[0] == 'v' && is_blank(l[1]);
     const bool vn = l.size() > 2 && l[0] == 'v' && l[1] == 'n' && is_blank(l[2]);
     const bool vt = l.size() > 2 && l[0] == 'v' && l[1] == 't' && is_blank(l[2]);
+    const bool vw = l.size() > 2 && l[0] == 'v' && l[1] == 'w' && is_blank(l[2]);
     const bool indices = (l[0] == 'f' || l[0] == 'l' || l[0] == 'p') && is_blank(l[1]);
-    if (!v && !vn && !vt && !indices) continue;
+    if (!v && !vn && !vt && !vw && !indices) continue;
     split_fields(l.substr(v || indices ? 2 : 3), is_blank, fields);
     if (indices) {
       for (std::string_view f : fields) check_index_field(path, line, f, c);
+      continue;
+    }
+    if (vw) {  // tinyobj's skin weights, "vw vertex joint weight ...": unused here, but read
+      // by tinyobj, which converts each joint to an int (undefined past the int range).
+      if (fields.empty() || fields.size() % 2 == 0)
+        throw Error(cat(path, ": line ", line, ": a skin weight ('vw') takes a vertex and joint-weight pairs, got ",
+                        fields.size(), " numbers"));
+      for (size_t k = 0; k < fields.size(); ++k) {
+        const float x = strict_number(path, line, fields[k]);
+        if ((k == 0 || k % 2 == 1) && !(std::abs(x) < 2147483648.0f))
+          throw Error(cat(path, ": line ", line, ": skin weight ", k == 0 ? "vertex " : "joint ", printable(fields[k]),
+                          " is out of range"));
+      }
       continue;
     }
     const size_t lo = v ? 3 : vn ? 3 : 1, hi = v ? 7 : vn ? 3 : 3;

@@ -303,7 +303,8 @@ TEST(ObjLoader, EveryNumberIsParsedStrictlyWithItsLine) {
       {tri + "v 0x10 0 0\nf 1 2 3\n", "line 4: '0x10' is not a number"},
       {tri + "v . 0 0\nf 1 2 3\n", "line 4: '.' is not a number"},
       {tri + "v 1e39 0 0\nf 1 2 3\n", "line 4: '1e39' is out of the float range"},
-      {tri + "v 0 2e9 0\nf 1 2 3\n", "line 4: vertex coordinate 2e9 is outside the supported coordinate range |x| <= 1073741824 (2^30)"},
+      {tri + "v 0 2e9 0\nf 1 2 3\n",
+       "line 4: vertex coordinate 2e9 is outside the supported coordinate range |x| <= 1073741824 (2^30)"},
       {tri + "v 1 2\nf 1 2 3\n", "line 4: a vertex ('v') takes 3 to 7 numbers, got 2"},
       {tri + "vn 0 0\nf 1 2 3\n", "line 4: a normal ('vn') takes 3 numbers, got 2"},
       {tri + "vn 0 0 1x\nf 1 2 3\n", "line 4: '1x' is not a number"},
@@ -315,13 +316,20 @@ TEST(ObjLoader, EveryNumberIsParsedStrictlyWithItsLine) {
       {tri + "f 1 2 3/1/1/1\n", "line 4: '3/1/1/1' has more than 3 indices"},
       {tri + "vt 0 0\nf 1/1 2/1 3/x\n", "line 5: '3/x' is not an index (i, i/j, i//k or i/j/k)"},
       {tri + "l 1 2 0\n", "line 4: vertex index 0 is 0 (OBJ counts from 1)"},
+      // tinyobj's skin weights: it turns each joint into an int, undefined past the int range.
+      {tri + "vw 1 2e+38 4\nf 1 2 3\n", "line 4: skin weight joint 2e+38 is out of range"},
+      {tri + "vw 1 2 4 \x9b\nf 1 2 3\n",
+       "line 4: a skin weight ('vw') takes a vertex and joint-weight pairs, got 4 numbers"},
+      {tri + "vw 1 2 x\nf 1 2 3\n", "line 4: 'x' is not a number"},
       // Line numbers count lines as tinyobj does: "\r\n" and a lone "\r" end one line each.
       {"v 0 0 0\r\nv 1 0 0\r\nv 0 one 0\r\nf 1 2 3\r\n", "line 3: 'one' is not a number"},
       {"v 0 0 0\rv 1 0 0\rv 0 one 0\rf 1 2 3\r", "line 3: 'one' is not a number"},
   };
   for (const auto& [text, message] : cases) EXPECT_EQ(obj_error("strict.obj", text), path_of("strict.obj") + ": " + message) << text;
   // What tinyobj reads and the check accepts: signs, fractions alone, exponents, w and colours.
-  const Scene s = obj_scene("fine.obj", "v +1 -.5 1.e0\nv 1.5E+2 0 0 1\nv 0 1 0 0.5 0.5 0.5\nvt .5\nvn 0 0 +1\nf 1/1/1 2//1 -1\n");
+  const Scene s = obj_scene(
+      "fine.obj",
+      "v +1 -.5 1.e0\nv 1.5E+2 0 0 1\nv 0 1 0 0.5 0.5 0.5\nvt .5\nvn 0 0 +1\nvw 0 0 0.25 1 0.75\nf 1/1/1 2//1 -1\n");
   EXPECT_EQ(s.triangle_count(), 1u);
   EXPECT_EQ(s.meshes()[0].positions[0], Vec3f(1, -0.5f, 1));
 }
