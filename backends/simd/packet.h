@@ -76,15 +76,15 @@ struct CertifiedKernel {
   };
   struct Single {
     CertifiedRays r;
-    Ray ray;
-    RP_SIMD_INLINE explicit Single(const Ray& ray_) : r(ray_), ray(ray_) {}
+    const Ray* ray;  ///< for Woop's test (a pointer: the ray is copied nowhere on the fast path)
+    RP_SIMD_INLINE explicit Single(const Ray& ray_) : r(ray_), ray(&ray_) {}
     Single(const RayPacket& p, int lane, const Ray& ray_)
-        : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(ray_) {}
+        : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(&ray_) {}
     RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar) const {
       TriHit8 h;
       if (const uint32_t unsure = certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h)) [[unlikely]] {
         Settled s;
-        settle_single(Leaf(b.leaf), ray, tfar.get(0), s);
+        settle_single(Leaf(b.leaf), *ray, tfar.get(0), s);
         s.merge_into(h, unsure);
       }
       return h;
