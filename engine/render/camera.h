@@ -2,11 +2,11 @@
 /// Cameras that turn image positions into primary rays: the lecture notes' pinhole, a cylindrical
 /// panorama, an equidistant fisheye and a thin lens for depth of field.
 
-#include <optional>
-#include <span>
-
 #include <algorithm>
 #include <limits>
+#include <optional>
+#include <span>
+#include <utility>
 
 #include "engine/lanes.h"
 #include "engine/ray.h"
@@ -61,9 +61,15 @@ class Camera {
   /// The pinhole direction through image position (px, py), in lanes (engine/lanes.h).
   template <class F>
   Vec3<F> pinhole_direction(const F& px, const F& py) const {
-    const F sx = px / F(float(width_)) * F(2.0f) - F(1.0f), sy = F(1.0f) - py / F(float(height_)) * F(2.0f);
+    const auto [sx, sy] = screen(px, py);
     const Vec3<F> w(F(w_.x), F(w_.y), F(w_.z)), u(F(u_.x), F(u_.y), F(u_.z)), v(F(v_.x), F(v_.y), F(v_.z));
     return unit(w + u * (sx * F(xm_)) + v * (sy * F(ym_)));
+  }
+
+  /// Image position (px, py) as screen coordinates in [-1, 1], y up, in lanes.
+  template <class F>
+  std::pair<F, F> screen(const F& px, const F& py) const {
+    return {px / F(float(width_)) * F(2.0f) - F(1.0f), F(1.0f) - py / F(float(height_)) * F(2.0f)};
   }
 
   /// The image position whose ray has direction `dir` (pinhole, panoramic, fisheye), or
@@ -101,12 +107,12 @@ void Camera::ray_lanes(const F& px, const F& py, const F& lx, const F& ly, Vec3<
   org = eye;
   tnear = F(0.0f);
   tfar = F(std::numeric_limits<float>::infinity());
-  const F sx = px / F(float(width_)) * F(2.0f) - F(1.0f), sy = F(1.0f) - py / F(float(height_)) * F(2.0f);
   switch (model_) {
     case CameraModel::pinhole:
       dir = pinhole_direction<F>(px, py);
       return;
     case CameraModel::panoramic: {
+      const auto [sx, sy] = screen(px, py);
       F s, c;
       sincos_lanes(sx * F(float(kPi)), s, c);
       dir = unit(w * c + u * s + v * (sy * F(ym_)));
