@@ -121,19 +121,14 @@ struct EdgeFactors {
       : x(x_), x94(x_ * float8(94.0f * 0x1p-24f)), x_thin(x_ * x_ * float8(kThin / 2.2f)) {}
 };
 
-/// Möller–Trumbore on rays (org, dir, tnear), whose bound factors are d_m, d_x
-/// (CertifiedRays), and triangles v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma)
-/// with edge factors `f`: its answer in `h` (the bits of moller_trumbore8); returns the lanes
-/// it leaves to Woop's test: those whose edge decisions its bound leaves uncertain, and the
-/// hits nearly in the triangle's plane (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
-                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
-  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  h = mt_answer(m, tnear, tfar);
-  const float8 mc = max_abs(m.c);
+/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays whose bound factors
+/// are d_m, d_x (CertifiedRays), given M >= |c| per lane (`mc`) and the second factor of the
+/// bound from it, q = 38u M + 94u X: the lanes whose edge decisions the bound leaves uncertain,
+/// and the hits nearly in the triangle's plane (see the top of this file).
+RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& mc, const float8& q,
+                                       const float8& d_m, const float8& d_x, const EdgeFactors& f) {
   const float8 rr = xsimd::fma(mc, d_m, max_abs(m.r));  // R' = R + 2^-20 M D
-  const float8 b = xsimd::fma(f.x, d_x, rr) * xsimd::fma(mc, float8(38.0f * 0x1p-24f), f.x94);
+  const float8 b = xsimd::fma(f.x, d_x, rr) * q;
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 least = xsimd::min(xsimd::abs(m.u), xsimd::min(xsimd::abs(m.v), xsimd::abs(w)));
@@ -148,11 +143,61 @@ RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, cons
   return simd::movemask((reach <= b) | thin);
 }
 
+/// The second factor of the bound, 38u M + 94u X, for M >= |c|.
+RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
+  return xsimd::fma(mc, float8(38.0f * 0x1p-24f), f.x94);
+}
+
+/// Möller–Trumbore on rays (org, dir, tnear), whose bound factors are d_m, d_x
+/// (CertifiedRays), and triangles v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma)
+/// with edge factors `f`: its answer in `h` (the bits of moller_trumbore8); returns the lanes
+/// it leaves to Woop's test (certified_rule), M taken lane by lane.
+RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
+                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
+                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  h = mt_answer(m, tnear, tfar);
+  const float8 mc = max_abs(m.c);
+  return certified_rule(m, h, mc, bound_q(mc, f), d_m, d_x, f);
+}
+
+/// The same with M and the factor q = bound_q(M) given (SharedOrigin: rays from one point).
+RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
+                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
+                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, const float8& mc,
+                                      const float8& q, TriHit8& h) {
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  h = mt_answer(m, tnear, tfar);
+  return certified_rule(m, h, mc, q, d_m, d_x, f);
+}
+
 /// The same for one ray broadcast (CertifiedRays).
 RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
                                       const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
   return certified_mt8(r.org, r.dir, r.tnear, r.d_m, r.d_x, tfar, v0, e1, e2, ng, f, h);
 }
+
+/// M for the triangles of a leaf (lanes) and rays that all start at one point, as a pinhole
+/// camera's primary rays do: c = v0 - o is then the same floats for every ray, and so is M,
+/// computed here once for all of them (the same bits as each ray's own: every answer stays the
+/// one-ray test's). `shared` when the box of the rays' origins (a packet's or a group's beam,
+/// mirrored per axis as PacketBeam keeps it) is one point.
+struct SharedOrigin {
+  float8 m, q;  ///< M and bound_q(M) per triangle, when `shared`
+  bool shared = false;
+  RP_SIMD_INLINE SharedOrigin(const Vec3x8& v0, const EdgeFactors& f, const PacketBeam& beam) {
+    if (!beam.valid) return;
+    float o[3];
+    for (int a = 0; a < 3; ++a) {
+      const float lo = beam.omin[a].get(0);
+      if (lo != beam.omax[a].get(0)) return;
+      o[a] = beam.neg[a] ? -lo : lo;  // (a -0 and a +0 origin give the same |c|)
+    }
+    m = max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]}));
+    q = bound_q(m, f);
+    shared = true;
+  }
+};
 
 /// Woop's answers (watertight8: the bits of the scalar routine) for the lanes `unsure`.
 struct Settled {

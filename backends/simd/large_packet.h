@@ -483,9 +483,11 @@ class LargePacketTraversal {
         Packet& q = w.packets[size_t(i)];
         t_.leaf_by_rays(leaf, kb, here, q.p, packet_rays(rays, i), q.h, inst);
       });
-      for (uint32_t k = 0; k < leaf.n && m > 0; ++k) {
+      if (m == 0) continue;
+      const typename Kernel::Origins og(kb, gb.beam);  // the group's origins against the leaf
+      for (uint32_t k = 0; k < leaf.n; ++k) {
         const uint32_t id = leaf.prim(k);
-        const typename Kernel::Triangle tri(kb, k);  // set up once for every packet
+        const typename Kernel::Triangle tri(kb, k, og);  // set up once for every packet
         for (int j = 0; j < m; ++j) {
           Packet& q = w.packets[which[j]];
           Traversal<Kernel>::update(q.h, q.kp.test(tri, q.h.tfar, lanes[j]), lanes[j], id, inst);

@@ -32,6 +32,10 @@ struct MtKernel {
     RP_SIMD_INLINE explicit Block(const LeafView& lv)
         : v0(lv.v0), e1(lv.e1()), e2(lv.e2()), ng(simd::cross_fma(e2, e1)) {}
   };
+  /// What the certified kernel learns from the origins of the rays that meet a leaf: nothing here.
+  struct Origins {
+    RP_SIMD_INLINE Origins(const Block&, const PacketBeam&) {}
+  };
   struct Single {
     Vec3x8 org, dir;
     float8 tnear;
@@ -46,6 +50,7 @@ struct MtKernel {
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
     Triangle() = default;
+    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k, const Origins&) : Triangle(b, k) {}
     /// Triangle k of a leaf's Block, in every lane.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k)
         : v0(b.v0.broadcast(int(k))),
@@ -74,6 +79,10 @@ struct CertifiedKernel {
     const float* leaf;  ///< the leaf's words, where Woop's test reads the corners (LeafView::words)
     RP_SIMD_INLINE explicit Block(const LeafView& lv) : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.words) {}
   };
+  /// A leaf's triangles against the origins of the rays that will meet them (SharedOrigin).
+  struct Origins : SharedOrigin {
+    RP_SIMD_INLINE Origins(const Block& b, const PacketBeam& beam) : SharedOrigin(b.v0, b.f, beam) {}
+  };
   struct Single {
     CertifiedRays r;
     const Ray* ray;  ///< for Woop's test (a pointer: the ray is copied nowhere on the fast path)
@@ -90,15 +99,26 @@ struct CertifiedKernel {
       return h;
     }
   };
-  /// MtKernel's Triangle, with its factors of the bound and where Woop's test reads it.
+  /// MtKernel's Triangle, with its factors of the bound, where Woop's test reads it, and, for
+  /// rays from one point (SharedOrigin), M and the bound's factor from it.
   struct Triangle : MtKernel::Triangle {
     EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
+    float8 mc, q;                 ///< M and bound_q(M) for every ray, when `shared`
     const float* leaf = nullptr;  ///< the leaf's words, where Woop's test reads the corners
     uint32_t k = 0;
+    bool shared = false;
     Triangle() = default;
-    /// Triangle k of a leaf's Block, in every lane.
+    /// Triangle k of a leaf's Block, in every lane, each ray with its own M.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
         : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_) {}
+    /// The same, with M once for every ray when they share an origin (`o`).
+    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o)
+        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_), shared(o.shared) {
+      if (shared) {
+        mc = simd::broadcast_lane(o.m, int(k_));
+        q = simd::broadcast_lane(o.q, int(k_));
+      }
+    }
   };
   struct Packet {
     const RayPacket* p = nullptr;
@@ -111,9 +131,11 @@ struct CertifiedKernel {
     /// go to Woop's test).
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
       TriHit8 h;
-      if (const uint32_t unsure =
-              certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h) & lanes)
-          [[unlikely]] {
+      const uint32_t unsure =
+          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.mc, t.q, h)
+                    : certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) &
+          lanes;
+      if (unsure) [[unlikely]] {
         Settled s;
         settle_packet(*p, tfar, Leaf(t.leaf), t.k, s);
         s.merge_into(h, unsure);

@@ -334,8 +334,9 @@ class Traversal {
       leaf_by_rays(leaf, kb, mask, p, rays, h, inst);
       return;
     }
+    const typename Kernel::Origins og(kb, ps.beam);
     for (uint32_t k = 0; k < leaf.n; ++k)
-      update(h, ps.kp.test(typename Kernel::Triangle(kb, k), h.tfar, mask), mask, leaf.prim(k), inst);
+      update(h, ps.kp.test(typename Kernel::Triangle(kb, k, og), h.tfar, mask), mask, leaf.prim(k), inst);
   }
 
   /// True when testing a leaf of n triangles one lane of `mask` at a time (each lane against

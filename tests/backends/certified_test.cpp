@@ -288,6 +288,72 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
   EXPECT_GT(unsure, 1000);
 }
 
+/// Rays from one point (a pinhole camera's): the bound's M taken once per triangle from the
+/// packet's beam (SharedOrigin) is each ray's own M bit for bit, also where the origin has
+/// coordinates of +0 in some lanes and -0 in others, and the packet test with it gives the
+/// per-ray test's answers bit for bit; rays from two points share nothing.
+TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  int shared = 0, hits = 0;
+  for (int iter = 0; iter < 3000; ++iter) {
+    const double scale = std::pow(10.0, 3.0 * int(iter % 3) - 3.0);
+    const double shift = iter % 4 == 0 ? 0.0 : std::min(std::pow(10.0, double(iter % 7)), 1e5 * scale);
+    const Fan f = make_fan(rng, scale, Vec3d{1.0, 0.75, 0.5} * shift, iter % 4 == 3 ? int(rng() % 3) : -1);
+    const std::vector<float> words = make_leaf(f.v[0], f.v[1], f.v[2], uint32_t(f.k));
+    const CertifiedKernel::Block kb{LeafView(Leaf(words.data()))};
+    Vec3f o(Vec3d(f.centre) + random_unit(rng) * (scale * std::pow(10.0, 1.0 + 2.0 * u01(rng))));
+    if (iter % 5 == 0) o[int(rng() % 3)] = 0.0f;  // an origin coordinate of 0, as +0 and -0 below
+    std::vector<Ray> eight;
+    for (int j = 0; j < 8; ++j) {  // towards the fan's shared vertices, edges and near them
+      const int i = int(rng() % uint32_t(f.k));
+      const double s = j % 3 == 0 ? 0.0 : j % 3 == 1 ? 1.0 : u01(rng);
+      const Vec3d target = Vec3d(f.centre) * (1.0 - s) + Vec3d(f.ring[i]) * s +
+                           random_unit(rng) * (j < 4 ? 0.0 : scale * std::ldexp(1.0, -10 - int(rng() % 21)));
+      Vec3f org = o;
+      for (int a = 0; a < 3; ++a)
+        if (org[a] == 0.0f && (rng() & 1u)) org[a] = -0.0f;
+      eight.push_back({org, 0.0f, Vec3f(target - Vec3d(o)), std::numeric_limits<float>::infinity()});
+    }
+    RayPacket p;
+    float8 tfar;
+    if (load_packet(eight, p, tfar) != 0xffu) continue;
+    const PacketBeam beam(p, 0xffu);
+    if (!beam.valid) continue;  // directions of mixed signs: no beam
+    const SharedOrigin so(kb.v0, kb.f, beam);
+    ASSERT_TRUE(so.shared) << "iter " << iter;
+    ++shared;
+    const CertifiedKernel::Packet packet(p, eight);
+    for (int l = 0; l < f.k; ++l) {
+      for (const Ray& r : eight) {
+        const Vec3f c = f.v[0][l] - r.org;
+        const float m = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+        ASSERT_EQ(std::bit_cast<uint32_t>(so.m.get(size_t(l))), std::bit_cast<uint32_t>(m)) << "iter " << iter;
+      }
+      const TriHit8 own = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l)), tfar, 0xffu);
+      const TriHit8 once = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l), so), tfar, 0xffu);
+      for (int j = 0; j < 8; ++j) {
+        ASSERT_EQ(lane_of(once, j).hit, lane_of(own, j).hit) << "iter " << iter << " ray " << j;
+        if (lane_of(own, j).hit) {
+          expect_same_bits(lane_of(once, j), lane_of(own, j));
+          ++hits;
+        }
+      }
+    }
+    // The same rays with one origin moved by an ulp: not one point.
+    Ray& moved = eight[size_t(rng() % 8)];
+    moved.org.x = std::nextafter(moved.org.x, std::numeric_limits<float>::infinity());
+    ASSERT_EQ(load_packet(eight, p, tfar), 0xffu);
+    const PacketBeam two(p, 0xffu);
+    if (two.valid) {
+      EXPECT_FALSE(SharedOrigin(kb.v0, kb.f, two).shared) << "iter " << iter;
+    }
+  }
+  std::printf("[ one point] %d packets from one origin, %d hits compared\n", shared, hits);
+  EXPECT_GT(shared, 1500);
+  EXPECT_GT(hits, 10000);
+}
+
 /// The t of a hit the filter decided (Möller–Trumbore's) against the double-precision
 /// watertight test on the same floats, beside the error of the float watertight test itself,
 /// on rays at random points of random triangles at translations 0..10^6 and scales 10^-3..10^3:
