@@ -5,7 +5,9 @@
 // diffuse rays as single rays. Scenes: the embedded default and, when ../shared/scenes is
 // present, bunny.obj, dragon.ply, Sponza from inside (bench/scenes/sponza-inside.json) and 16
 // bunnies placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json).
-// Rays from engine/analysis/raygen.h.
+// Rays from engine/analysis/raygen.h. BM_Pair/simd-watertight:simd/<scene>/<kind>: the
+// watertight variant against the default one on the same rays, as the median ratio of
+// alternated traces (see BM_Pair).
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -16,6 +18,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -191,6 +194,38 @@ void BM_Trace(benchmark::State& state, const std::string& label, const std::stri
   state.counters["Rays/s"] = benchmark::Counter(double(rays.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
+/// BM_Pair/<a>:<b>/<scene>/<kind>: methods a and b on the same rays, each iteration one trace
+/// of each (their order alternating), and as the counter `speed_ratio` the median over the
+/// iterations of a's speed over b's. A shared machine slows both traces of one iteration
+/// alike, so their ratio holds where the rates of separately timed benchmarks drift (measured
+/// here: BM_Trace's rates move by 7-20% between repetitions of one run, this ratio by ~2%).
+void BM_Pair(benchmark::State& state, const std::string& a, const std::string& b, const std::string& scene_name,
+             const std::string& kind, Coherence coh) {
+  SceneFixture& f = fixture(scene_name);
+  const Backend* methods[2] = {f.backends.at(a).get(), f.backends.at(b).get()};
+  const std::vector<Ray>& rays = kind == "primary" ? f.rays.primary : kind == "shadow" ? f.rays.shadow : f.rays.diffuse;
+  const bool shadow = kind == "shadow";
+  std::vector<Hit> hits(rays.size());
+  std::vector<uint8_t> occ(rays.size());
+  for (const Backend* m : methods) trace(*m, rays, hits, occ, shadow, coh);  // warm-up
+  std::vector<double> ratios;
+  int first = 0;
+  for (auto _ : state) {
+    double seconds[2];
+    for (int i = 0; i < 2; ++i) {
+      const int k = first ^ i;
+      const auto start = std::chrono::steady_clock::now();
+      trace(*methods[k], rays, hits, occ, shadow, coh);
+      seconds[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    first ^= 1;
+    ratios.push_back(seconds[1] / seconds[0]);
+  }
+  std::nth_element(ratios.begin(), ratios.begin() + ptrdiff_t(ratios.size() / 2), ratios.end());
+  state.counters["speed_ratio"] = ratios.empty() ? 0.0 : ratios[ratios.size() / 2];
+  state.counters["rays"] = double(rays.size());
+}
+
 void BM_Build(benchmark::State& state, const Method& m, const std::string& scene_name) {
   SceneFixture& f = fixture(scene_name);
   size_t bytes = 0;
@@ -266,6 +301,14 @@ int main(int argc, char** argv) {
               ->Unit(benchmark::kMillisecond)
               ->UseRealTime();
       }
+      if (m.label == "simd-watertight")  // issue 19's measure: against the default variant
+        for (const char* kind : {"primary", "shadow", "diffuse"})
+          benchmark::RegisterBenchmark(
+              ("BM_Pair/simd-watertight:simd/" + scene + "/" + kind).c_str(), BM_Pair, m.label, std::string("simd"),
+              scene, std::string(kind),
+              std::string_view(kind) == "diffuse" ? Coherence::incoherent : Coherence::coherent)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
       if (m.rays == Rays::all)
         benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
             ->Unit(benchmark::kMillisecond)
