@@ -50,6 +50,7 @@ struct MtKernel {
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
     Triangle() = default;
+    /// Triangle k, whatever the rays' origins.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k, const Origins&) : Triangle(b, k) {}
     /// Triangle k of a leaf's Block, in every lane.
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k)
