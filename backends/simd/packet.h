@@ -113,8 +113,8 @@ struct CertifiedKernel {
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
         : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_) {}
     /// The same, with M once for every ray when they share an origin (`o`).
-    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o)
-        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_), shared(o.shared) {
+    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o) : Triangle(b, k_) {
+      shared = o.shared;
       if (shared) {
         mc = simd::broadcast_lane(o.m, int(k_));
         q = simd::broadcast_lane(o.q, int(k_));
