@@ -344,10 +344,9 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     Ray& moved = eight[size_t(rng() % 8)];
     moved.org.x = std::nextafter(moved.org.x, std::numeric_limits<float>::infinity());
     ASSERT_EQ(load_packet(eight, p, tfar), 0xffu);
-    const PacketBeam two(p, 0xffu);
-    if (two.valid) {
-      EXPECT_FALSE(SharedOrigin(kb.v0, kb.f, two).shared) << "iter " << iter;
-    }
+    const PacketBeam two(p, 0xffu);  // the same directions: as valid as `beam`
+    ASSERT_TRUE(two.valid) << "iter " << iter;
+    EXPECT_FALSE(SharedOrigin(kb.v0, kb.f, two).shared) << "iter " << iter;
   }
   std::printf("[ one point] %d packets from one origin, %d hits compared\n", shared, hits);
   EXPECT_GT(shared, 1500);
