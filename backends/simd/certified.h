@@ -90,8 +90,7 @@ RP_SIMD_INLINE float8 edge_bound8(const Vec3x8& e1, const Vec3x8& e2) {
 struct CertifiedRays {
   Vec3x8 org, dir;
   float8 tnear;
-  float8 d_m;  ///< 2^-20 D, D = |dir|
-  float8 d_x;  ///< 2.2 D, the factor of X in the bound
+  float8 d;  ///< D = |dir|, the bound's factor of the ray's
 
   CertifiedRays() = default;
   /// From SoA vectors (a packet's lane, broadcast).
@@ -103,32 +102,32 @@ struct CertifiedRays {
 
  private:
   /// The rays, whose directions' max-norms are `d`.
-  RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn, const float8& d)
-      : org(o), dir(dir_), tnear(tn), d_m(d * float8(0x1p-20f)), d_x(d * float8(2.2f)) {}
+  RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn, const float8& d_)
+      : org(o), dir(dir_), tnear(tn), d(d_) {}
 };
 
-/// A triangle's factors of the bound, from its edge bound X (edge_bound8): X itself, 94u X and
-/// 2^-12 X^2 / 2.2 (kThin). Computed once per triangle where many rays meet it.
+/// A triangle's factors of the bound, from its edge bound X (edge_bound8): 2.2 X, 94u X and
+/// 2^-12 X^2 (kThin). Computed once per triangle where many rays meet it.
 struct EdgeFactors {
-  float8 x, x94, x_thin;
+  float8 x22, x94, x_thin;
   EdgeFactors() = default;
   /// Lane k of `f` in every lane.
   RP_SIMD_INLINE EdgeFactors(const EdgeFactors& f, int k)
-      : x(simd::broadcast_lane(f.x, k)),
+      : x22(simd::broadcast_lane(f.x22, k)),
         x94(simd::broadcast_lane(f.x94, k)),
         x_thin(simd::broadcast_lane(f.x_thin, k)) {}
-  RP_SIMD_INLINE explicit EdgeFactors(const float8& x_)
-      : x(x_), x94(x_ * float8(94.0f * 0x1p-24f)), x_thin(x_ * x_ * float8(kThin / 2.2f)) {}
+  RP_SIMD_INLINE explicit EdgeFactors(const float8& x)
+      : x22(x * float8(2.2f)), x94(x * float8(94.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
 
-/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays whose bound factors
-/// are d_m, d_x (CertifiedRays), given M >= |c| per lane (`mc`) and the second factor of the
-/// bound from it, q = 38u M + 94u X: the lanes whose edge decisions the bound leaves uncertain,
-/// and the hits nearly in the triangle's plane (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& mc, const float8& q,
-                                       const float8& d_m, const float8& d_x, const EdgeFactors& f) {
-  const float8 rr = xsimd::fma(mc, d_m, max_abs(m.r));  // R' = R + 2^-20 M D
-  const float8 b = xsimd::fma(f.x, d_x, rr) * q;
+/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays of max-norms `d`
+/// (CertifiedRays), given the bound's factors from M >= |c| per lane, g = 2^-20 M + 2.2 X
+/// (bound_g) and q = 38u M + 94u X (bound_q), so that B = (R + D g) q: the lanes whose edge
+/// decisions the bound leaves uncertain, and the hits nearly in the triangle's plane (see the
+/// top of this file).
+RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& g, const float8& q,
+                                       const float8& d, const EdgeFactors& f) {
+  const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 least = xsimd::min(xsimd::abs(m.u), xsimd::min(xsimd::abs(m.v), xsimd::abs(w)));
@@ -139,51 +138,58 @@ RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const
   const float8 reach = xsimd::max(least, lowest * float8(-(1.0f - 0x1p-22f) / 3.5f));
   // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
   // test too: see the top of this file.
-  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d_x);
+  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
   return simd::movemask((reach <= b) | thin);
 }
 
-/// The second factor of the bound, 38u M + 94u X, for M >= |c|.
+/// The bound's factor of D, 2^-20 M + 2.2 X, for M >= |c|.
+RP_SIMD_INLINE float8 bound_g(const float8& mc, const EdgeFactors& f) {
+  return xsimd::fma(mc, float8(0x1p-20f), f.x22);
+}
+
+/// The bound's second factor, 38u M + 94u X, for M >= |c|.
 RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
   return xsimd::fma(mc, float8(38.0f * 0x1p-24f), f.x94);
 }
 
-/// Möller–Trumbore on rays (org, dir, tnear), whose bound factors are d_m, d_x
-/// (CertifiedRays), and triangles v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma)
-/// with edge factors `f`: its answer in `h` (the bits of moller_trumbore8); returns the lanes
-/// it leaves to Woop's test (certified_rule), M taken lane by lane.
-RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
-                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
+/// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (CertifiedRays) and triangles
+/// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`: its answer
+/// in `h` (the bits of moller_trumbore8); returns the lanes it leaves to Woop's test
+/// (certified_rule), M taken lane by lane.
+RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
+                                      const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
+                                      const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
   h = mt_answer(m, tnear, tfar);
   const float8 mc = max_abs(m.c);
-  return certified_rule(m, h, mc, bound_q(mc, f), d_m, d_x, f);
+  return certified_rule(m, h, bound_g(mc, f), bound_q(mc, f), d, f);
 }
 
-/// The same with M and the factor q = bound_q(M) given (SharedOrigin: rays from one point).
-RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d_m,
-                                      const float8& d_x, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, const float8& mc,
-                                      const float8& q, TriHit8& h) {
+/// The same with the factors g = bound_g(M) and q = bound_q(M) given (SharedOrigin: rays from
+/// one point).
+RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
+                                      const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
+                                      const Vec3x8& ng, const EdgeFactors& f, const float8& g, const float8& q,
+                                      TriHit8& h) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
   h = mt_answer(m, tnear, tfar);
-  return certified_rule(m, h, mc, q, d_m, d_x, f);
+  return certified_rule(m, h, g, q, d, f);
 }
 
 /// The same for one ray broadcast (CertifiedRays).
 RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
                                       const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
-  return certified_mt8(r.org, r.dir, r.tnear, r.d_m, r.d_x, tfar, v0, e1, e2, ng, f, h);
+  return certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, h);
 }
 
 /// M for the triangles of a leaf (lanes) and rays that all start at one point, as a pinhole
 /// camera's primary rays do: c = v0 - o is then the same floats for every ray, and so is M,
-/// computed here once for all of them (the same bits as each ray's own: every answer stays the
-/// one-ray test's). `shared` when the box of the rays' origins (a packet's or a group's beam,
-/// mirrored per axis as PacketBeam keeps it) is one point.
+/// computed here once for all of them with the bound's factors from it (the same bits as each
+/// ray's own: every answer stays the one-ray test's). `shared` when the box of the rays'
+/// origins (a packet's or a group's beam, mirrored per axis as PacketBeam keeps it) is one
+/// point.
 struct SharedOrigin {
-  float8 m, q;  ///< M and bound_q(M) per triangle, when `shared`
+  float8 g, q;  ///< bound_g(M) and bound_q(M) per triangle, when `shared`
   bool shared = false;
   RP_SIMD_INLINE SharedOrigin(const Vec3x8& v0, const EdgeFactors& f, const PacketBeam& beam) {
     if (!beam.valid) return;
@@ -193,7 +199,8 @@ struct SharedOrigin {
       if (lo != beam.omax[a].get(0)) return;
       o[a] = beam.neg[a] ? -lo : lo;  // (a -0 and a +0 origin give the same |c|)
     }
-    m = max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]}));
+    const float8 m = max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]}));
+    g = bound_g(m, f);
     q = bound_q(m, f);
     shared = true;
   }

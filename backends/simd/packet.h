@@ -104,7 +104,7 @@ struct CertifiedKernel {
   /// rays from one point (SharedOrigin), M and the bound's factor from it.
   struct Triangle : MtKernel::Triangle {
     EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
-    float8 mc, q;                 ///< M and bound_q(M) for every ray, when `shared`
+    float8 g, q;                  ///< bound_g(M) and bound_q(M) for every ray, when `shared`
     const float* leaf = nullptr;  ///< the leaf's words, where Woop's test reads the corners
     uint32_t k = 0;
     bool shared = false;
@@ -116,25 +116,25 @@ struct CertifiedKernel {
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o) : Triangle(b, k_) {
       shared = o.shared;
       if (shared) {
-        mc = simd::broadcast_lane(o.m, int(k_));
+        g = simd::broadcast_lane(o.g, int(k_));
         q = simd::broadcast_lane(o.q, int(k_));
       }
     }
   };
   struct Packet {
     const RayPacket* p = nullptr;
-    float8 d_m, d_x;  ///< the rays' factors of the bound (CertifiedRays)
+    float8 d;  ///< the rays' max-norms, the bound's factor of theirs (CertifiedRays)
     Packet() = default;
     Packet(const RayPacket& packet, std::span<const Ray>) : Packet(packet, max_abs(packet.dir)) {}
     /// The rays of `packet`, whose directions' max-norms are `d`.
-    Packet(const RayPacket& packet, const float8& d) : p(&packet), d_m(d * float8(0x1p-20f)), d_x(d * float8(2.2f)) {}
+    Packet(const RayPacket& packet, const float8& d_) : p(&packet), d(d_) {}
     /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
     /// go to Woop's test).
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
       TriHit8 h;
       const uint32_t unsure =
-          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.mc, t.q, h)
-                    : certified_mt8(p->org, p->dir, p->tnear, d_m, d_x, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) &
+          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.g, t.q, h)
+                    : certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) &
           lanes;
       if (unsure) [[unlikely]] {
         Settled s;

@@ -288,8 +288,8 @@ TEST(Certified, NeverChangesADecisionOfTheWatertightTest) {
   EXPECT_GT(unsure, 1000);
 }
 
-/// Rays from one point (a pinhole camera's): the bound's M taken once per triangle from the
-/// packet's beam (SharedOrigin) is each ray's own M bit for bit, also where the origin has
+/// Rays from one point (a pinhole camera's): the bound's factors from M taken once per triangle
+/// from the packet's beam (SharedOrigin) are each ray's own bit for bit, also where the origin has
 /// coordinates of +0 in some lanes and -0 in others, and the packet test with it gives the
 /// per-ray test's answers bit for bit; rays from two points share nothing.
 TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
@@ -327,8 +327,12 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     for (int l = 0; l < f.k; ++l) {
       for (const Ray& r : eight) {
         const Vec3f c = f.v[0][l] - r.org;
-        const float m = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});
-        ASSERT_EQ(std::bit_cast<uint32_t>(so.m.get(size_t(l))), std::bit_cast<uint32_t>(m)) << "iter " << iter;
+        const float8 m(std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}));  // the ray's own M
+        const EdgeFactors fl(kb.f, l);
+        ASSERT_EQ(std::bit_cast<uint32_t>(so.g.get(size_t(l))), std::bit_cast<uint32_t>(bound_g(m, fl).get(0)))
+            << "iter " << iter;
+        ASSERT_EQ(std::bit_cast<uint32_t>(so.q.get(size_t(l))), std::bit_cast<uint32_t>(bound_q(m, fl).get(0)))
+            << "iter " << iter;
       }
       const TriHit8 own = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l)), tfar, 0xffu);
       const TriHit8 once = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l), so), tfar, 0xffu);
