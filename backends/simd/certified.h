@@ -90,7 +90,7 @@ RP_SIMD_INLINE float8 edge_bound8(const Vec3x8& e1, const Vec3x8& e2) {
 struct CertifiedRays {
   Vec3x8 org, dir;
   float8 tnear;
-  float8 d;  ///< D = |dir|, the bound's factor of the ray's
+  float8 d;  ///< D = |dir| (max-norm), the ray's factor in the bound
 
   CertifiedRays() = default;
   /// From SoA vectors (a packet's lane, broadcast).

@@ -101,7 +101,7 @@ struct CertifiedKernel {
     }
   };
   /// MtKernel's Triangle, with its factors of the bound, where Woop's test reads it, and, for
-  /// rays from one point (SharedOrigin), M and the bound's factor from it.
+  /// rays from one point (SharedOrigin), the bound's factors from their shared M.
   struct Triangle : MtKernel::Triangle {
     EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
     float8 g, q;                  ///< bound_g(M) and bound_q(M) for every ray, when `shared`
@@ -123,7 +123,7 @@ struct CertifiedKernel {
   };
   struct Packet {
     const RayPacket* p = nullptr;
-    float8 d;  ///< the rays' max-norms, the bound's factor of theirs (CertifiedRays)
+    float8 d;  ///< the rays' max-norms D, their factor in the bound (CertifiedRays)
     Packet() = default;
     Packet(const RayPacket& packet, std::span<const Ray>) : Packet(packet, max_abs(packet.dir)) {}
     /// The rays of `packet`, whose directions' max-norms are `d`.
