@@ -95,15 +95,10 @@ struct CertifiedRays {
   CertifiedRays() = default;
   /// From SoA vectors (a packet's lane, broadcast).
   RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn)
-      : CertifiedRays(o, dir_, tn, max_abs(dir_)) {}
+      : org(o), dir(dir_), tnear(tn), d(max_abs(dir_)) {}
   /// One ray in every lane (its factors computed on the broadcast direction: the same bits as
   /// from the scalar norm, in fewer instructions).
   RP_SIMD_INLINE explicit CertifiedRays(const Ray& r) : CertifiedRays(Vec3x8(r.org), Vec3x8(r.dir), float8(r.tnear)) {}
-
- private:
-  /// The rays, whose directions' max-norms are `d`.
-  RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn, const float8& d_)
-      : org(o), dir(dir_), tnear(tn), d(d_) {}
 };
 
 /// A triangle's factors of the bound, from its edge bound X (edge_bound8): 2.2 X, 94u X and

@@ -125,9 +125,7 @@ struct CertifiedKernel {
     const RayPacket* p = nullptr;
     float8 d;  ///< the rays' max-norms D, their factor in the bound (CertifiedRays)
     Packet() = default;
-    Packet(const RayPacket& packet, std::span<const Ray>) : Packet(packet, max_abs(packet.dir)) {}
-    /// The rays of `packet`, whose directions' max-norms are `d`.
-    Packet(const RayPacket& packet, const float8& d_) : p(&packet), d(d_) {}
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet), d(max_abs(packet.dir)) {}
     /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
     /// go to Woop's test).
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
