@@ -9,16 +9,17 @@
 /// passes. Möller–Trumbore's U, V and W = |den| - U - V are, in exact arithmetic, the E of
 /// the triangle's three edges (signed by den), and Woop's three 2D edge functions are E / d_kz.
 /// B bounds, for each edge, the error of Möller–Trumbore's value plus the error Woop's test
-/// makes on the same quantity. A lane is certain of its edges when all three values lie
-/// farther than B from 0 (both tests then see the sign of every exact E, so both pass the
-/// edges or both miss), or when one lies below -3.5B (both see that edge negative and, as
-/// the three exact values sum to |den|, another positive: mixed signs, a miss in both).
-/// Every other lane, a ray within about B of the triangle's border or nearly parallel to it,
-/// is decided by Woop's test itself. So every lane's edge decisions are Woop's: two triangles sharing an edge, however
-/// each lane was decided, reach the decisions of Woop's watertight test, which computes a
-/// shared edge's function from the same floats for both and never lets a ray through. (A
-/// property test compares every lane with the unfiltered test on rays aimed at shared edges
-/// and vertices, near them, and leaving a surface.)
+/// makes on the same quantity, so where Möller–Trumbore's value lies farther than B from 0,
+/// both tests see that edge's exact E with its sign. A lane is certain of its edges when all
+/// three values exceed B (both tests see the three E with one sign: both pass), or when one
+/// lies below -B and another above B (both see two E of opposite signs, whatever they see of
+/// the third: both miss). Every other lane, a ray within about B of the triangle's border or
+/// nearly parallel to it, is decided by Woop's test itself. So every lane passes or fails
+/// its edges as Woop's test does: two triangles sharing an edge, however each lane was
+/// decided, reach the decisions of Woop's watertight test, which computes a shared edge's
+/// function from the same floats for both and never lets a ray through. (A property test
+/// compares every lane with the unfiltered test on rays aimed at shared edges and vertices,
+/// near them, and leaving a surface.)
 ///
 /// The distance of a certain lane, and so its comparisons with tnear and tfar, are
 /// Möller–Trumbore's, as are its u, v. That is not a leak: a ray whose t lies within rounding
@@ -125,12 +126,12 @@ RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const
   const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
-  const float8 least = xsimd::min(xsimd::abs(m.u), xsimd::min(xsimd::abs(m.v), xsimd::abs(w)));
-  // Not sure of the edges: some value within B of 0 and none below -3.5B, that is
-  // max(least, -lowest / 3.5) <= B (the product rounded down, so that no lane below -3.5B
-  // is missed). A NaN lane (past a leaf's end; no other lane can have one) compares false:
-  // certain, Möller–Trumbore's miss.
-  const float8 reach = xsimd::max(least, lowest * float8(-(1.0f - 0x1p-22f) / 3.5f));
+  const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
+  // Sure of the edges: every value above B, or one below -B and another above B; that is
+  // max(lowest, min(-lowest, highest)) > B (no rounding: negation, min and max are exact). A
+  // NaN lane (past a leaf's end; no other lane can have one) compares false: certain,
+  // Möller–Trumbore's miss.
+  const float8 reach = xsimd::max(lowest, xsimd::min(-lowest, highest));
   // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
   // test too: see the top of this file.
   const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
