@@ -153,8 +153,8 @@ RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
 /// factors g, q taken from c by `factors`: its answer in `h` (the bits of moller_trumbore8);
 /// returns the lanes it leaves to Woop's test (certified_rule). B is taken as soon as r is
 /// known, so that M's and R's inputs are dead before the rest of the test: so ordered, fewer
-/// of the packet test's vectors spill from AVX2's 16 registers to the stack (shadow and
-/// diffuse rays 1-2% faster in alternated runs, the same bits).
+/// of the packet test's vectors spill from AVX2's 16 registers to the stack (shadow rays 1-3%
+/// faster in alternated runs, primary and diffuse rays the same; the same bits).
 template <class Factors>
 RP_SIMD_INLINE uint32_t certified_mt8_by(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                          const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
