@@ -32,8 +32,9 @@
 /// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
 /// of a reported t independent of the order in which a traversal met the leaves.
 ///
-/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a hit with
-/// |den| < 2^-12 X^2 D (kThin) goes to Woop's test too. Möller–Trumbore's t is Ng.c / Ng.d, and
+/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a lane
+/// inside Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) goes to Woop's test too,
+/// whatever its t (so that the rule need not wait for t's division). Möller–Trumbore's t is Ng.c / Ng.d, and
 /// on a needle (or a ray nearly in the triangle's plane) Ng is the cross product of nearly
 /// parallel edges, relatively far less accurate than the edges; Woop's t is the average of the
 /// vertices' depths weighted by its edge functions and does not depend on Ng. (Tested on
@@ -117,13 +118,12 @@ struct EdgeFactors {
       : x22(x * float8(2.2f)), x94(x * float8(94.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
 
-/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays of max-norms `d`
+/// The certified rule on Möller–Trumbore's terms `m` for rays of max-norms `d`
 /// (CertifiedRays), given the bound b = B = (R + D g) q, where g = 2^-20 M + 2.2 X (bound_g)
 /// and q = 38u M + 94u X (bound_q) for M >= |c| per lane: the lanes whose edge decisions the
-/// bound leaves uncertain, and the hits nearly in the triangle's plane (see the top of this
-/// file).
-RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& b, const float8& d,
-                                       const EdgeFactors& f) {
+/// bound leaves uncertain, and the lanes inside the edges nearly in the triangle's plane (see
+/// the top of this file).
+RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const float8& b, const float8& d, const EdgeFactors& f) {
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
@@ -132,9 +132,9 @@ RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const
   // NaN lane (past a leaf's end; no other lane can have one) compares false: certain,
   // Möller–Trumbore's miss.
   const float8 reach = xsimd::max(lowest, xsimd::min(-lowest, highest));
-  // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
-  // test too: see the top of this file.
-  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
+  // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2
+  // D) goes to Woop's test too: see the top of this file.
+  const mask8 thin = mt_edges(m) & (m.abs_den < f.x_thin * d);
   return simd::movemask((reach <= b) | thin);
 }
 
@@ -164,7 +164,7 @@ RP_SIMD_INLINE uint32_t certified_mt8_by(const Vec3x8& org, const Vec3x8& dir, c
   const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
   mt_finish(m, dir, e1, e2, ng);
   h = mt_answer(m, tnear, tfar);
-  return certified_rule(m, h, b, d, f);
+  return certified_rule(m, b, d, f);
 }
 
 /// certified_mt8_by with M taken lane by lane.
