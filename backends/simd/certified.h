@@ -32,9 +32,8 @@
 /// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
 /// of a reported t independent of the order in which a traversal met the leaves.
 ///
-/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a lane
-/// inside Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) goes to Woop's test too,
-/// whatever its t (so that the rule need not wait for t's division). Möller–Trumbore's t is Ng.c / Ng.d, and
+/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a hit with
+/// |den| < 2^-12 X^2 D (kThin) goes to Woop's test too. Möller–Trumbore's t is Ng.c / Ng.d, and
 /// on a needle (or a ray nearly in the triangle's plane) Ng is the cross product of nearly
 /// parallel edges, relatively far less accurate than the edges; Woop's t is the average of the
 /// vertices' depths weighted by its edge functions and does not depend on Ng. (Tested on
@@ -65,7 +64,6 @@
 #include <cstdint>
 #include <limits>
 #include <span>
-#include <utility>
 
 #include "backends/simd/kernels.h"
 #include "engine/geometry/triangle.h"
@@ -118,12 +116,14 @@ struct EdgeFactors {
       : x22(x * float8(2.2f)), x94(x * float8(94.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
 
-/// The certified rule on Möller–Trumbore's terms `m` for rays of max-norms `d`
-/// (CertifiedRays), given the bound b = B = (R + D g) q, where g = 2^-20 M + 2.2 X (bound_g)
-/// and q = 38u M + 94u X (bound_q) for M >= |c| per lane: the lanes whose edge decisions the
-/// bound leaves uncertain, and the lanes inside the edges nearly in the triangle's plane (see
-/// the top of this file).
-RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const float8& b, const float8& d, const EdgeFactors& f) {
+/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays of max-norms `d`
+/// (CertifiedRays), given the bound's factors from M >= |c| per lane, g = 2^-20 M + 2.2 X
+/// (bound_g) and q = 38u M + 94u X (bound_q), so that B = (R + D g) q: the lanes whose edge
+/// decisions the bound leaves uncertain, and the hits nearly in the triangle's plane (see the
+/// top of this file).
+RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& g, const float8& q,
+                                       const float8& d, const EdgeFactors& f) {
+  const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
@@ -132,9 +132,9 @@ RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const float8& b, const 
   // NaN lane (past a leaf's end; no other lane can have one) compares false: certain,
   // Möller–Trumbore's miss.
   const float8 reach = xsimd::max(lowest, xsimd::min(-lowest, highest));
-  // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2
-  // D) goes to Woop's test too: see the top of this file.
-  const mask8 thin = mt_edges(m) & (m.abs_den < f.x_thin * d);
+  // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
+  // test too: see the top of this file.
+  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
   return simd::movemask((reach <= b) | thin);
 }
 
@@ -149,35 +149,16 @@ RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
 }
 
 /// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (CertifiedRays) and triangles
-/// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`, the bound's
-/// factors g, q taken from c by `factors`: its answer in `h` (the bits of moller_trumbore8);
-/// returns the lanes it leaves to Woop's test (certified_rule). B is taken as soon as r is
-/// known, so that M's and R's inputs are dead before the rest of the test: so ordered, fewer
-/// of the packet test's vectors spill from AVX2's 16 registers to the stack (shadow rays 1-3%
-/// faster in alternated runs, primary and diffuse rays the same; the same bits).
-template <class Factors>
-RP_SIMD_INLINE uint32_t certified_mt8_by(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
-                                         const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                         const Vec3x8& ng, const EdgeFactors& f, Factors factors, TriHit8& h) {
-  MtTerms m = mt_start(org, dir, v0);
-  const auto [g, q] = factors(m.c);
-  const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
-  mt_finish(m, dir, e1, e2, ng);
-  h = mt_answer(m, tnear, tfar);
-  return certified_rule(m, b, d, f);
-}
-
-/// certified_mt8_by with M taken lane by lane.
+/// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`: its answer
+/// in `h` (the bits of moller_trumbore8); returns the lanes it leaves to Woop's test
+/// (certified_rule), M taken lane by lane.
 RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
                                       const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
-  return certified_mt8_by(
-      org, dir, tnear, d, tfar, v0, e1, e2, ng, f,
-      [&f](const Vec3x8& c) {
-        const float8 mc = max_abs(c);
-        return std::pair{bound_g(mc, f), bound_q(mc, f)};
-      },
-      h);
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  h = mt_answer(m, tnear, tfar);
+  const float8 mc = max_abs(m.c);
+  return certified_rule(m, h, bound_g(mc, f), bound_q(mc, f), d, f);
 }
 
 /// The same with the factors g = bound_g(M) and q = bound_q(M) given (SharedOrigin: rays from
@@ -186,12 +167,9 @@ RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, cons
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
                                       const Vec3x8& ng, const EdgeFactors& f, const float8& g, const float8& q,
                                       TriHit8& h) {
-  return certified_mt8_by(
-      org, dir, tnear, d, tfar, v0, e1, e2, ng, f,
-      [&](const Vec3x8&) {
-        return std::pair{g, q};
-      },
-      h);
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  h = mt_answer(m, tnear, tfar);
+  return certified_rule(m, h, g, q, d, f);
 }
 
 /// The same for one ray broadcast (CertifiedRays).

@@ -359,28 +359,17 @@ struct MtTerms {
   float8 tn;       ///< Ng . c, sign-corrected: t times |den|
 };
 
-/// The terms in two steps, for a caller that uses c and r in between (certified.h): c and r
-/// here, the rest in mt_finish.
-RP_SIMD_INLINE MtTerms mt_start(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0) {
+RP_SIMD_INLINE MtTerms mt_terms(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
+                                const Vec3x8& e2, const Vec3x8& ng) {
   MtTerms m;
   m.c = v0 - org;
   m.r = simd::cross_fma(m.c, dir);
-  return m;
-}
-
-RP_SIMD_INLINE void mt_finish(MtTerms& m, const Vec3x8& dir, const Vec3x8& e1, const Vec3x8& e2, const Vec3x8& ng) {
   m.den = simd::dot_fma(ng, dir);
   m.sign = m.den & float8(-0.0f);
   m.abs_den = m.den ^ m.sign;
   m.u = simd::dot_fma(m.r, e2) ^ m.sign;
   m.v = simd::dot_fma(m.r, e1) ^ m.sign;
   m.tn = simd::dot_fma(ng, m.c) ^ m.sign;
-}
-
-RP_SIMD_INLINE MtTerms mt_terms(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                                const Vec3x8& e2, const Vec3x8& ng) {
-  MtTerms m = mt_start(org, dir, v0);
-  mt_finish(m, dir, e1, e2, ng);
   return m;
 }
 
