@@ -13,15 +13,15 @@
 /// both tests see that edge's exact E with its sign. A lane is certain of its edges when all
 /// three values exceed B (both tests see the three E with one sign: both pass), or when one
 /// lies below -B and another above B (both see two E of opposite signs, whatever they see of
-/// the third: both miss; should Woop's test find the third exactly 0, it re-evaluates all
-/// three in double from the same sheared coordinates, with less rounding than in float, and
-/// the two keep their signs). Every other lane, a ray within about B of the triangle's border or
-/// nearly parallel to it, is decided by Woop's test itself. So every lane passes or fails
-/// its edges as Woop's test does: two triangles sharing an edge, however each lane was
-/// decided, reach the decisions of Woop's watertight test, which computes a shared edge's
-/// function from the same floats for both and never lets a ray through. (A property test
-/// compares every lane with the unfiltered test on rays aimed at shared edges and vertices,
-/// near them, and leaving a surface.)
+/// the third: both miss; should Woop's test find the third exactly 0, it re-evaluates all three
+/// in double from the same sheared coordinates, with less rounding than in float, and the two
+/// keep their signs). Every other lane, a ray within about B of the triangle's border or nearly
+/// parallel to it, is decided by Woop's test itself. So every lane passes or fails its edges as
+/// Woop's test does: two triangles sharing an edge, however each lane was decided, reach the
+/// decisions of Woop's watertight test, which computes a shared edge's function from the same
+/// floats for both and never lets a ray through. (A property test compares every lane with the
+/// unfiltered test on rays aimed at shared edges and vertices, near them, and leaving a
+/// surface.)
 ///
 /// The distance of a certain lane, and so its comparisons with tnear and tfar, are
 /// Möller–Trumbore's, as are its u, v. That is not a leak: a ray whose t lies within rounding
