@@ -130,10 +130,11 @@ RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
   // Sure of the edges: every value above B, or one below -B and another above B; that is
-  // max(lowest, min(-lowest, highest)) > B (no rounding: negation, min and max are exact). A
-  // NaN lane (past a leaf's end; no other lane can have one) compares false: certain,
-  // Möller–Trumbore's miss.
-  const float8 reach = xsimd::max(lowest, xsimd::min(-lowest, highest));
+  // min(highest, |lowest|) > B (B > 0: the lowest value's sign is sure and the highest is
+  // above B, so either all three are or two have opposite signs; no rounding: abs, min and max
+  // are exact). A NaN lane (past a leaf's end; no other lane can have one) compares false:
+  // certain, Möller–Trumbore's miss.
+  const float8 reach = xsimd::min(highest, xsimd::abs(lowest));
   // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
   // test too: see the top of this file.
   const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
