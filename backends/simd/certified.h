@@ -34,8 +34,9 @@
 /// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
 /// of a reported t independent of the order in which a traversal met the leaves.
 ///
-/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a hit with
-/// |den| < 2^-12 X^2 D (kThin) goes to Woop's test too. Möller–Trumbore's t is Ng.c / Ng.d, and
+/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a lane inside
+/// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) goes to Woop's test too, whatever
+/// its t (so the guard need not wait for t's division). Möller–Trumbore's t is Ng.c / Ng.d, and
 /// on a needle (or a ray nearly in the triangle's plane) Ng is the cross product of nearly
 /// parallel edges, relatively far less accurate than the edges; Woop's t is the average of the
 /// vertices' depths weighted by its edge functions and does not depend on Ng. (Tested on
@@ -72,7 +73,7 @@
 
 namespace rp::bvh8 {
 
-/// The |den| (in units of X^2 D) below which a hit's t is left to Woop's test.
+/// The |den| (in units of X^2 D) below which a lane inside the edges is left to Woop's test.
 inline constexpr float kThin = 0x1p-12f;
 
 /// Max-abs norm of each lane.
@@ -118,26 +119,36 @@ struct EdgeFactors {
       : x22(x * float8(2.2f)), x94(x * float8(94.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
 
-/// The certified rule on Möller–Trumbore's terms `m` and answer `h` for rays of max-norms `d`
-/// (CertifiedRays), given the bound's factors from M >= |c| per lane, g = 2^-20 M + 2.2 X
-/// (bound_g) and q = 38u M + 94u X (bound_q), so that B = (R + D g) q: the lanes whose edge
-/// decisions the bound leaves uncertain, and the hits nearly in the triangle's plane (see the
-/// top of this file).
-RP_SIMD_INLINE uint32_t certified_rule(const MtTerms& m, const TriHit8& h, const float8& g, const float8& q,
-                                       const float8& d, const EdgeFactors& f) {
+/// Möller–Trumbore's answer from its terms `m` for rays of max-norms `d` (CertifiedRays), with
+/// the certified rule, given the bound's factors from M >= |c| per lane, g = 2^-20 M + 2.2 X
+/// (bound_g) and q = 38u M + 94u X (bound_q), so that B = (R + D g) q: the answer in `h`
+/// (the bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
+/// lanes whose edge decisions the bound leaves uncertain, and the lanes nearly in the
+/// triangle's plane inside its edges (see the top of this file).
+RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& g, const float8& q, const float8& d,
+                                         const float8& tnear, const float8& tfar, const EdgeFactors& f, TriHit8& h) {
   const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
+  // Inside Möller–Trumbore's edges: U, V >= 0 and U + V <= |den| (the sign of |den| - (U + V)
+  // is exact), as mt_edges decides it but without den != 0: a lane with den = 0 has t = Tn / 0,
+  // infinite or NaN, which the t test rejects. A NaN lane (past a leaf's end; no other lane
+  // can have one) is outside (MINPS returns its second operand on a NaN, and all three are
+  // NaN there).
+  const float8 zero(0.0f), inf(std::numeric_limits<float>::infinity());
+  const mask8 inside = lowest >= zero;
+  const float8 inv = float8(1.0f) / m.abs_den;
+  const float8 t = m.tn * inv;
+  h = {inside & (t >= tnear) & (t <= tfar) & (t < inf), t, m.u * inv, m.v * inv};
   // Sure of the edges: every value above B, or one below -B and another above B; that is
   // min(highest, |lowest|) > B (B > 0: the lowest value's sign is sure and the highest is
   // above B, so either all three are or two have opposite signs; no rounding: abs, min and max
-  // are exact). A NaN lane (past a leaf's end; no other lane can have one) compares false:
-  // certain, Möller–Trumbore's miss.
+  // are exact). A NaN lane compares false: certain, Möller–Trumbore's miss.
   const float8 reach = xsimd::min(highest, xsimd::abs(lowest));
-  // A hit nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D) goes to Woop's
-  // test too: see the top of this file.
-  const mask8 thin = h.hit & (m.abs_den < f.x_thin * d);
+  // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D)
+  // goes to Woop's test too, whatever its t: see the top of this file.
+  const mask8 thin = inside & (m.abs_den < f.x_thin * d);
   return simd::movemask((reach <= b) | thin);
 }
 
@@ -154,14 +165,13 @@ RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
 /// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (CertifiedRays) and triangles
 /// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`: its answer
 /// in `h` (the bits of moller_trumbore8); returns the lanes it leaves to Woop's test
-/// (certified_rule), M taken lane by lane.
+/// (certified_answer), M taken lane by lane.
 RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
                                       const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  h = mt_answer(m, tnear, tfar);
   const float8 mc = max_abs(m.c);
-  return certified_rule(m, h, bound_g(mc, f), bound_q(mc, f), d, f);
+  return certified_answer(m, bound_g(mc, f), bound_q(mc, f), d, tnear, tfar, f, h);
 }
 
 /// The same with the factors g = bound_g(M) and q = bound_q(M) given (SharedOrigin: rays from
@@ -170,9 +180,7 @@ RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, cons
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
                                       const Vec3x8& ng, const EdgeFactors& f, const float8& g, const float8& q,
                                       TriHit8& h) {
-  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  h = mt_answer(m, tnear, tfar);
-  return certified_rule(m, h, g, q, d, f);
+  return certified_answer(mt_terms(org, dir, v0, e1, e2, ng), g, q, d, tnear, tfar, f, h);
 }
 
 /// The same for one ray broadcast (CertifiedRays).
