@@ -490,7 +490,7 @@ class SlowPathShare : public testing::TestWithParam<Model> {};
 /// On bunny, dragon and Sponza from inside (large triangles, which the rays leaving them meet
 /// at t near 0), primary rays (256 x 256) and the diffuse and shadow rays leaving their hits,
 /// the share of lanes the filter leaves to Woop's test (the closing figures of issue 19 come
-/// from this test's output). Under 1% everywhere (Sponza: 0.20% primary, 0.091% diffuse, 0.14%
+/// from this test's output). Under 1% everywhere (Sponza: 0.20% primary, 0.093% diffuse, 0.15%
 /// shadow, where a filter that also bounded the t comparisons sent 4.9% of diffuse and 8.6% of
 /// shadow lanes) but on dragon's primary rays, measured at 1.11%:
 /// its triangles are about 1/2000 of the camera's distance across, and the float watertight
