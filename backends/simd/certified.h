@@ -132,15 +132,11 @@ RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& g, cons
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
   // Inside Möller–Trumbore's edges: U, V >= 0 and U + V <= |den| (the sign of |den| - (U + V)
-  // is exact), as mt_edges decides it but without den != 0: a lane with den = 0 has t = Tn / 0,
-  // infinite or NaN, which the t test rejects. A NaN lane (past a leaf's end; no other lane
-  // can have one) is outside (MINPS returns its second operand on a NaN, and all three are
-  // NaN there).
-  const float8 zero(0.0f), inf(std::numeric_limits<float>::infinity());
-  const mask8 inside = lowest >= zero;
-  const float8 inv = float8(1.0f) / m.abs_den;
-  const float8 t = m.tn * inv;
-  h = {inside & (t >= tnear) & (t <= tfar) & (t < inf), t, m.u * inv, m.v * inv};
+  // is exact), as mt_edges decides it but for den != 0, which mt_answer's t test implies. A
+  // NaN lane (past a leaf's end; no other lane can have one) is outside (MINPS returns its
+  // second operand on a NaN, and all three are NaN there).
+  const mask8 inside = lowest >= float8(0.0f);
+  h = mt_answer(m, inside, tnear, tfar);
   // Sure of the edges: every value above B, or one below -B and another above B; that is
   // min(highest, |lowest|) > B (B > 0: the lowest value's sign is sure and the highest is
   // above B, so either all three are or two have opposite signs; no rounding: abs, min and max

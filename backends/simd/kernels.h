@@ -380,14 +380,20 @@ RP_SIMD_INLINE mask8 mt_edges(const MtTerms& m) {
   return (m.den != zero) & (m.u >= zero) & (m.v >= zero) & (m.u + m.v <= m.abs_den);
 }
 
-/// moller_trumbore8's answer from its terms.
-RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const float8& tnear, const float8& tfar) {
+/// moller_trumbore8's answer from its terms and the lanes inside its edges (mt_edges, or a mask
+/// equal to it wherever den != 0: a lane with den = 0 has t = Tn / 0, infinite or NaN, which
+/// the t test rejects).
+RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const mask8& edges, const float8& tnear, const float8& tfar) {
   const float8 inf(std::numeric_limits<float>::infinity());
-  const mask8 edges = mt_edges(m);
   const float8 inv = float8(1.0f) / m.abs_den;
   const float8 t = m.tn * inv;
   const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
   return {hit, t, m.u * inv, m.v * inv};
+}
+
+/// moller_trumbore8's answer from its terms.
+RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const float8& tnear, const float8& tfar) {
+  return mt_answer(m, mt_edges(m), tnear, tfar);
 }
 
 /// Möller–Trumbore ×8 in the normal-first factoring of rp::intersect_triangle_mt_normal (Möller
