@@ -63,10 +63,7 @@
 /// Lanes past a leaf's end are NaN: every comparison is false, the lane counts as certain,
 /// and Möller–Trumbore's miss is Woop's miss too.
 
-#include <bit>
 #include <cstdint>
-#include <limits>
-#include <span>
 
 #include "backends/simd/kernels.h"
 #include "engine/geometry/triangle.h"
