@@ -1,4 +1,4 @@
-// BM_Kernel/<slab8|moller_trumbore8|certified8|watertight8|sphere8>: the simd backend's 8-wide kernels per call, on
+// BM_Kernel/<slab8|moller_trumbore8|certified8|sphere8>: the simd backend's 8-wide kernels per call, on
 // seeded random inputs, with the fraction of lanes that hit as a counter. This file is built
 // for AVX2+FMA; main() registers these benchmarks only when the CPU has both.
 
@@ -101,20 +101,13 @@ void BM_MollerTrumbore8(benchmark::State& state) {
 }
 
 /// The watertight variant's test x8 (certified.h): Möller–Trumbore with the bound on its edge
-/// decisions, Woop's test for the lanes it leaves uncertain.
+/// decisions, the exact test for the lanes it leaves uncertain.
 void BM_Certified8(benchmark::State& state) {
   triangle_kernel(
       state, [](const Ray& r) { return CertifiedKernel::Single(r); },
       [](const CertifiedKernel::Single& k, const LeafView& tv) {
         return k.block(CertifiedKernel::Block(tv), float8(100.0f));
       });
-}
-
-/// Watertight x8, the per-ray shear and axis permutation prepared once per ray.
-void BM_Watertight8(benchmark::State& state) {
-  triangle_kernel(
-      state, [](const Ray& r) { return WatertightRays(r); },
-      [](const WatertightRays& w, const LeafView& tv) { return watertight8(w, tv.v0, tv.v1, tv.v2, float8(100.0f)); });
 }
 
 /// Sphere x8: one ray against 8 spheres by the scalar stable-quadratic routine the backends
@@ -145,7 +138,6 @@ void register_kernel_benchmarks() {
   benchmark::RegisterBenchmark("BM_Kernel/slab8", BM_Slab8);
   benchmark::RegisterBenchmark("BM_Kernel/moller_trumbore8", BM_MollerTrumbore8);
   benchmark::RegisterBenchmark("BM_Kernel/certified8", BM_Certified8);
-  benchmark::RegisterBenchmark("BM_Kernel/watertight8", BM_Watertight8);
   benchmark::RegisterBenchmark("BM_Kernel/sphere8", BM_Sphere8);
 }
 

@@ -1,76 +1,87 @@
 #pragma once
 /// The triangle test of the watertight variant: Möller–Trumbore ×8 (the default variant's
-/// kernel) with a forward error bound on each of its edge decisions, and the watertight test
-/// of Woop, Benthin and Wald (2013) for the lanes whose decisions the bound leaves uncertain.
+/// kernel) with a forward error bound on each of its edge decisions, and exact edge decisions
+/// (rp::edge_side, engine/geometry/exact_triangle.h) for the lanes the bound leaves uncertain.
 /// AVX2+FMA translation units only.
 ///
 /// Why the combination is watertight. For an edge p-q and a ray (o, d), let E be the exact
-/// determinant det(p - o, q - o, d): its sign says on which side of the edge's line the ray
+/// determinant ((p - o) x (q - o)) . d: its sign says on which side of the edge's line the ray
 /// passes. Möller–Trumbore's U, V and W = |den| - U - V are, in exact arithmetic, the E of
-/// the triangle's three edges (signed by den), and Woop's three 2D edge functions are E / d_kz.
-/// B bounds, for each edge, the error of Möller–Trumbore's value plus the error Woop's test
-/// makes on the same quantity, so where Möller–Trumbore's value lies farther than B from 0,
-/// both tests see that edge's exact E with its sign. A lane is certain of its edges when all
-/// three values exceed B (both tests see the three E with one sign: both pass), or when one
-/// lies below -B and another above B (both see two E of opposite signs, whatever they see of
-/// the third: both miss; should Woop's test find the third exactly 0, it re-evaluates all three
-/// in double from the same sheared coordinates, with less rounding than in float, and the two
-/// keep their signs). Every other lane, a ray within about B of the triangle's border or nearly
-/// parallel to it, is decided by Woop's test itself. So every lane passes or fails its edges as
-/// Woop's test does: two triangles sharing an edge, however each lane was decided, reach the
-/// decisions of Woop's watertight test, which computes a shared edge's function from the same
-/// floats for both and never lets a ray through. (A property test compares every lane with the
-/// unfiltered test on rays aimed at shared edges and vertices, near them, and leaving a
-/// surface.)
+/// the triangle's edges (v2, v0), (v0, v1) and (v1, v2), signed by den. B bounds the error of
+/// each of Möller–Trumbore's three values, so where a value lies farther than B from 0 its sign
+/// is that of the exact E. A lane is certain of its edges when all three values exceed B (the
+/// three E have one sign: inside), or when one lies below -B and another above B (two E of
+/// opposite signs: outside). Every other lane, a ray within about B of an edge's line or
+/// nearly parallel to the triangle, is settled with the sign of each uncertain E taken
+/// exactly. So every lane passes or fails its edges as the exact signs say: two
+/// triangles sharing an edge see one determinant for it (negated), the triangles around a
+/// shared vertex see the ray on consistent sides of their edges, and no ray that crosses a
+/// closed mesh passes between its triangles, at any translation or scale. (A property test
+/// compares every lane with rp::intersect_triangle_exact on rays aimed at shared edges and
+/// vertices, near them, and leaving a surface.)
 ///
 /// The distance of a certain lane, and so its comparisons with tnear and tfar, are
 /// Möller–Trumbore's, as are its u, v. That is not a leak: a ray whose t lies within rounding
 /// of tnear or tfar has its hit at the end of its segment (a ray leaving its own surface, or a
-/// near-tie with the hit that set tfar), where both tests decide by a rounded t and
-/// Möller–Trumbore's is the more accurate one (tested against a double reference, and on rays
-/// leaving a surface its decision agrees with the reference's at least as often as Woop's). A
-/// rigorous bound on both tests' t error, tried first, was some thousands of u X wide: wider
-/// than the renderer's ray-origin offset on large triangles, it sent 8.6% of Sponza's shadow
-/// lanes (43% of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits
-/// of a reported t independent of the order in which a traversal met the leaves.
+/// near-tie with the hit that set tfar), where any test decides by a rounded t. A rigorous
+/// bound on the t error, tried first, was some thousands of u X wide: wider than the
+/// renderer's ray-origin offset on large triangles, it sent 8.6% of Sponza's shadow lanes (43%
+/// of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits of a
+/// reported t independent of the order in which a traversal met the leaves.
 ///
-/// One guard keeps a hit's t as accurate as Woop's where Möller–Trumbore's is not: a lane inside
-/// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) goes to Woop's test too, whatever
-/// its t (so the guard need not wait for t's division). Möller–Trumbore's t is Ng.c / Ng.d, and
-/// on a needle (or a ray nearly in the triangle's plane) Ng is the cross product of nearly
-/// parallel edges, relatively far less accurate than the edges; Woop's t is the average of the
-/// vertices' depths weighted by its edge functions and does not depend on Ng. (Tested on
-/// needles and near-degenerate triangles against the double test: without the guard the
-/// kernel's t is wrong more often than Woop's.)
+/// One guard keeps a hit's t accurate where Möller–Trumbore's is not: a lane inside
+/// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) is settled too, whatever its t (so
+/// the guard need not wait for t's division), by rp::intersect_triangle_exact, which computes t
+/// in double.
+/// Möller–Trumbore's t is Ng.c / Ng.d, and on a needle (or a ray nearly in the triangle's
+/// plane) Ng is the cross product of nearly parallel edges, relatively far less accurate than
+/// the edges. (Tested on needles and near-degenerate triangles against the double test:
+/// without the guard the kernel's t is wrong more often than the float watertight test's.)
 ///
-/// The bound, per lane, with max-abs norms, u = 2^-24, c = v0 - o and r = c x d as
-/// Möller–Trumbore computes them, M = |c|, R' = |r| + 2^-20 M D, D = |d| (= |d_kz|) and X the
-/// triangle's edge bound (edge_bound8: the exact |e1|, |e2| <= X):
+/// The bound, per lane, with max-abs norms, u = 2^-24, c = v0 - o as Möller–Trumbore computes
+/// it, M = |c|, D = |d| (= |d_kz|) and X the triangle's edge bound (edge_bound8: the exact
+/// |e1|, |e2| <= X):
 ///
-///     B = u (R' + 2.2 X D) (38 M + 94 X).
+///     B = u X D (116 M + 56 X),
+///
+/// and for rays from one point (SharedOrigin, where M is taken once per triangle), with
+/// R = |c x d| as computed, the tighter B = u X (36 R + 41 M D + 54 X D).
 ///
 /// Möller–Trumbore's errors, each rounded difference, product and FMA of its factoring traced
-/// (r and Ng = e2 x e1 per component within 6.5u M D and 8u X^2): U and V within
+/// (r = c x d and Ng = e2 x e1 per component within 6.5u M D and 8u X^2): U and V within
 /// u X (20.2 M D + 14 R'), |den| within 52.7u D X^2, W within u X (53.2 X D + 40.7 M D +
-/// 35.1 R'). Woop's, in the units of E: a vertex's sheared coordinates err by at most
-/// s = u (4.5 (M + X) + 1.1 P / D) and lie within P / D of 0, P = R' + 2.01 X D >=
-/// |(p - o) x d|; an edge function errs by at most 2.01 (2 P s + s^2 D) + 4.5u P^2 / D <=
-/// u (36 R' M + 54 R' X + 36.4 X D M + 72.4 X^2 D) (R' / D <= 2.01 M). The sum,
-/// u (36 R' M + 89 R' X + 77 X D M + 126 X^2 D), is below each term of B's product (38, 94,
-/// 83.6, 206.8) with room for the bound's own rounding.
+/// 35.1 R'), where R' = R + 2^-20 M D. W's bound is the widest, and both forms of B exceed it
+/// with room for their own few roundings: the second directly; the first because each
+/// component of a cross product is at most twice the product of its factors' max-norms, so
+/// R' <= 2.0001 M D and W's bound is at most u X D (110.9 M + 53.2 X). The first needs no R per
+/// lane (five vector operations fewer a test); the second, where M is shared, leaves about a
+/// third as many lanes uncertain on camera rays. Which one a path takes changes nothing in its
+/// answers (below), only how often it settles.
 ///
-/// No term underflows, which could hide an error: valid rays have D >= 2^-26, and X >= 2^-32.
-/// Lanes past a leaf's end are NaN: every comparison is false, the lane counts as certain,
-/// and Möller–Trumbore's miss is Woop's miss too.
+/// The settle (Uncertain) makes the test's terms again for its lanes and decides each edge by
+/// Möller–Trumbore's value where that lies farther than the first form of B from 0, and by
+/// rp::edge_side, exactly, otherwise; inside the edges its t, u, v are Möller–Trumbore's (u, v
+/// clamped to the triangle), or, for a lane with |den| < 2^-12 X^2 D, rp::intersect_triangle_exact's
+/// (t in double). Those are the answers of a certain lane too, so every lane's answer, certain
+/// or settled, on whichever path, is the same function of the ray and the triangle: a packet,
+/// a ray alone and rays from one point give the same bits.
+///
+/// No term underflows, which could hide an error: valid rays have D >= 2^-26, and X >= 2^-32,
+/// so B >= 2^-108. Lanes past a leaf's end are NaN: every comparison is false, the lane
+/// counts as certain, and Möller–Trumbore's miss is the exact miss too.
 
 #include <cstdint>
 
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
 #include "backends/simd/kernels.h"
-#include "engine/geometry/triangle.h"
+#include "engine/geometry/exact_triangle.h"
 
 namespace rp::bvh8 {
 
-/// The |den| (in units of X^2 D) below which a lane inside the edges is left to Woop's test.
+/// The |den| (in units of X^2 D) below which a lane inside the edges is settled, t in double.
 inline constexpr float kThin = 0x1p-12f;
 
 /// Max-abs norm of each lane.
@@ -102,29 +113,30 @@ struct CertifiedRays {
   RP_SIMD_INLINE explicit CertifiedRays(const Ray& r) : CertifiedRays(Vec3x8(r.org), Vec3x8(r.dir), float8(r.tnear)) {}
 };
 
-/// A triangle's factors of the bound, from its edge bound X (edge_bound8): 2.2 X, 94u X and
+/// A triangle's factors of the bound, from its edge bound X (edge_bound8): 116u X, 56u X^2 and
 /// 2^-12 X^2 (kThin). Computed once per triangle where many rays meet it.
 struct EdgeFactors {
-  float8 x22, x94, x_thin;
+  float8 xm, xx, x_thin;
   EdgeFactors() = default;
   /// Lane k of `f` in every lane.
   RP_SIMD_INLINE EdgeFactors(const EdgeFactors& f, int k)
-      : x22(simd::broadcast_lane(f.x22, k)),
-        x94(simd::broadcast_lane(f.x94, k)),
+      : xm(simd::broadcast_lane(f.xm, k)),
+        xx(simd::broadcast_lane(f.xx, k)),
         x_thin(simd::broadcast_lane(f.x_thin, k)) {}
   RP_SIMD_INLINE explicit EdgeFactors(const float8& x)
-      : x22(x * float8(2.2f)), x94(x * float8(94.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
+      : xm(x * float8(116.0f * 0x1p-24f)), xx(x * x * float8(56.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
 
-/// Möller–Trumbore's answer from its terms `m` for rays of max-norms `d` (CertifiedRays), with
-/// the certified rule, given the bound's factors from M >= |c| per lane, g = 2^-20 M + 2.2 X
-/// (bound_g) and q = 38u M + 94u X (bound_q), so that B = (R + D g) q: the answer in `h`
-/// (the bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
+/// The bound per unit of D, h = 116u X M + 56u X^2 for M >= |c|, so that B = D h.
+RP_SIMD_INLINE float8 bound_h(const float8& mc, const EdgeFactors& f) { return xsimd::fma(mc, f.xm, f.xx); }
+
+/// Möller–Trumbore's answer from its terms `m`, with the certified rule for the bound `b` on
+/// its values' errors (B) and rays of max-norms `d` (CertifiedRays): the answer in `hit` (the
+/// bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
 /// lanes whose edge decisions the bound leaves uncertain, and the lanes nearly in the
 /// triangle's plane inside its edges (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& g, const float8& q, const float8& d,
-                                         const float8& tnear, const float8& tfar, const EdgeFactors& f, TriHit8& h) {
-  const float8 b = xsimd::fma(d, g, max_abs(m.r)) * q;  // (R' + 2.2 X D) q, R' = R + 2^-20 M D
+RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, const float8& tnear, const float8& tfar,
+                                         const EdgeFactors& f, TriHit8& hit, const float8& d) {
   const float8 w = m.abs_den - (m.u + m.v);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
@@ -133,63 +145,59 @@ RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& g, cons
   // NaN lane (past a leaf's end; no other lane can have one) is outside (MINPS returns its
   // second operand on a NaN, and all three are NaN there).
   const mask8 inside = lowest >= float8(0.0f);
-  h = mt_answer(m, inside, tnear, tfar);
+  hit = mt_answer(m, inside, tnear, tfar);
   // Sure of the edges: every value above B, or one below -B and another above B; that is
   // min(highest, |lowest|) > B (B > 0: the lowest value's sign is sure and the highest is
   // above B, so either all three are or two have opposite signs; no rounding: abs, min and max
   // are exact). A NaN lane compares false: certain, Möller–Trumbore's miss.
   const float8 reach = xsimd::min(highest, xsimd::abs(lowest));
   // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D)
-  // goes to Woop's test too, whatever its t: see the top of this file.
+  // is settled too, whatever its t: see the top of this file.
   const mask8 thin = inside & (m.abs_den < f.x_thin * d);
   return simd::movemask((reach <= b) | thin);
 }
 
-/// The bound's factor of D, 2^-20 M + 2.2 X, for M >= |c|.
-RP_SIMD_INLINE float8 bound_g(const float8& mc, const EdgeFactors& f) {
-  return xsimd::fma(mc, float8(0x1p-20f), f.x22);
-}
-
-/// The bound's second factor, 38u M + 94u X, for M >= |c|.
-RP_SIMD_INLINE float8 bound_q(const float8& mc, const EdgeFactors& f) {
-  return xsimd::fma(mc, float8(38.0f * 0x1p-24f), f.x94);
-}
-
 /// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (CertifiedRays) and triangles
 /// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`: its answer
-/// in `h` (the bits of moller_trumbore8); returns the lanes it leaves to Woop's test
+/// in `hit` (the bits of moller_trumbore8); returns the lanes it leaves to the settle
 /// (certified_answer), M taken lane by lane.
 RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                      const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
+                                      const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  const float8 mc = max_abs(m.c);
-  return certified_answer(m, bound_g(mc, f), bound_q(mc, f), d, tnear, tfar, f, h);
+  return certified_answer(m, d * bound_h(max_abs(m.c), f), tnear, tfar, f, hit, d);
 }
 
-/// The same with the factors g = bound_g(M) and q = bound_q(M) given (SharedOrigin: rays from
-/// one point).
+/// The factors of the tighter bound for rays from one point, B = R q + D h (see the top of
+/// this file): h = 41u X M + 54u X^2 for M >= |c|, and q = 36u X, from the edge factors.
+RP_SIMD_INLINE float8 shared_h(const float8& mc, const EdgeFactors& f) {
+  return xsimd::fma(mc, f.xm * float8(41.0f / 116.0f), f.xx * float8(54.0f / 56.0f));
+}
+RP_SIMD_INLINE float8 shared_q(const EdgeFactors& f) { return f.xm * float8(36.0f / 116.0f); }
+
+/// The same for rays from one point (SharedOrigin), with the tighter bound that R = |c x d|
+/// per lane gives, B = R q + D h, from q = 36u X and h = 41u X M + 54u X^2 given.
 RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                      const Vec3x8& ng, const EdgeFactors& f, const float8& g, const float8& q,
-                                      TriHit8& h) {
-  return certified_answer(mt_terms(org, dir, v0, e1, e2, ng), g, q, d, tnear, tfar, f, h);
+                                      const Vec3x8& ng, const EdgeFactors& f, const float8& h, const float8& q,
+                                      TriHit8& hit) {
+  const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+  return certified_answer(m, xsimd::fma(max_abs(m.r), q, d * h), tnear, tfar, f, hit, d);
 }
 
 /// The same for one ray broadcast (CertifiedRays).
 RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& h) {
-  return certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, h);
+                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
+  return certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, hit);
 }
 
 /// M for the triangles of a leaf (lanes) and rays that all start at one point, as a pinhole
 /// camera's primary rays do: c = v0 - o is then the same floats for every ray, and so is M,
-/// computed here once for all of them with the bound's factors from it (the same bits as each
-/// ray's own: every answer stays the one-ray test's). `shared` when the box of the rays'
-/// origins (a packet's or a group's beam, mirrored per axis as PacketBeam keeps it) is one
-/// point.
+/// computed here once for all of them (the same bits as each ray's own) with the factors of
+/// the tighter bound B = R q + D h. `shared` when the box of the rays' origins (a packet's or
+/// a group's beam, mirrored per axis as PacketBeam keeps it) is one point.
 struct SharedOrigin {
-  float8 g, q;  ///< bound_g(M) and bound_q(M) per triangle, when `shared`
+  float8 h, q;  ///< 41u X M + 54u X^2 and 36u X per triangle, when `shared`
   bool shared = false;
   RP_SIMD_INLINE SharedOrigin(const Vec3x8& v0, const EdgeFactors& f, const PacketBeam& beam) {
     if (!beam.valid) return;
@@ -199,14 +207,65 @@ struct SharedOrigin {
       if (lo != beam.omax[a].get(0)) return;
       o[a] = beam.neg[a] ? -lo : lo;  // (a -0 and a +0 origin give the same |c|)
     }
-    const float8 m = max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]}));
-    g = bound_g(m, f);
-    q = bound_q(m, f);
+    h = shared_h(max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]})), f);
+    q = shared_q(f);
     shared = true;
   }
 };
 
-/// Woop's answers (watertight8: the bits of the scalar routine) for the lanes `unsure`.
+/// A test's terms again, for the lanes it left uncertain: the cold settles below recompute
+/// them from the leaf and the rays by the same operations on the same floats (so with the bits
+/// of the fast path) rather than have the traversal hand its vectors over. Holds, per lane,
+/// Möller–Trumbore's answer, its edge values U, V, W (signed by den), B, den's sign and whether
+/// |den| < 2^-12 X^2 D.
+struct Uncertain {
+  alignas(32) float u[8], v[8], w[8], b[8], sign[8], t[8], bu[8], bv[8];
+  uint32_t tiny = 0;
+  RP_SIMD_INLINE Uncertain(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
+                           const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2, const Vec3x8& ng,
+                           const EdgeFactors& f) {
+    const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
+    const float8 w8 = m.abs_den - (m.u + m.v);
+    const TriHit8 mt = mt_answer(m, xsimd::min(m.u, xsimd::min(m.v, w8)) >= float8(0.0f), tnear, tfar);
+    m.u.store_aligned(u);
+    m.v.store_aligned(v);
+    w8.store_aligned(w);
+    (d * bound_h(max_abs(m.c), f)).store_aligned(b);
+    m.sign.store_aligned(sign);
+    mt.t.store_aligned(t);
+    mt.u.store_aligned(bu);
+    mt.v.store_aligned(bv);
+    tiny = simd::movemask(m.abs_den < f.x_thin * d);
+  }
+
+  /// Lane l's answer for the ray `r` and the triangle v0, v1, v2: the exact signs of its
+  /// edges, each taken from Möller–Trumbore's value where that lies farther than B from 0 and
+  /// from rp::edge_side otherwise; inside them, Möller–Trumbore's t (tested against tnear and
+  /// tfar) and u, v (clamped to the triangle), but for a lane with |den| < 2^-12 X^2 D, which
+  /// takes all of rp::intersect_triangle_exact (t in double). A ray and a triangle give these
+  /// terms on every path (a packet, a ray alone, rays from one point), so a lane's answer does
+  /// not depend on which path met it, nor on whether that path's bound was certain of it.
+  Intersection<float> lane(int l, const Ray& r, const Vec3f& v0, const Vec3f& v1, const Vec3f& v2) const {
+    if (tiny >> l & 1u) return intersect_triangle_exact(r, v0, v1, v2);
+    // The exact edge functions of (v2, v0), (v0, v1) and (v1, v2) are U, V, W times den's sign.
+    const int s = std::signbit(sign[l]) ? -1 : 1;
+    const auto side = [&](float value, const Vec3f& p, const Vec3f& q) {
+      if (value > b[l]) return 1;
+      if (value < -b[l]) return -1;
+      return s * edge_side(p, q, r.org, r.dir);
+    };
+    const int su = side(u[l], v2, v0), sv = side(v[l], v0, v1), sw = side(w[l], v1, v2);
+    const bool none = su == 0 && sv == 0 && sw == 0;
+    if (none || !((su >= 0 && sv >= 0 && sw >= 0) || (su <= 0 && sv <= 0 && sw <= 0))) return {};
+    if (!in_ray_interval(r, t[l])) return {};
+    const float cu = std::clamp(bu[l], 0.0f, 1.0f);
+    return make_intersection(t[l], cu, std::clamp(bv[l], 0.0f, 1.0f - cu));
+  }
+};
+
+/// The answers of the lanes a test left uncertain. An out-parameter of the cold settles,
+/// merged by the caller: the caller's answer stays in registers (passed to them by reference,
+/// it would live in memory through the traversal: watertight bunny primary 3% slower).
 struct Settled {
   TriHit8 w;
   /// Replaces the lanes `unsure` of `h` by these.
@@ -217,23 +276,58 @@ struct Settled {
     h.u = xsimd::select(m, w.u, h.u);
     h.v = xsimd::select(m, w.v, h.v);
   }
+  /// Lane l, for each lane l of `lanes`, answer(l) (an Intersection<float>).
+  template <class Answer>
+  void fill(uint32_t lanes, Answer&& answer) {
+    simd::Spill<3> s;
+    uint32_t bits = 0;
+    for (uint32_t b = lanes; b; b &= b - 1) {
+      const int l = std::countr_zero(b);
+      const Intersection<float> x = answer(l);
+      s.lanes[0][l] = x.t;
+      s.lanes[1][l] = x.u;
+      s.lanes[2][l] = x.v;
+      bits |= uint32_t(x.hit) << l;
+    }
+    w = {simd::mask_from_bits(bits), s.load(0), s.load(1), s.load(2)};
+  }
 };
 
-/// Woop's test for one ray against the triangles of `leaf`. Out of line and cold: inlined, it
-/// would make the traversal around the kernel keep its vectors in memory (bunny diffuse rays
-/// 20% slower, though it ran for 0.3% of leaf tests).
-[[gnu::noinline, gnu::cold]] inline void settle_single(const Leaf& leaf, const Ray& ray, float tfar, Settled& out) {
+/// The settled answers for one ray (with `tfar`) against the triangles of `leaf` in the lanes
+/// `unsure` (the leaf's edges, normals and factors made again as CertifiedKernel::Block makes
+/// them). Out of line and cold: inlined, it would make the traversal around the kernel keep
+/// its vectors in memory (bunny diffuse rays 20% slower, though it ran for 0.3% of leaf tests).
+[[gnu::noinline, gnu::cold]] inline void settle_single(const Leaf& leaf, const Ray& ray, float tfar, uint32_t unsure,
+                                                       Settled& out) {
   const LeafView lv(leaf);
-  out.w = watertight8(WatertightRays(ray), lv.v0, lv.v1, lv.v2, float8(tfar));
+  const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
+  const CertifiedRays cr(ray);
+  const Uncertain un(cr.org, cr.dir, cr.tnear, cr.d, float8(tfar), lv.v0, e1, e2, simd::cross_fma(e2, e1),
+                     EdgeFactors(edge_bound8(e1, e2)));
+  Ray r = ray;
+  r.tfar = tfar;
+  out.fill(unsure, [&](int l) {
+    const auto k = uint32_t(l);
+    return un.lane(l, r, leaf.vertex(k, 0), leaf.vertex(k, 1), leaf.vertex(k, 2));
+  });
 }
 
-/// The same for the 8 rays of a packet (SoA, as loaded) against triangle k of `leaf`. Woop's
-/// set-up of the rays is made here, 8 lanes at once, each time: keeping it in the packet made
-/// the large-packet traversal's working set twice as large.
+/// The same for the rays of a packet (SoA, as loaded) in the lanes `unsure` against triangle
+/// k of `leaf` (made again as CertifiedKernel::Triangle makes it: lane k of the leaf's).
 [[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Leaf& leaf,
-                                                       uint32_t k, Settled& out) {
-  out.w = watertight8(WatertightRays(p.org, p.dir, p.tnear), Vec3x8(leaf.vertex(k, 0)), Vec3x8(leaf.vertex(k, 1)),
-                      Vec3x8(leaf.vertex(k, 2)), tfar);
+                                                       uint32_t k, uint32_t unsure, Settled& out) {
+  const LeafView lv(leaf);
+  const Vec3x8 e1 = lv.e1(), e2 = lv.e2(), ng = simd::cross_fma(e2, e1);
+  const int i = int(k);
+  const Uncertain un(p.org, p.dir, p.tnear, max_abs(p.dir), tfar, lv.v0.broadcast(i), e1.broadcast(i), e2.broadcast(i),
+                     ng.broadcast(i), EdgeFactors(EdgeFactors(edge_bound8(e1, e2)), i));
+  const Vec3f v0 = leaf.vertex(k, 0), v1 = leaf.vertex(k, 1), v2 = leaf.vertex(k, 2);
+  simd::Spill<8> rays(p.org.x, p.org.y, p.org.z, p.dir.x, p.dir.y, p.dir.z, p.tnear, tfar);
+  const auto& q = rays.lanes;
+  out.fill(unsure, [&](int l) {
+    const Ray r{{q[0][l], q[1][l], q[2][l]}, q[6][l], {q[3][l], q[4][l], q[5][l]}, q[7][l]};
+    return un.lane(l, r, v0, v1, v2);
+  });
 }
 
 }  // namespace rp::bvh8

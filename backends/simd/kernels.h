@@ -3,9 +3,7 @@
 /// boxes, and 8 rays against one box) and Möller–Trumbore (one ray against 8 triangles, and
 /// 8 rays against one triangle, by the same function). AVX2+FMA translation units only.
 
-#include <bit>
 #include <limits>
-#include <utility>
 
 #include "backends/simd/bvh8.h"
 #include "engine/geometry/triangle.h"
@@ -341,7 +339,7 @@ inline uint32_t intersect_box_octant(const RayPacket& p, const bool neg[3], cons
   return simd::movemask(t_enter <= xsimd::fma(t_exit, float8(kSlabPad), p.abs_pad));
 }
 
-/// Result of an 8-wide triangle test (moller_trumbore8, watertight8): lanes that hit, with t and
+/// Result of an 8-wide triangle test (moller_trumbore8, certified.h): lanes that hit, with t and
 /// the barycentrics (u, v).
 struct TriHit8 {
   mask8 hit;
@@ -454,119 +452,5 @@ struct LeafView {
     return {simd::lookup(x, i), simd::lookup(x + l.v, i), simd::lookup(x + 2 * l.v, i)};
   }
 };
-
-/// One ray's axis permutation (kx, ky, kz) and shear constants, by the scalar code of
-/// rp::intersect_triangle_watertight: kz the dominant axis of dir, kx and ky the next two,
-/// swapped when dir[kz] < 0 to keep the winding.
-struct Shear {
-  int k[3];
-  float sx, sy, sz;
-};
-inline Shear shear(const Vec3f& dir) {
-  const int kz = max_abs_axis(dir);
-  int kx = kz + 1 == 3 ? 0 : kz + 1;
-  int ky = kx + 1 == 3 ? 0 : kx + 1;
-  if (dir[kz] < 0.0f) std::swap(kx, ky);
-  return {{kx, ky, kz}, dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0f / dir[kz]};
-}
-
-/// Per-ray constants of the watertight test (Woop, Benthin and Wald 2013, section 3.1) for 8
-/// lanes: one ray broadcast, or the 8 rays of a packet, each with its own axis permutation.
-/// The constants are those of rp::intersect_triangle_watertight, by the same choice of axes and
-/// the same IEEE divisions, so each lane gets that routine's bits.
-struct WatertightRays {
-  Vec3x8 org, dir;
-  mask8 is_x[3], is_y[3];  ///< per lane: axis kx, ky, kz (index 0, 1, 2) is x / is y (else z)
-  float8 sx, sy, sz;
-  float8 tnear;
-
-  WatertightRays() = default;
-  /// One ray in every lane: its constants as the scalar routine computes them, broadcast.
-  RP_SIMD_INLINE explicit WatertightRays(const Ray& r) {
-    const Shear h = shear(r.dir);
-    org = Vec3x8(r.org);
-    dir = Vec3x8(r.dir);
-    sx = float8(h.sx);
-    sy = float8(h.sy);
-    sz = float8(h.sz);
-    tnear = float8(r.tnear);
-    for (int j = 0; j < 3; ++j) {
-      is_x[j] = simd::mask_from_bits(h.k[j] == 0 ? 0xffu : 0u);
-      is_y[j] = simd::mask_from_bits(h.k[j] == 1 ? 0xffu : 0u);
-    }
-  }
-  /// 8 rays in SoA, each lane with its own axes and shear, chosen and computed as the scalar
-  /// `shear` does: kz the first axis of largest |component|, (kx, ky) the next two in cyclic
-  /// order, swapped when dir[kz] < 0; IEEE divisions, so each lane has the scalar bits.
-  RP_SIMD_INLINE WatertightRays(const Vec3x8& o, const Vec3x8& d, const float8& tn) : org(o), dir(d), tnear(tn) {
-    const float8 ax = xsimd::abs(d.x), ay = xsimd::abs(d.y), az = xsimd::abs(d.z);
-    const mask8 x_ge_y = ax >= ay;
-    const mask8 z_is_x = x_ge_y & (ax >= az), z_is_y = ~x_ge_y & (ay >= az), z_is_z = ~(z_is_x | z_is_y);
-    is_x[2] = z_is_x;
-    is_y[2] = z_is_y;
-    const float8 d_z = axis(d, 2);
-    const mask8 swap = d_z < float8(0.0f);
-    // Unswapped, kx follows kz cyclically (kz = x: kx = y; kz = y: kx = z; kz = z: kx = x) and
-    // ky follows kx.
-    is_x[0] = (z_is_z & ~swap) | (z_is_y & swap);
-    is_y[0] = (z_is_x & ~swap) | (z_is_z & swap);
-    is_x[1] = (z_is_y & ~swap) | (z_is_z & swap);
-    is_y[1] = (z_is_z & ~swap) | (z_is_x & swap);
-    sx = axis(d, 0) / d_z;
-    sy = axis(d, 1) / d_z;
-    sz = float8(1.0f) / d_z;
-  }
-
-  /// Component k_j of p in every lane (j = 0, 1, 2 for kx, ky, kz): two blends, no branch on
-  /// the axes (a stream's leaf meets rays of every axis order in turn).
-  RP_SIMD_INLINE float8 axis(const Vec3x8& p, int j) const {
-    return xsimd::select(is_x[j], p.x, xsimd::select(is_y[j], p.y, p.z));
-  }
-};
-
-/// Watertight ray/triangle test ×8 (Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
-/// Intersection", JCGT 2(1)), lane by lane exactly as rp::intersect_triangle_watertight: the
-/// same products, each rounded once (no FMA: the TU is built with -ffp-contract=off), the same
-/// sign tests, and the same fallback: a lane with an edge function of exactly 0 is decided by
-/// the scalar routine, which re-evaluates the edge functions in double. Two rays share one
-/// edge's value for two triangles only when the vertices are the same floats, so the test
-/// takes the vertices (as every leaf stores them), never edges. Serves one ray against 8
-/// triangles and 8 rays against one triangle.
-RP_SIMD_INLINE TriHit8 watertight8(const WatertightRays& r, const Vec3x8& v0, const Vec3x8& v1, const Vec3x8& v2,
-                                   const float8& tfar) {
-  const Vec3x8 a = v0 - r.org, b = v1 - r.org, c = v2 - r.org;
-  const float8 a_z = r.axis(a, 2), b_z = r.axis(b, 2), c_z = r.axis(c, 2);
-  const float8 ax = r.axis(a, 0) - r.sx * a_z, ay = r.axis(a, 1) - r.sy * a_z;
-  const float8 bx = r.axis(b, 0) - r.sx * b_z, by = r.axis(b, 1) - r.sy * b_z;
-  const float8 cx = r.axis(c, 0) - r.sx * c_z, cy = r.axis(c, 1) - r.sy * c_z;
-  const float8 u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
-  const float8 zero(0.0f), one(1.0f), inf(std::numeric_limits<float>::infinity());
-  const mask8 mixed = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
-  const float8 det = u + v + w;
-  const float8 t_scaled = (u * (r.sz * a_z) + v * (r.sz * b_z)) + w * (r.sz * c_z);
-  const float8 sign = xsimd::select(det < zero, float8(-1.0f), one);
-  const float8 t_signed = t_scaled * sign, abs_det = det * sign;
-  const float8 t = t_scaled / det;
-  TriHit8 out{~mixed & (det != zero) & (t_signed >= r.tnear * abs_det) & (t_signed <= tfar * abs_det) &
-              (t >= r.tnear) & (t <= tfar) & (t < inf) & (t > -inf),
-          t, v / det, w / det};
-  const uint32_t exact = simd::movemask((u == zero) | (v == zero) | (w == zero));
-  if (exact) {  // rare: decide those lanes in double precision, by the scalar routine
-    simd::Spill<5> s(out.t, out.u, out.v, tfar, r.tnear);
-    auto& [ht, hu, hv, tf, tn] = s.lanes;
-    uint32_t hit = simd::movemask(out.hit);
-    for (uint32_t bits = exact; bits; bits &= bits - 1) {
-      const int l = std::countr_zero(bits);
-      const Ray ray{r.org.lane(l), tn[l], r.dir.lane(l), tf[l]};
-      const Intersection<float> h = intersect_triangle_watertight(ray, v0.lane(l), v1.lane(l), v2.lane(l));
-      hit = h.hit ? hit | 1u << l : hit & ~(1u << l);
-      ht[l] = h.t;
-      hu[l] = h.u;
-      hv[l] = h.v;
-    }
-    out = {simd::mask_from_bits(hit), s.load(0), s.load(1), s.load(2)};
-  }
-  return out;
-}
 
 }  // namespace rp::bvh8

@@ -71,13 +71,13 @@ struct MtKernel {
 };
 
 /// The triangle test of the watertight variant as it runs: Möller–Trumbore with a bound on
-/// the error of each edge decision, and Woop, Benthin and Wald's test for the lanes the bound
-/// leaves uncertain (certified.h: why every lane's edge decisions are that test's).
+/// the error of each edge decision, settled exactly (rp::edge_side) for the lanes the bound
+/// leaves uncertain (certified.h: why every lane's edge decisions are exact).
 struct CertifiedKernel {
-  /// MtKernel's Block, with the triangles' factors of the bound and the leaf for Woop's test.
+  /// MtKernel's Block, with the triangles' factors of the bound and the leaf for the settle.
   struct Block : MtKernel::Block {
     EdgeFactors f;      ///< the triangles' factors of the bound (edge_bound8)
-    const float* leaf;  ///< the leaf's words, where Woop's test reads the corners (LeafView::words)
+    const float* leaf;  ///< the leaf's words, where the settle reads the corners (LeafView::words)
     RP_SIMD_INLINE explicit Block(const LeafView& lv) : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.words) {}
   };
   /// A leaf's triangles against the origins of the rays that will meet them (SharedOrigin).
@@ -86,7 +86,7 @@ struct CertifiedKernel {
   };
   struct Single {
     CertifiedRays r;
-    const Ray* ray;  ///< for Woop's test (a pointer: the ray is copied nowhere on the fast path)
+    const Ray* ray;  ///< for the settle (a pointer: the ray is copied nowhere on the fast path)
     RP_SIMD_INLINE explicit Single(const Ray& ray_) : r(ray_), ray(&ray_) {}
     Single(const RayPacket& p, int lane, const Ray& ray_)
         : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(&ray_) {}
@@ -94,18 +94,18 @@ struct CertifiedKernel {
       TriHit8 h;
       if (const uint32_t unsure = certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h)) [[unlikely]] {
         Settled s;
-        settle_single(Leaf(b.leaf), *ray, tfar.get(0), s);
+        settle_single(Leaf(b.leaf), *ray, tfar.get(0), unsure, s);
         s.merge_into(h, unsure);
       }
       return h;
     }
   };
-  /// MtKernel's Triangle, with its factors of the bound, where Woop's test reads it, and, for
-  /// rays from one point (SharedOrigin), the bound's factors from their shared M.
+  /// MtKernel's Triangle, with its factors of the bound, where the settle reads it, and,
+  /// for rays from one point (SharedOrigin), the bound per unit of D from their shared M.
   struct Triangle : MtKernel::Triangle {
     EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
-    float8 g, q;                  ///< bound_g(M) and bound_q(M) for every ray, when `shared`
-    const float* leaf = nullptr;  ///< the leaf's words, where Woop's test reads the corners
+    float8 h, q;                  ///< SharedOrigin's h and q for every ray, when `shared`
+    const float* leaf = nullptr;  ///< the leaf's words, where the settle reads the corners
     uint32_t k = 0;
     bool shared = false;
     Triangle() = default;
@@ -116,7 +116,7 @@ struct CertifiedKernel {
     RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o) : Triangle(b, k_) {
       shared = o.shared;
       if (shared) {
-        g = simd::broadcast_lane(o.g, int(k_));
+        h = simd::broadcast_lane(o.h, int(k_));
         q = simd::broadcast_lane(o.q, int(k_));
       }
     }
@@ -127,16 +127,16 @@ struct CertifiedKernel {
     Packet() = default;
     Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet), d(max_abs(packet.dir)) {}
     /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
-    /// go to Woop's test).
+    /// go to the settle).
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
       TriHit8 h;
       const uint32_t unsure =
-          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.g, t.q, h)
+          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.h, t.q, h)
                     : certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) &
           lanes;
       if (unsure) [[unlikely]] {
         Settled s;
-        settle_packet(*p, tfar, Leaf(t.leaf), t.k, s);
+        settle_packet(*p, tfar, Leaf(t.leaf), t.k, unsure, s);
         s.merge_into(h, unsure);
       }
       return h;
