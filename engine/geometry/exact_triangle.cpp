@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace rp {
 namespace {
@@ -49,7 +50,7 @@ struct Side {
   int sign(const Vec3f& p, const Vec3f& q, const Vec3f& o, const Vec3f& d) const {
     if (value > bound) return 1;
     if (value < -bound) return -1;
-    if (bound == 0.0) return 0;
+    if (bound == 0.0 || !(bound < std::numeric_limits<double>::infinity())) return 0;  // (0: a NaN or infinite input)
     return exact_side(p, q, o, d);
   }
 };

@@ -17,7 +17,7 @@ namespace rp {
 /// through p and q the ray from o along d passes (0: through the line, or d parallel to the
 /// plane of p, q and o). Antisymmetric in p and q. A double-precision evaluation with a
 /// forward error bound decides whenever its value is farther from 0 than the bound; otherwise
-/// the determinant is evaluated in integers (GMP), exactly. Every input must be finite.
+/// the determinant is evaluated in integers (GMP), exactly. 0 for a NaN or infinite input.
 int edge_side(const Vec3f& p, const Vec3f& q, const Vec3f& o, const Vec3f& d);
 
 /// The ray/triangle test of the contract of engine/geometry/triangle.h with exact edge

@@ -319,6 +319,14 @@ TEST(ExactTriangle, EdgeSideIsTheSignOfTheIntegerDeterminant) {
     units += kind == 2 && want != 0;
     ++signs[want + 1];
   }
+  // A NaN or infinite input gives 0 (no integer evaluation of it), whichever input it is.
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const Vec3f one{1.0f, 2.0f, 3.0f}, two{-2.0f, 1.0f, 0.5f}, zero{0.0f, 0.0f, 0.0f}, up{0.0f, 0.0f, 1.0f};
+  EXPECT_EQ(edge_side(Vec3f{nan, 0.0f, 0.0f}, two, zero, up), 0);
+  EXPECT_EQ(edge_side(one, Vec3f{0.0f, inf, 0.0f}, zero, up), 0);
+  EXPECT_EQ(edge_side(one, two, Vec3f{0.0f, 0.0f, -inf}, up), 0);
+  EXPECT_EQ(edge_side(one, two, zero, Vec3f{nan, nan, nan}), 0);
+  EXPECT_NE(edge_side(one, two, zero, up), 0);
   std::printf("[ exact    ] signs -1 / 0 / +1: %d / %d / %d (%d one unit off a zero)\n", signs[0], signs[1], signs[2],
               units);
   EXPECT_GT(zeros, 9000);
