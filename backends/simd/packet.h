@@ -101,7 +101,7 @@ struct CertifiedKernel {
     }
   };
   /// MtKernel's Triangle, with its factors of the bound, where the settle reads it, and,
-  /// for rays from one point (SharedOrigin), the bound per unit of D from their shared M.
+  /// for rays from one point (SharedOrigin), the tighter bound's factors from their shared M.
   struct Triangle : MtKernel::Triangle {
     EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
     float8 h, q;                  ///< SharedOrigin's h and q for every ray, when `shared`
