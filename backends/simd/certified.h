@@ -130,6 +130,9 @@ struct EdgeFactors {
 /// The bound per unit of D, h = 116u X M + 56u X^2 for M >= |c|, so that B = D h.
 RP_SIMD_INLINE float8 bound_h(const float8& mc, const EdgeFactors& f) { return xsimd::fma(mc, f.xm, f.xx); }
 
+/// Möller–Trumbore's third edge value, W = |den| - (U + V) (signed by den as U and V are).
+RP_SIMD_INLINE float8 third_edge(const MtTerms& m) { return m.abs_den - (m.u + m.v); }
+
 /// Möller–Trumbore's answer from its terms `m`, with the certified rule for the bound `b` on
 /// its values' errors (B) and rays of max-norms `d` (CertifiedRays): the answer in `hit` (the
 /// bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
@@ -137,7 +140,7 @@ RP_SIMD_INLINE float8 bound_h(const float8& mc, const EdgeFactors& f) { return x
 /// triangle's plane inside its edges (see the top of this file).
 RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, const float8& tnear, const float8& tfar,
                                          const EdgeFactors& f, TriHit8& hit, const float8& d) {
-  const float8 w = m.abs_den - (m.u + m.v);
+  const float8 w = third_edge(m);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
   // Inside Möller–Trumbore's edges: U, V >= 0 and U + V <= |den| (the sign of |den| - (U + V)
@@ -225,12 +228,13 @@ struct Uncertain {
                            const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2, const Vec3x8& ng,
                            const EdgeFactors& f) {
     const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-    const float8 w8 = m.abs_den - (m.u + m.v);
-    const TriHit8 mt = mt_answer(m, xsimd::min(m.u, xsimd::min(m.v, w8)) >= float8(0.0f), tnear, tfar);
+    const float8 bound = d * bound_h(max_abs(m.c), f);
+    TriHit8 mt;
+    (void)certified_answer(m, bound, tnear, tfar, f, mt, d);  // Möller–Trumbore's answer, as the fast path's
     m.u.store_aligned(u);
     m.v.store_aligned(v);
-    w8.store_aligned(w);
-    (d * bound_h(max_abs(m.c), f)).store_aligned(b);
+    third_edge(m).store_aligned(w);
+    bound.store_aligned(b);
     m.sign.store_aligned(sign);
     mt.t.store_aligned(t);
     mt.u.store_aligned(bu);
@@ -255,9 +259,7 @@ struct Uncertain {
       return s * edge_side(p, q, r.org, r.dir);
     };
     const int su = side(u[l], v2, v0), sv = side(v[l], v0, v1), sw = side(w[l], v1, v2);
-    const bool none = su == 0 && sv == 0 && sw == 0;
-    if (none || !((su >= 0 && sv >= 0 && sw >= 0) || (su <= 0 && sv <= 0 && sw <= 0))) return {};
-    if (!in_ray_interval(r, t[l])) return {};
+    if (!inside_edges(su, sv, sw) || !in_ray_interval(r, t[l])) return {};
     const float cu = std::clamp(bu[l], 0.0f, 1.0f);
     return make_intersection(t[l], cu, std::clamp(bv[l], 0.0f, 1.0f - cu));
   }

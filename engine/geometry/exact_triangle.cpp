@@ -68,8 +68,7 @@ Intersection<float> intersect_triangle_exact(const Ray& r, const Vec3f& v0, cons
   const Vec3d o(r.org), d(r.dir), c0 = Vec3d(v0) - o, c1 = Vec3d(v1) - o, c2 = Vec3d(v2) - o;
   const Side U(c2, c0, d), V(c0, c1, d), W(c1, c2, d);
   const int su = U.sign(v2, v0, r.org, r.dir), sv = V.sign(v0, v1, r.org, r.dir), sw = W.sign(v1, v2, r.org, r.dir);
-  const bool none = su == 0 && sv == 0 && sw == 0;
-  if (none || !((su >= 0 && sv >= 0 && sw >= 0) || (su <= 0 && sv <= 0 && sw <= 0))) return {};
+  if (!inside_edges(su, sv, sw)) return {};
   // t by Möller–Trumbore's normal Ng = (v2 - v0) x (v0 - v1): Ng.(v0 - o) / Ng.d.
   const double sum = U.value + V.value + W.value;
   const Vec3d ng = cross(Vec3d(v2) - Vec3d(v0), Vec3d(v0) - Vec3d(v1));

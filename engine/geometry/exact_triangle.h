@@ -20,13 +20,19 @@ namespace rp {
 /// the determinant is evaluated in integers (GMP), exactly. 0 for a NaN or infinite input.
 int edge_side(const Vec3f& p, const Vec3f& q, const Vec3f& o, const Vec3f& d);
 
+/// Whether a ray passes inside a triangle whose edges (v2, v0), (v0, v1), (v1, v2) it passes
+/// on the sides su, sv, sw (edge_side): all >= 0 or all <= 0, and not all 0 (the three exact
+/// edge functions then sum to a nonzero determinant).
+constexpr bool inside_edges(int su, int sv, int sw) {
+  const bool none = su == 0 && sv == 0 && sw == 0;
+  return !none && ((su >= 0 && sv >= 0 && sw >= 0) || (su <= 0 && sv <= 0 && sw <= 0));
+}
+
 /// The ray/triangle test of the contract of engine/geometry/triangle.h with exact edge
-/// decisions: the ray passes inside when the edge sides of (v2, v0), (v0, v1) and (v1, v2)
-/// (edge_side) are all >= 0 or all <= 0 and not all 0, the three exact edge functions then
-/// summing to a nonzero determinant. t, u and v are computed in double from the same floats
-/// (Möller–Trumbore's normal-first factoring, t = Ng.(v0 - o) / Ng.d, u and v the edge
-/// functions over their sum, clamped to the triangle) and rounded once; the hit needs that t
-/// finite and within [tnear, tfar]. A NaN or infinite input misses.
+/// decisions: the ray passes inside by inside_edges of its edge sides (edge_side). t, u and v are computed in double
+/// from the same floats (Möller–Trumbore's normal-first factoring, t = Ng.(v0 - o) / Ng.d, u and v the edge functions
+/// over their sum, clamped to the triangle) and rounded once; the hit needs that t finite and within [tnear, tfar]. A
+/// NaN or infinite input misses.
 Intersection<float> intersect_triangle_exact(const Ray& r, const Vec3f& v0, const Vec3f& v1, const Vec3f& v2);
 
 }  // namespace rp
