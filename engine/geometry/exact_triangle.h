@@ -29,10 +29,11 @@ constexpr bool inside_edges(int su, int sv, int sw) {
 }
 
 /// The ray/triangle test of the contract of engine/geometry/triangle.h with exact edge
-/// decisions: the ray passes inside by inside_edges of its edge sides (edge_side). t, u and v are computed in double
-/// from the same floats (Möller–Trumbore's normal-first factoring, t = Ng.(v0 - o) / Ng.d, u and v the edge functions
-/// over their sum, clamped to the triangle) and rounded once; the hit needs that t finite and within [tnear, tfar]. A
-/// NaN or infinite input misses.
+/// decisions: the ray passes inside by inside_edges of its edge sides (edge_side). t, u and v
+/// are computed in double from the same floats (Möller–Trumbore's normal-first factoring,
+/// t = Ng.(v0 - o) / Ng.d, u and v the edge functions over their sum, clamped to the
+/// triangle) and rounded once; the hit needs that t finite and within [tnear, tfar]. A NaN or
+/// infinite input misses.
 Intersection<float> intersect_triangle_exact(const Ray& r, const Vec3f& v0, const Vec3f& v1, const Vec3f& v2);
 
 }  // namespace rp
