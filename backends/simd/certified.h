@@ -32,7 +32,8 @@
 /// One guard keeps a hit's t accurate where Möller–Trumbore's is not: a lane inside
 /// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) is settled too, whatever its t (so
 /// the guard need not wait for t's division), by rp::intersect_triangle_exact, which computes t
-/// in double.
+/// in double. (Rays from one point take one threshold for the beam, at least each ray's; the
+/// settle then decides by the lane's own.)
 /// Möller–Trumbore's t is Ng.c / Ng.d, and on a needle (or a ray nearly in the triangle's
 /// plane) Ng is the cross product of nearly parallel edges, relatively far less accurate than
 /// the edges. (Tested on needles and near-degenerate triangles against the double test:
@@ -45,7 +46,9 @@
 ///     B = u X D (116 M + 56 X),
 ///
 /// and for rays from one point (SharedOrigin, where M is taken once per triangle), with
-/// R = |c x d| as computed, the tighter B = u X (36 R + 41 M D + 54 X D).
+/// R = |c x d| as computed, the tighter B = u X (36 R + 41 M D + 54 X D). The traversals take
+/// R there at its largest over the beam of rays that meets a leaf (rho, SharedOrigin): one
+/// FMA a test, B = D h + g, with h and g made once per leaf.
 ///
 /// Möller–Trumbore's errors, each rounded difference, product and FMA of its factoring traced
 /// (r = c x d and Ng = e2 x e1 per component within 6.5u M D and 8u X^2): U and V within
@@ -53,10 +56,9 @@
 /// 35.1 R'), where R' = R + 2^-20 M D. W's bound is the widest, and both forms of B exceed it
 /// with room for their own few roundings: the second directly; the first because each
 /// component of a cross product is at most twice the product of its factors' max-norms, so
-/// R' <= 2.0001 M D and W's bound is at most u X D (110.9 M + 53.2 X). The first needs no R per
-/// lane (five vector operations fewer a test); the second, where M is shared, leaves about a
-/// third as many lanes uncertain on camera rays. Which one a path takes changes nothing in its
-/// answers (below), only how often it settles.
+/// R' <= 2.0001 M D and W's bound is at most u X D (110.9 M + 53.2 X). The second, where M is
+/// shared, leaves about a third as many lanes uncertain on camera rays. Which one a path takes
+/// changes nothing in its answers (below), only how often it settles.
 ///
 /// The settle (Uncertain) makes the test's terms again for its lanes and decides each edge by
 /// Möller–Trumbore's value where that lies farther than the first form of B from 0, and by
@@ -123,6 +125,9 @@ struct EdgeFactors {
       : xm(simd::broadcast_lane(f.xm, k)),
         xx(simd::broadcast_lane(f.xx, k)),
         x_thin(simd::broadcast_lane(f.x_thin, k)) {}
+  /// From the factors themselves.
+  RP_SIMD_INLINE EdgeFactors(const float8& xm_, const float8& xx_, const float8& x_thin_)
+      : xm(xm_), xx(xx_), x_thin(x_thin_) {}
   RP_SIMD_INLINE explicit EdgeFactors(const float8& x)
       : xm(x * float8(116.0f * 0x1p-24f)), xx(x * x * float8(56.0f * 0x1p-24f)), x_thin(x * x * float8(kThin)) {}
 };
@@ -138,8 +143,8 @@ RP_SIMD_INLINE float8 third_edge(const MtTerms& m) { return m.abs_den - (m.u + m
 /// bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
 /// lanes whose edge decisions the bound leaves uncertain, and the lanes nearly in the
 /// triangle's plane inside its edges (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, const float8& tnear, const float8& tfar,
-                                         const EdgeFactors& f, TriHit8& hit, const float8& d) {
+RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, const float8& thin_below,
+                                         const float8& tnear, const float8& tfar, TriHit8& hit) {
   const float8 w = third_edge(m);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
@@ -154,9 +159,10 @@ RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, cons
   // above B, so either all three are or two have opposite signs; no rounding: abs, min and max
   // are exact). A NaN lane compares false: certain, Möller–Trumbore's miss.
   const float8 reach = xsimd::min(highest, xsimd::abs(lowest));
-  // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D)
-  // is settled too, whatever its t: see the top of this file.
-  const mask8 thin = inside & (m.abs_den < f.x_thin * d);
+  // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D,
+  // or below a `thin_below` at least that) is settled too, whatever its t: see the top of this
+  // file.
+  const mask8 thin = inside & (m.abs_den < thin_below);
   return simd::movemask((reach <= b) | thin);
 }
 
@@ -168,24 +174,17 @@ RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, cons
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
                                       const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  return certified_answer(m, d * bound_h(max_abs(m.c), f), tnear, tfar, f, hit, d);
+  return certified_answer(m, d * bound_h(max_abs(m.c), f), f.x_thin * d, tnear, tfar, hit);
 }
 
-/// The factors of the tighter bound for rays from one point, B = R q + D h (see the top of
-/// this file): h = 41u X M + 54u X^2 for M >= |c|, and q = 36u X, from the edge factors.
-RP_SIMD_INLINE float8 shared_h(const float8& mc, const EdgeFactors& f) {
-  return xsimd::fma(mc, f.xm * float8(41.0f / 116.0f), f.xx * float8(54.0f / 56.0f));
-}
-RP_SIMD_INLINE float8 shared_q(const EdgeFactors& f) { return f.xm * float8(36.0f / 116.0f); }
-
-/// The same for rays from one point (SharedOrigin), with the tighter bound that R = |c x d|
-/// per lane gives, B = R q + D h, from q = 36u X and h = 41u X M + 54u X^2 given.
+/// The same for rays from one point (SharedOrigin), with the bound B = D h + g that it
+/// gives, and the lanes whose |den| lies below `thin` (at least 2^-12 X^2 D) settled as thin.
 RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                      const Vec3x8& ng, const EdgeFactors& f, const float8& h, const float8& q,
+                                      const Vec3x8& ng, const float8& h, const float8& g, const float8& thin,
                                       TriHit8& hit) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  return certified_answer(m, xsimd::fma(max_abs(m.r), q, d * h), tnear, tfar, f, hit, d);
+  return certified_answer(m, xsimd::fma(d, h, g), thin, tnear, tfar, hit);
 }
 
 /// The same for one ray broadcast (CertifiedRays).
@@ -194,24 +193,65 @@ RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar
   return certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, hit);
 }
 
-/// M for the triangles of a leaf (lanes) and rays that all start at one point, as a pinhole
-/// camera's primary rays do: c = v0 - o is then the same floats for every ray, and so is M,
-/// computed here once for all of them (the same bits as each ray's own) with the factors of
-/// the tighter bound B = R q + D h. `shared` when the box of the rays' origins (a packet's or
-/// a group's beam, mirrored per axis as PacketBeam keeps it) is one point.
-struct SharedOrigin {
-  float8 h, q;  ///< 41u X M + 54u X^2 and 36u X per triangle, when `shared`
-  bool shared = false;
-  RP_SIMD_INLINE SharedOrigin(const Vec3x8& v0, const EdgeFactors& f, const PacketBeam& beam) {
+/// What the bound for rays from one point needs of a beam (PacketBeam), worked out once per
+/// beam: whether its rays start at one point, that point (unmirrored; a -0 and a +0 coordinate
+/// count as one: they give the same |c|), and the box of the rays' directions, unmirrored:
+/// each component d_a lies within dmid_a +- drad_a, and |d_a| <= dmax. A ray's inverse is
+/// 1 / |d_a| rounded once, so |d_a| lies within [1 / imax_a, 1 / imin_a] widened by a relative
+/// 2^-22 (in double; drad's extra 2^-21 of the largest |d_a| covers the box's rounding to float).
+struct OnePoint {
+  bool valid = false;
+  Vec3f origin;
+  float dmid[3], drad[3], dmax;
+  OnePoint() = default;
+  explicit OnePoint(const PacketBeam& beam) {
     if (!beam.valid) return;
-    float o[3];
+    dmax = 0.0f;
     for (int a = 0; a < 3; ++a) {
       const float lo = beam.omin[a].get(0);
       if (lo != beam.omax[a].get(0)) return;
-      o[a] = beam.neg[a] ? -lo : lo;  // (a -0 and a +0 origin give the same |c|)
+      origin[a] = beam.neg[a] ? -lo : lo;
+      const double low = (1.0 / double(beam.imax[a].get(0))) * (1.0 - 0x1p-22);
+      const double high = (1.0 / double(beam.imin[a].get(0))) * (1.0 + 0x1p-22);
+      dmid[a] = float(beam.neg[a] ? -0.5 * (low + high) : 0.5 * (low + high));
+      drad[a] = float((0.5 * (high - low) + high * 0x1p-21) * (1.0 + 0x1p-22));
+      dmax = std::max(dmax, float(high * (1.0 + 0x1p-22)));
     }
-    h = shared_h(max_abs(v0 - Vec3x8(Vec3f{o[0], o[1], o[2]})), f);
-    q = shared_q(f);
+    valid = true;
+  }
+};
+
+/// The bound's factors for the triangles of a leaf (lanes) and the rays of a beam that all
+/// start at one point o, as a pinhole camera's primary rays do. c = v0 - o is then the same
+/// floats for every ray, and so is M, computed here once for all of them (the same bits as
+/// each ray's own). R = |c x d| differs from ray to ray, but the beam holds every direction in
+/// a box d = dmid + delta, |delta_a| <= drad_a, so each component of c x d lies within
+/// |c x dmid| + |c_b| drad_a + |c_a| drad_b (a, b its two other axes), and the largest of the
+/// three, widened for its own roundings and for R's (6.5u M D), bounds every ray's R: rho. So
+/// the tighter bound u X (36 R + 41 M D + 54 X D) is at most B = D h + g, with
+/// h = 41u X M + 54u X^2 and g = 36u X rho per triangle: one FMA a test, no R per lane. On a
+/// group of camera rays rho is a few hundredths of M D and B is within a few percent of each
+/// ray's own tighter bound. `shared` when the beam's rays start at one point (OnePoint::valid).
+struct SharedOrigin {
+  float8 h, g;  ///< 41u X M + 54u X^2 and 36u X rho per triangle, when `shared`
+  float8 thin;  ///< 2^-12 X^2 times the beam's largest |d_a| (>= each ray's 2^-12 X^2 D)
+  bool shared = false;
+  RP_SIMD_INLINE SharedOrigin(const Vec3x8& v0, const EdgeFactors& f, const OnePoint& beam) {
+    if (!beam.valid) return;
+    const Vec3x8 c = v0 - Vec3x8(beam.origin);
+    const float8 mc = max_abs(c);
+    const float8 ax = xsimd::abs(c.x), ay = xsimd::abs(c.y), az = xsimd::abs(c.z);
+    const float8 mx(beam.dmid[0]), my(beam.dmid[1]), mz(beam.dmid[2]);
+    const float8 rx(beam.drad[0]), ry(beam.drad[1]), rz(beam.drad[2]);
+    const float8 bx = xsimd::abs(xsimd::fms(c.y, mz, c.z * my)) + xsimd::fma(ay, rz, az * ry);
+    const float8 by = xsimd::abs(xsimd::fms(c.z, mx, c.x * mz)) + xsimd::fma(az, rx, ax * rz);
+    const float8 bz = xsimd::abs(xsimd::fms(c.x, my, c.y * mx)) + xsimd::fma(ax, ry, ay * rx);
+    // The evaluation errs by under 12u M dmax and R by 6.5u M D: 2^-18 M dmax covers both.
+    const float8 rho =
+        xsimd::fma(xsimd::max(bx, xsimd::max(by, bz)), float8(1.0f + 0x1p-20f), mc * float8(beam.dmax * 0x1p-18f));
+    h = xsimd::fma(mc, f.xm * float8(41.0f / 116.0f), f.xx * float8(54.0f / 56.0f));
+    g = f.xm * float8(36.0f / 116.0f) * rho;
+    thin = f.x_thin * float8(beam.dmax);
     shared = true;
   }
 };
@@ -224,13 +264,14 @@ struct SharedOrigin {
 struct Uncertain {
   alignas(32) float u[8], v[8], w[8], b[8], sign[8], t[8], bu[8], bv[8];
   uint32_t tiny = 0;
+  uint32_t hits = 0;  ///< the lanes of Möller–Trumbore's answer that hit
   RP_SIMD_INLINE Uncertain(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
                            const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2, const Vec3x8& ng,
                            const EdgeFactors& f) {
     const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
     const float8 bound = d * bound_h(max_abs(m.c), f);
     TriHit8 mt;
-    (void)certified_answer(m, bound, tnear, tfar, f, mt, d);  // Möller–Trumbore's answer, as the fast path's
+    (void)certified_answer(m, bound, f.x_thin * d, tnear, tfar, mt);  // Möller–Trumbore's answer, as the fast path's
     m.u.store_aligned(u);
     m.v.store_aligned(v);
     third_edge(m).store_aligned(w);
@@ -240,6 +281,7 @@ struct Uncertain {
     mt.u.store_aligned(bu);
     mt.v.store_aligned(bv);
     tiny = simd::movemask(m.abs_den < f.x_thin * d);
+    hits = simd::movemask(mt.hit);
   }
 
   /// Lane l's answer for the ray `r` and the triangle v0, v1, v2: the exact signs of its
@@ -265,25 +307,21 @@ struct Uncertain {
   }
 };
 
-/// The answers of the lanes a test left uncertain. An out-parameter of the cold settles,
-/// merged by the caller: the caller's answer stays in registers (passed to them by reference,
-/// it would live in memory through the traversal: watertight bunny primary 3% slower).
+/// A test's answer with the lanes it left uncertain settled: an out-parameter of the cold
+/// settles, which make every lane's answer (where the test was certain, Möller–Trumbore's from
+/// Uncertain: the fast path's bits). So the fast path's answer is dead on the settle's path:
+/// the fast path normalises u and v only where the traversal uses them, and the caller's
+/// answer stays in registers (passed to the settles by reference, it would live in memory
+/// through the traversal: watertight bunny primary 3% slower).
 struct Settled {
   TriHit8 w;
-  /// Replaces the lanes `unsure` of `h` by these.
-  RP_SIMD_INLINE void merge_into(TriHit8& h, uint32_t unsure) const {
-    const mask8 m = simd::mask_from_bits(unsure);
-    h.hit = (w.hit & m) | (h.hit & ~m);
-    h.t = xsimd::select(m, w.t, h.t);
-    h.u = xsimd::select(m, w.u, h.u);
-    h.v = xsimd::select(m, w.v, h.v);
-  }
-  /// Lane l, for each lane l of `lanes`, answer(l) (an Intersection<float>).
+  /// Lane l, for each lane l of `unsure`, answer(l) (an Intersection<float>); `un`'s
+  /// Möller–Trumbore answer in the others.
   template <class Answer>
-  void fill(uint32_t lanes, Answer&& answer) {
-    simd::Spill<3> s;
-    uint32_t bits = 0;
-    for (uint32_t b = lanes; b; b &= b - 1) {
+  void fill(const Uncertain& un, uint32_t unsure, Answer&& answer) {
+    simd::Spill<3> s(float8::load_aligned(un.t), float8::load_aligned(un.bu), float8::load_aligned(un.bv));
+    uint32_t bits = un.hits & ~unsure;
+    for (uint32_t b = unsure; b; b &= b - 1) {
       const int l = std::countr_zero(b);
       const Intersection<float> x = answer(l);
       s.lanes[0][l] = x.t;
@@ -295,8 +333,8 @@ struct Settled {
   }
 };
 
-/// The settled answers for one ray (with `tfar`) against the triangles of `leaf` in the lanes
-/// `unsure` (the leaf's edges, normals and factors made again as CertifiedKernel::Block makes
+/// The answers of one ray (with `tfar`) against the triangles of `leaf`, the lanes `unsure`
+/// settled (the leaf's edges, normals and factors made again as CertifiedKernel::Block makes
 /// them). Out of line and cold: inlined, it would make the traversal around the kernel keep
 /// its vectors in memory (bunny diffuse rays 20% slower, though it ran for 0.3% of leaf tests).
 [[gnu::noinline, gnu::cold]] inline void settle_single(const Leaf& leaf, const Ray& ray, float tfar, uint32_t unsure,
@@ -308,14 +346,14 @@ struct Settled {
                      EdgeFactors(edge_bound8(e1, e2)));
   Ray r = ray;
   r.tfar = tfar;
-  out.fill(unsure, [&](int l) {
+  out.fill(un, unsure, [&](int l) {
     const auto k = uint32_t(l);
     return un.lane(l, r, leaf.vertex(k, 0), leaf.vertex(k, 1), leaf.vertex(k, 2));
   });
 }
 
-/// The same for the rays of a packet (SoA, as loaded) in the lanes `unsure` against triangle
-/// k of `leaf` (made again as CertifiedKernel::Triangle makes it: lane k of the leaf's).
+/// The same for the rays of a packet (SoA, as loaded) against triangle k of `leaf`, the lanes
+/// `unsure` settled (made again as CertifiedKernel::Triangle makes it: lane k of the leaf's).
 [[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Leaf& leaf,
                                                        uint32_t k, uint32_t unsure, Settled& out) {
   const LeafView lv(leaf);
@@ -326,7 +364,7 @@ struct Settled {
   const Vec3f v0 = leaf.vertex(k, 0), v1 = leaf.vertex(k, 1), v2 = leaf.vertex(k, 2);
   simd::Spill<8> rays(p.org.x, p.org.y, p.org.z, p.dir.x, p.dir.y, p.dir.z, p.tnear, tfar);
   const auto& q = rays.lanes;
-  out.fill(unsure, [&](int l) {
+  out.fill(un, unsure, [&](int l) {
     const Ray r{{q[0][l], q[1][l], q[2][l]}, q[6][l], {q[3][l], q[4][l], q[5][l]}, q[7][l]};
     return un.lane(l, r, v0, v1, v2);
   });

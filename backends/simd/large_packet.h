@@ -248,6 +248,7 @@ class LargePacketTraversal {
   /// block k / 8 for member k).
   struct GroupBeam {
     PacketBeam beam;
+    typename Kernel::Beam kbeam;  ///< what the kernel takes of `beam`
     float8 sx, sy, sz;
     float tfar_max;
     PacketBeams8 members[kMaxPackets / 8];
@@ -308,6 +309,7 @@ class LargePacketTraversal {
     }
     b.tnear_min = simd::reduce_min(lo[12]);
     gb.beam = PacketBeam(b, neg);
+    gb.kbeam = typename Kernel::Beam(gb.beam);
     gb.sx = float8(neg[0] ? -1.0f : 1.0f);
     gb.sy = float8(neg[1] ? -1.0f : 1.0f);
     gb.sz = float8(neg[2] ? -1.0f : 1.0f);
@@ -479,12 +481,12 @@ class LargePacketTraversal {
         continue;
       }
       const typename Kernel::Block kb{LeafView(leaf)};  // the leaf read once
+      const typename Kernel::Origins og(kb, gb.kbeam);  // the group's origins against the leaf
       m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
         Packet& q = w.packets[size_t(i)];
-        t_.leaf_by_rays(leaf, kb, here, q.p, packet_rays(rays, i), q.h, inst);
+        t_.leaf_by_rays(leaf, kb, og, here, q.p, packet_rays(rays, i), q.h, inst);
       });
       if (m == 0) continue;
-      const typename Kernel::Origins og(kb, gb.beam);  // the group's origins against the leaf
       for (uint32_t k = 0; k < leaf.n; ++k) {
         const uint32_t id = leaf.prim(k);
         const typename Kernel::Triangle tri(kb, k, og);  // set up once for every packet

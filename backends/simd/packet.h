@@ -32,9 +32,14 @@ struct MtKernel {
     RP_SIMD_INLINE explicit Block(const LeafView& lv)
         : v0(lv.v0), e1(lv.e1()), e2(lv.e2()), ng(simd::cross_fma(e2, e1)) {}
   };
-  /// What the certified kernel learns from the origins of the rays that meet a leaf: nothing here.
+  /// What the certified kernel learns from a beam of rays (once per beam) and from the origins
+  /// of the rays that meet a leaf: nothing here.
+  struct Beam {
+    Beam() = default;
+    explicit Beam(const PacketBeam&) {}
+  };
   struct Origins {
-    RP_SIMD_INLINE Origins(const Block&, const PacketBeam&) {}
+    RP_SIMD_INLINE Origins(const Block&, const Beam&) {}
   };
   struct Single {
     Vec3x8 org, dir;
@@ -46,6 +51,8 @@ struct MtKernel {
     RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar) const {
       return moller_trumbore8(org, dir, b.v0, b.e1, b.e2, b.ng, tnear, tfar);
     }
+    /// The same, for a ray of the beam an Origins was made for.
+    RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar, const Origins&) const { return block(b, tfar); }
   };
   struct Triangle {
     Vec3x8 v0, e1, e2, ng;
@@ -80,9 +87,11 @@ struct CertifiedKernel {
     const float* leaf;  ///< the leaf's words, where the settle reads the corners (LeafView::words)
     RP_SIMD_INLINE explicit Block(const LeafView& lv) : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.words) {}
   };
-  /// A leaf's triangles against the origins of the rays that will meet them (SharedOrigin).
+  /// A beam's rays as the bound for rays from one point takes them (once per beam), and a
+  /// leaf's triangles against them (SharedOrigin).
+  using Beam = OnePoint;
   struct Origins : SharedOrigin {
-    RP_SIMD_INLINE Origins(const Block& b, const PacketBeam& beam) : SharedOrigin(b.v0, b.f, beam) {}
+    RP_SIMD_INLINE Origins(const Block& b, const Beam& beam) : SharedOrigin(b.v0, b.f, beam) {}
   };
   struct Single {
     CertifiedRays r;
@@ -92,33 +101,54 @@ struct CertifiedKernel {
         : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(&ray_) {}
     RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar) const {
       TriHit8 h;
-      if (const uint32_t unsure = certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h)) [[unlikely]] {
-        Settled s;
-        settle_single(Leaf(b.leaf), *ray, tfar.get(0), unsure, s);
-        s.merge_into(h, unsure);
-      }
+      settle(b, tfar, certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h), h);
       return h;
     }
+    /// The same for a ray of the beam `og` was made for, with its bound where the beam's rays
+    /// start at one point (the same answers).
+    RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar, const Origins& og) const {
+      if (!og.shared) return block(b, tfar);
+      TriHit8 h;
+      settle(b, tfar, certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, b.v0, b.e1, b.e2, b.ng, og.h, og.g, og.thin, h),
+             h);
+      return h;
+    }
+
+   private:
+    /// `h` replaced by the answer with the lanes `unsure` settled, if there are any.
+    RP_SIMD_INLINE void settle(const Block& b, const float8& tfar, uint32_t unsure, TriHit8& h) const {
+      if (unsure) [[unlikely]] {
+        Settled s;
+        settle_single(Leaf(b.leaf), *ray, tfar.get(0), unsure, s);
+        h = s.w;
+      }
+    }
   };
-  /// MtKernel's Triangle, with its factors of the bound, where the settle reads it, and,
-  /// for rays from one point (SharedOrigin), the tighter bound's factors from their shared M.
+  /// MtKernel's Triangle, with the factors of its bound in a, b and thin, and where the settle
+  /// reads it. For rays each with their own M: the edge factors xm, xx and x_thin (B =
+  /// D (M xm + xx), lanes with |den| < x_thin D thin); for rays from one point (SharedOrigin,
+  /// `shared`): its h, g and thin (B = D h + g, lanes with |den| < thin thin).
   struct Triangle : MtKernel::Triangle {
-    EdgeFactors f;                ///< the triangle's factors of the bound (edge_bound8)
-    float8 h, q;                  ///< SharedOrigin's h and q for every ray, when `shared`
+    float8 a, b, thin;
     const float* leaf = nullptr;  ///< the leaf's words, where the settle reads the corners
     uint32_t k = 0;
     bool shared = false;
     Triangle() = default;
     /// Triangle k of a leaf's Block, in every lane, each ray with its own M.
-    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_)
-        : MtKernel::Triangle(b, k_), f(b.f, int(k_)), leaf(b.leaf), k(k_) {}
-    /// The same, with M once for every ray when they share an origin (`o`).
-    RP_SIMD_INLINE Triangle(const Block& b, uint32_t k_, const SharedOrigin& o) : Triangle(b, k_) {
-      shared = o.shared;
-      if (shared) {
-        h = simd::broadcast_lane(o.h, int(k_));
-        q = simd::broadcast_lane(o.q, int(k_));
-      }
+    RP_SIMD_INLINE Triangle(const Block& bl, uint32_t k_)
+        : MtKernel::Triangle(bl, k_),
+          a(simd::broadcast_lane(bl.f.xm, int(k_))),
+          b(simd::broadcast_lane(bl.f.xx, int(k_))),
+          thin(simd::broadcast_lane(bl.f.x_thin, int(k_))),
+          leaf(bl.leaf),
+          k(k_) {}
+    /// The same, with SharedOrigin's factors when the rays start at one point.
+    RP_SIMD_INLINE Triangle(const Block& bl, uint32_t k_, const SharedOrigin& o)
+        : MtKernel::Triangle(bl, k_), leaf(bl.leaf), k(k_), shared(o.shared) {
+      const int i = int(k_);
+      a = simd::broadcast_lane(shared ? o.h : bl.f.xm, i);
+      b = simd::broadcast_lane(shared ? o.g : bl.f.xx, i);
+      thin = simd::broadcast_lane(shared ? o.thin : bl.f.x_thin, i);
     }
   };
   struct Packet {
@@ -131,13 +161,14 @@ struct CertifiedKernel {
     RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
       TriHit8 h;
       const uint32_t unsure =
-          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, t.h, t.q, h)
-                    : certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.f, h)) &
+          (t.shared ? certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.a, t.b, t.thin, h)
+                    : certified_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng,
+                                    EdgeFactors(t.a, t.b, t.thin), h)) &
           lanes;
       if (unsure) [[unlikely]] {
         Settled s;
         settle_packet(*p, tfar, Leaf(t.leaf), t.k, unsure, s);
-        s.merge_into(h, unsure);
+        h = s.w;
       }
       return h;
     }
@@ -238,14 +269,16 @@ struct PacketHits {
 };
 
 /// What a packet traversal sets up once: the kernel's per-packet data, the direction signs
-/// that order children near-first, and the beam that culls them.
+/// that order children near-first, the beam that culls them and what the kernel takes of it.
 template <class Kernel>
 struct PacketSetup {
   typename Kernel::Packet kp;
   float8 sx, sy, sz;
   PacketBeam beam;
+  typename Kernel::Beam kbeam;
   PacketSetup() = default;
-  PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active) : kp(p, rays), beam(p, active) {
+  PacketSetup(const RayPacket& p, std::span<const Ray> rays, uint32_t active)
+      : kp(p, rays), beam(p, active), kbeam(beam) {
     // The packet's direction signs from its first active ray, as +-1 per axis.
     const Vec3f d = p.dir.lane(std::countr_zero(active));
     sx = float8(std::signbit(d.x) ? -1.0f : 1.0f);

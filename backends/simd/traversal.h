@@ -226,8 +226,8 @@ class Traversal {
   /// the top of this file; `inst` places the leaf's triangles). True when it took one.
   RP_SIMD_INLINE static bool leaf_single(const Leaf& leaf, const typename Kernel::Block& kb,
                                          const typename Kernel::Single& kr, float& tfar, Hit& best,
-                                         uint32_t inst = kNoInstance) {
-    const TriHit8 h = kr.block(kb, float8(tfar));
+                                         uint32_t inst = kNoInstance, const typename Kernel::Origins* og = nullptr) {
+    const TriHit8 h = og ? kr.block(kb, float8(tfar), *og) : kr.block(kb, float8(tfar));
     const uint32_t bits = simd::movemask(h.hit) & ((1u << leaf.n) - 1);
     if (!bits) return false;
     const float tmin =
@@ -330,11 +330,11 @@ class Traversal {
       return;
     }
     const typename Kernel::Block kb{LeafView(leaf)};
+    const typename Kernel::Origins og(kb, ps.kbeam);
     if (by_rays(mask, leaf.n)) {
-      leaf_by_rays(leaf, kb, mask, p, rays, h, inst);
+      leaf_by_rays(leaf, kb, og, mask, p, rays, h, inst);
       return;
     }
-    const typename Kernel::Origins og(kb, ps.beam);
     for (uint32_t k = 0; k < leaf.n; ++k)
       update(h, ps.kp.test(typename Kernel::Triangle(kb, k, og), h.tfar, mask), mask, leaf.prim(k), inst);
   }
@@ -347,11 +347,12 @@ class Traversal {
   /// The triangles of `leaf` (read into `kb`, once for every lane and packet that takes it
   /// this way) against each lane of `mask` in turn, by the single-ray test: the same hits and
   /// bits as a triangle at a time.
-  void leaf_by_rays(const Leaf& leaf, const typename Kernel::Block& kb, uint32_t mask, const RayPacket& p,
-                    std::span<const Ray> rays, PacketHits& h, uint32_t inst = kNoInstance) const noexcept {
+  void leaf_by_rays(const Leaf& leaf, const typename Kernel::Block& kb, const typename Kernel::Origins& og,
+                    uint32_t mask, const RayPacket& p, std::span<const Ray> rays, PacketHits& h,
+                    uint32_t inst = kNoInstance) const noexcept {
     h.each_lane(mask, [&](int lane, Hit& hit) {
       float tfar = hit.t;
-      leaf_single(leaf, kb, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit, inst);
+      leaf_single(leaf, kb, typename Kernel::Single(p, lane, rays[size_t(lane)]), tfar, hit, inst, &og);
     });
   }
 

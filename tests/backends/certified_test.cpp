@@ -301,6 +301,7 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   int shared = 0, hits = 0;
+  double widest_g = 0.0;  // the largest g in units of 36u X M D (R <= 2 M D)
   for (int iter = 0; iter < 3000; ++iter) {
     const double scale = std::pow(10.0, 3.0 * int(iter % 3) - 3.0);
     const double shift = iter % 4 == 0 ? 0.0 : std::min(std::pow(10.0, double(iter % 7)), 1e5 * scale);
@@ -325,19 +326,26 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     if (load_packet(eight, p, tfar) != 0xffu) continue;
     const PacketBeam beam(p, 0xffu);
     if (!beam.valid) continue;  // directions of mixed signs: no beam
-    const SharedOrigin so(kb.v0, kb.f, beam);
+    const SharedOrigin so(kb.v0, kb.f, OnePoint(beam));
     ASSERT_TRUE(so.shared) << "iter " << iter;
     ++shared;
     const CertifiedKernel::Packet packet(p, eight);
     for (int l = 0; l < f.k; ++l) {
+      const EdgeFactors fl(kb.f, l);
+      const float xm = fl.xm.get(0), xx = fl.xx.get(0);
       for (const Ray& r : eight) {
         const Vec3f c = f.v[0][l] - r.org;
-        const float8 m(std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}));  // the ray's own M
-        const EdgeFactors fl(kb.f, l);
-        ASSERT_EQ(std::bit_cast<uint32_t>(so.h.get(size_t(l))), std::bit_cast<uint32_t>(shared_h(m, fl).get(0)))
+        const float m = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});  // the ray's own M
+        ASSERT_EQ(std::bit_cast<uint32_t>(so.h.get(size_t(l))),
+                  std::bit_cast<uint32_t>(std::fma(m, xm * (41.0f / 116.0f), xx * (54.0f / 56.0f))))
             << "iter " << iter;
-        ASSERT_EQ(std::bit_cast<uint32_t>(so.q.get(size_t(l))), std::bit_cast<uint32_t>(shared_q(fl).get(0)))
-            << "iter " << iter;
+        // g bounds the ray's own R term, 36u X R with R = |c x d| as the test computes it, and
+        // thin its own 2^-12 X^2 D.
+        const Vec3x8 rc = simd::cross_fma(Vec3x8(c), Vec3x8(r.dir));
+        const float own_r = max_abs(rc).get(0), d = max_abs(Vec3x8(r.dir)).get(0);
+        ASSERT_GE(so.g.get(size_t(l)), xm * (36.0f / 116.0f) * own_r) << "iter " << iter;
+        ASSERT_GE(so.thin.get(size_t(l)), fl.x_thin.get(0) * d) << "iter " << iter;
+        widest_g = std::max(widest_g, double(so.g.get(size_t(l))) / (double(xm) * (36.0 / 116.0) * double(m) * d));
       }
       const TriHit8 own = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l)), tfar, 0xffu);
       const TriHit8 once = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l), so), tfar, 0xffu);
@@ -355,9 +363,10 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     ASSERT_EQ(load_packet(eight, p, tfar), 0xffu);
     const PacketBeam two(p, 0xffu);  // the same directions: as valid as `beam`
     ASSERT_TRUE(two.valid) << "iter " << iter;
-    EXPECT_FALSE(SharedOrigin(kb.v0, kb.f, two).shared) << "iter " << iter;
+    EXPECT_FALSE(SharedOrigin(kb.v0, kb.f, OnePoint(two)).shared) << "iter " << iter;
   }
-  std::printf("[ one point] %d packets from one origin, %d hits compared\n", shared, hits);
+  std::printf("[ one point] %d packets from one origin, %d hits compared; g at most %.3g x 36u X M D\n", shared, hits,
+              widest_g);
   EXPECT_GT(shared, 1500);
   EXPECT_GT(hits, 10000);
 }
@@ -466,18 +475,28 @@ struct CountingKernel {
   using Block = CertifiedKernel::Block;
   using Triangle = CertifiedKernel::Triangle;
   using Packet = CertifiedKernel::Packet;
+  using Origins = CertifiedKernel::Origins;
   struct Single {
     CertifiedKernel::Single k;
     explicit Single(const Ray& r) : k(r) {}
     Single(const RayPacket& p, int lane, const Ray& r) : k(p, lane, r) {}
     TriHit8 block(const Block& b, const float8& tfar) const {
       TriHit8 raw;
-      const uint32_t slow = slow_lanes(k.r, tfar, b, raw);
+      count(b, slow_lanes(k.r, tfar, b, raw));
+      return k.block(b, tfar);
+    }
+    TriHit8 block(const Block& b, const float8& tfar, const Origins& og) const {
+      TriHit8 raw;
+      count(b, og.shared ? certified_mt8(k.r.org, k.r.dir, k.r.tnear, k.r.d, tfar, b.v0, b.e1, b.e2, b.ng, og.h, og.g,
+                                         og.thin, raw)
+                         : slow_lanes(k.r, tfar, b, raw));
+      return k.block(b, tfar, og);
+    }
+    static void count(const Block& b, uint32_t slow) {
       counts.lanes += Leaf(b.leaf).n;
       counts.slow += uint64_t(std::popcount(slow));
       counts.blocks += 1;
       counts.slow_blocks += slow != 0;
-      return k.block(b, tfar);
     }
   };
 };
