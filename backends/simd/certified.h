@@ -198,7 +198,8 @@ RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar
 /// count as one: they give the same |c|), and the box of the rays' directions, unmirrored:
 /// each component d_a lies within dmid_a +- drad_a, and |d_a| <= dmax. A ray's inverse is
 /// 1 / |d_a| rounded once, so |d_a| lies within [1 / imax_a, 1 / imin_a] widened by a relative
-/// 2^-22 (in double; drad's extra 2^-21 of the largest |d_a| covers the box's rounding to float).
+/// 2^-22 (which also covers the rounding of these quotients, six in one division); drad's
+/// extra 2^-21 of the largest |d_a| covers the rounding of dmid and drad.
 struct OnePoint {
   bool valid = false;
   Vec3f origin;
@@ -206,16 +207,26 @@ struct OnePoint {
   OnePoint() = default;
   explicit OnePoint(const PacketBeam& beam) {
     if (!beam.valid) return;
-    dmax = 0.0f;
     for (int a = 0; a < 3; ++a) {
       const float lo = beam.omin[a].get(0);
       if (lo != beam.omax[a].get(0)) return;
       origin[a] = beam.neg[a] ? -lo : lo;
-      const double low = (1.0 / double(beam.imax[a].get(0))) * (1.0 - 0x1p-22);
-      const double high = (1.0 / double(beam.imin[a].get(0))) * (1.0 + 0x1p-22);
-      dmid[a] = float(beam.neg[a] ? -0.5 * (low + high) : 0.5 * (low + high));
-      drad[a] = float((0.5 * (high - low) + high * 0x1p-21) * (1.0 + 0x1p-22));
-      dmax = std::max(dmax, float(high * (1.0 + 0x1p-22)));
+    }
+    alignas(32) float inv[8] = {beam.imax[0].get(0),
+                                beam.imax[1].get(0),
+                                beam.imax[2].get(0),
+                                beam.imin[0].get(0),
+                                beam.imin[1].get(0),
+                                beam.imin[2].get(0),
+                                1.0f,
+                                1.0f};
+    (float8(1.0f) / float8::load_aligned(inv)).store_aligned(inv);
+    dmax = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+      const float low = inv[a] * (1.0f - 0x1p-22f), high = inv[3 + a] * (1.0f + 0x1p-22f);
+      dmid[a] = beam.neg[a] ? -0.5f * (low + high) : 0.5f * (low + high);
+      drad[a] = (0.5f * (high - low) + high * 0x1p-21f) * (1.0f + 0x1p-22f);
+      dmax = std::max(dmax, high);
     }
     valid = true;
   }
