@@ -320,10 +320,10 @@ struct Uncertain {
 
 /// A test's answer with the lanes it left uncertain settled: an out-parameter of the cold
 /// settles, which make every lane's answer (where the test was certain, Möller–Trumbore's from
-/// Uncertain: the fast path's bits). So the fast path's answer is dead on the settle's path:
-/// the fast path normalises u and v only where the traversal uses them, and the caller's
-/// answer stays in registers (passed to the settles by reference, it would live in memory
-/// through the traversal: watertight bunny primary 3% slower).
+/// Uncertain: the fast path's bits). So nothing of the fast path's answer need be kept across
+/// the settle's call, and the caller's answer stays in registers (passed to the settles by
+/// reference, it would live in memory through the traversal: watertight bunny primary 3%
+/// slower).
 struct Settled {
   TriHit8 w;
   /// Lane l, for each lane l of `unsure`, answer(l) (an Intersection<float>); `un`'s
