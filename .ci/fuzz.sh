@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Fuzzes raypack's file readers with libFuzzer under AddressSanitizer and UBSan: installs clang
 # and its runtime libraries when missing (as .ci/setup.sh does), builds the five targets of
-# tests/fuzz/ in ./build-fuzz (clang, RAYPACK_FUZZ=ON, RelWithDebInfo, sanitizers on every
+# tests/fuzz/ in ./build-fuzz (clang, RAYPACK_FUZZ=ON, RelWithDebInfo with line tables only
+# (-g1, as .ci/sanitize.sh), sanitizers on every
 # file so the readers in rp_engine are checked too), then runs each for a bounded time on a
 # copy of its seed corpus (tests/fuzz/corpus/<target>/ plus tests/fuzz/regression/<target>/),
 # so the repository is never modified.
@@ -29,10 +30,11 @@ declare -A dictionary=([fuzz_obj]=obj.dict [fuzz_ply]=ply.dict [fuzz_json]=json.
 # -fno-sanitize-recover: a UBSan report stops the run like an ASan one, so libFuzzer keeps the
 # input. _GLIBCXX_ASSERTIONS: operator[] past size() inside a vector's capacity is caught too.
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
-CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAYPACK_FUZZ=ON \
+CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DRAYPACK_FUZZ=ON \
   -DRAYPACK_BUILD_BENCH=OFF -DRAYPACK_BUILD_PYTHON=OFF -DCMAKE_CXX_FLAGS="$sanitize -D_GLIBCXX_ASSERTIONS" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" >/dev/null
-cmake --build "$build" -j"$jobs" --target "${targets[@]}"
+cmake --build "$build" -j"$jobs" --target rp_fuzz_targets
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}

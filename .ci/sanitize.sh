@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Runs the whole test suite under AddressSanitizer (with LeakSanitizer) and UBSan: configures
-# ./build-asan (the default compiler, RelWithDebInfo, every file built with the sanitizers),
-# builds only the GoogleTest binaries (every rp_test(...) of tests/) and what the other tests
-# run (rp_test_prerequisites: the raypack CLI, libraypack.so and the Python module; not the
-# benchmark rp_bench), and runs ctest. Any sanitizer report aborts its test, so ctest fails.
+# ./build-asan (the default compiler, RelWithDebInfo with line tables only (-g1: what a
+# sanitizer's report needs, file and line of every frame), every file built with the sanitizers),
+# builds what ctest runs and nothing else (rp_tests: every GoogleTest binary of tests/, the
+# raypack CLI, libraypack.so and the Python module; not the benchmark rp_bench) in one build
+# invocation, and runs ctest. Any sanitizer report aborts its test, so ctest fails.
 # The Python tests load the instrumented module into Debian's python3 with the sanitizer's
 # runtime preloaded (tests/python/CMakeLists.txt).
 # Usage: .ci/sanitize.sh    (from anywhere; RAYPACK_JOBS build jobs, default 2)
@@ -13,7 +14,8 @@ cd "$(dirname "$0")/.."
 jobs=${RAYPACK_JOBS:-2}
 build=build-asan
 sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAYPACK_MPI=ON -DCMAKE_CXX_FLAGS="$sanitize" \
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
+  -DRAYPACK_MPI=ON -DCMAKE_CXX_FLAGS="$sanitize" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
   -DCMAKE_MODULE_LINKER_FLAGS="$sanitize" -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
 
@@ -21,14 +23,8 @@ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DRAYPACK_MPI=ON -DCMAK
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-mapfile -t targets < <(grep -rhoE '^[[:space:]]*rp_test\([A-Za-z0-9_]+' tests --include=CMakeLists.txt |
-                       sed -E 's/.*rp_test\(//' | sort -u)
-if ((${#targets[@]} == 0)); then
-  echo "sanitize: no rp_test(...) targets found under tests/" >&2
-  exit 1
-fi
-echo "sanitize: building ${targets[*]} rp_test_prerequisites in $build"
-cmake --build "$build" -j"$jobs" --target "${targets[@]}" rp_test_prerequisites
+echo "sanitize: building rp_tests in $build"
+cmake --build "$build" -j"$jobs" --target rp_tests
 
 # gtest_discover_tests registers "<binary>_NOT_BUILT" for a test binary that was not built:
 # every test ctest knows must have its binary.

@@ -12,10 +12,12 @@
 #include <string>
 #include <tuple>
 
-#include "engine/render/image_io.h"
-#include "tests/support/gltf_files.h"
 #include "engine/rayfile.h"
+#include "engine/render/image_io.h"
 #include "engine/text.h"
+#include "tests/support/build_paths.h"
+#include "tests/support/gltf_files.h"
+#include "tests/support/sanitized.h"
 #include "tests/support/shell.h"
 
 namespace {
@@ -26,7 +28,7 @@ using Result = rp::test::ShellResult;
 
 /// Runs `raypack <args>` through the shell, after `prefix` (shell commands such as a ulimit).
 Result run(const std::string& args, const std::string& prefix = "") {
-  return rp::test::run_shell(prefix + std::string(RAYPACK_EXE) + " " + args);
+  return rp::test::run_shell(prefix + std::string(rp::test::kRaypackExe) + " " + args);
 }
 
 class Cli : public ::testing::Test {
@@ -399,7 +401,6 @@ TEST_F(Cli, HelpAndVersion) {
   EXPECT_NE(r.output.find("embree"), std::string::npos);
 }
 
-
 // ---- hostile input, round two -----------------------------------------------------------
 
 TEST_F(Cli, CameraAndLightFlagsOutsideTheCoordinateRangeAreBadFlags) {
@@ -677,15 +678,13 @@ TEST_F(Cli, RendersAndDescribesAGltfWithInstances) {
 }
 
 TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
-#else
+  if (rp::test::kSanitized)
+    GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
   const Result r = run("render --resolution 20000x10000 -q -o " + (dir_ / "x.png").string(), "ulimit -v 1500000; ");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output.rfind("raypack: out of memory while rendering 20000x10000: an allocation of ", 0), 0u) << r.output;
   EXPECT_NE(r.output.find(" bytes failed\n"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
-#endif
 }
 
 }  // namespace

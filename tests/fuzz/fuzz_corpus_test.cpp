@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "tests/fuzz/fuzz_file.h"
+#include "tests/support/build_paths.h"
 
 extern "C" int fuzz_obj_one_input(const uint8_t* data, size_t size);
 extern "C" int fuzz_ply_one_input(const uint8_t* data, size_t size);
@@ -48,8 +49,8 @@ std::string read_bytes(const fs::path& path) {
 }
 
 void replay(const std::string& target, Entry entry) {
-  const fs::path corpus = fs::path(RP_FUZZ_DIR) / "corpus" / target;
-  const fs::path regression = fs::path(RP_FUZZ_DIR) / "regression" / target;
+  const fs::path corpus = fs::path(rp::test::kSourceDir) / "tests" / "fuzz" / "corpus" / target;
+  const fs::path regression = fs::path(rp::test::kSourceDir) / "tests" / "fuzz" / "regression" / target;
   ASSERT_TRUE(fs::is_directory(corpus)) << corpus << " is missing";
   std::vector<fs::path> files = files_in(corpus);
   ASSERT_FALSE(files.empty()) << corpus << " has no inputs";

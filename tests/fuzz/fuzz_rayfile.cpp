@@ -11,6 +11,9 @@
 /// hit) through every available backend variant and the double-precision reference over the
 /// embedded default scene: a ray value that reaches an engine's assert (Embree aborts on
 /// coordinates from 1.844e18 up) or a sanitizer report is a finding like a reader's crash.
+/// The backends are built once, in LLVMFuzzerInitialize, before libFuzzer times any input:
+/// under the sanitizers their builds take seconds, which would otherwise count to the first
+/// input that yields rays (reported as a slow unit, or a timeout, where none is).
 
 #include <algorithm>
 #include <cstddef>
@@ -27,34 +30,51 @@
 
 namespace {
 
-/// The first 64 of `rays` through every backend variant and the reference (see the top).
-void trace_everywhere(std::span<const rp::Ray> rays) {
-  static const rp::Scene scene = rp::make_default_scene();
-  static const std::vector<std::unique_ptr<rp::Backend>> backends = [] {
-    std::vector<std::unique_ptr<rp::Backend>> all;
+/// The embedded default scene with every available backend variant and the reference built
+/// over it, once.
+struct Tracers {
+  rp::Scene scene = rp::make_default_scene();
+  std::vector<std::unique_ptr<rp::Backend>> backends;
+  rp::Reference reference{scene};
+  Tracers() {
     for (const rp::BackendEntry& e : rp::list_backends())
       if (e.available)
-        for (const std::string& v : e.variants) all.push_back(rp::make_backend(e.name, scene, {.variant = v, .device_config = {}, .coherent_method = {}, .incoherent_method = {}}));
-    return all;
-  }();
-  static const rp::Reference reference(scene);
+        for (const std::string& v : e.variants)
+          backends.push_back(rp::make_backend(
+              e.name, scene, {.variant = v, .device_config = {}, .coherent_method = {}, .incoherent_method = {}}));
+  }
+};
+
+const Tracers& tracers() {
+  static const Tracers t;
+  return t;
+}
+
+/// The first 64 of `rays` through every backend variant and the reference (see the top).
+void trace_everywhere(std::span<const rp::Ray> rays) {
+  const Tracers& t = tracers();
   rays = rays.first(std::min<size_t>(rays.size(), 64));
   std::vector<rp::Hit> hits(rays.size());
   std::vector<uint8_t> occluded(rays.size());
   size_t ids = 0;  // uses every answer, so no trace is optimised away
-  for (const auto& b : backends)
+  for (const auto& b : t.backends)
     for (rp::Coherence c : {rp::Coherence::coherent, rp::Coherence::incoherent}) {
       b->intersect(rays, hits, c);
       b->occluded(rays, occluded, c);
       for (size_t i = 0; i < rays.size(); ++i) ids += hits[i].prim_id + occluded[i];
     }
   std::vector<rp::ReferenceHit> reference_hits(rays.size());
-  reference.intersect(rays, reference_hits);
+  t.reference.intersect(rays, reference_hits);
   for (const rp::ReferenceHit& h : reference_hits) ids += h.prim_id;
   rp::fuzz::sink_count = ids;
 }
 
 }  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  (void)tracers();
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;

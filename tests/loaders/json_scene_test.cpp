@@ -17,17 +17,14 @@
 #include "engine/error.h"
 #include "engine/loaders/load.h"
 #include "scratch.h"
-
-#ifndef RP_SOURCE_DIR
-#define RP_SOURCE_DIR "/work/main"
-#endif
+#include "tests/support/build_paths.h"
 
 namespace rp {
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kExample = RP_SOURCE_DIR "/docs/example-scene.json";
+const std::string kExample = std::string(test::kSourceDir) + "/docs/example-scene.json";
 
 using test::scratch;
 using test::write_file;

@@ -22,11 +22,8 @@
 #include "engine/loaders/load.h"
 #include "ply_files.h"
 #include "scratch.h"
+#include "tests/support/build_paths.h"
 #include "tests/support/error_of.h"
-
-#ifndef RP_SHARED_SCENES
-#define RP_SHARED_SCENES "../shared/scenes"
-#endif
 
 namespace rp {
 namespace {
@@ -107,7 +104,7 @@ struct RealModel {
 class RealModels : public testing::TestWithParam<RealModel> {};
 
 TEST_P(RealModels, TriangleCountMatchesTheReadme) {
-  const fs::path dir = RP_SHARED_SCENES;
+  const fs::path dir = kSharedScenes;
   if (!fs::is_directory(dir)) GTEST_SKIP() << dir.string() << " is absent: real-model loader checks not run";
   const RealModel& model = GetParam();
   const std::string path = (dir / model.file).string();

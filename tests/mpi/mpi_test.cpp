@@ -1,7 +1,7 @@
 // raypack across MPI ranks as a user runs it: mpirun -n 2 and -n 3 on this machine against
 // one process with the same flags. Images, hit files, diff JSON and mismatch images must be
 // the same bytes, exit statuses the same; a rank that fails or dies must end the run with one
-// line and no output. Needs Open MPI's mpirun (RP_MPIEXEC, found by CMake).
+// line and no output. Needs Open MPI's mpirun (kMpiexec, found by CMake).
 
 #include <gtest/gtest.h>
 
@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "engine/rayfile.h"
+#include "tests/support/build_paths.h"
+#include "tests/support/sanitized.h"
 #include "tests/support/shell.h"
 #include "tests/support/temp_dir.h"
 
@@ -25,16 +27,10 @@ namespace fs = std::filesystem;
 using rp::test::TempDir;
 
 using Result = rp::test::ShellResult;  // the output: every rank's and mpirun's
+using rp::test::kSanitized;
 using rp::test::run_shell;
 
-const std::string kRaypack = RAYPACK_EXE;
-
-/// Whether these tests (and the raypack they run) are built with AddressSanitizer.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
+const std::string kRaypack = rp::test::kRaypackExe;
 
 /// The start of an mpirun command line: Open MPI's, quiet (no banners of its own), as root
 /// when the tests run as root, more ranks than cores, no binding (ctest runs tests side by
@@ -42,8 +38,10 @@ constexpr bool kSanitized = false;
 /// (tests/mpi/openmpi-lsan.supp), without listing what was skipped.
 std::string mpirun() {
   std::string env = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ";
-  if (kSanitized) env += "LSAN_OPTIONS=suppressions=" + std::string(RP_LSAN_SUPPRESSIONS) + ":print_suppressions=0 ";
-  return env + RP_MPIEXEC + " -q --oversubscribe --bind-to none";
+  if (kSanitized)
+    env += "LSAN_OPTIONS=suppressions=" + std::string(rp::test::kSourceDir) + "/tests/mpi/openmpi-lsan.supp" +
+           ":print_suppressions=0 ";
+  return env + rp::test::kMpiexec + " -q --oversubscribe --bind-to none";
 }
 
 /// `raypack <args>` on `ranks` ranks.
