@@ -120,8 +120,11 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
-/// The JSON text of a GLB (its first chunk), after checking the 12-byte header and the chunk's
-/// 8 against the file's size; throws one line naming the file for a truncated or malformed one.
+/// The JSON text of a GLB (its first chunk), after checking the 12-byte header and every chunk
+/// against the file's size: each chunk's 8-byte header and the length it claims inside the
+/// file, the second chunk (when there is one) BIN, the last ending where the file does.
+/// tinygltf 2.7 checks the BIN chunk's length without its header and would copy up to 8 bytes
+/// past the file. Throws one line naming the file for a truncated or malformed one.
 std::string_view glb_json(const std::string& path, std::string_view bytes) {
   const auto u32 = [&](size_t at) {
     uint32_t v;
@@ -138,6 +141,19 @@ std::string_view glb_json(const std::string& path, std::string_view bytes) {
   if (u32(16) != 0x4E4F534Au) throw Error(cat(path, ": GLB whose first chunk is not JSON"));
   if (20 + json_bytes > bytes.size())
     throw Error(cat(path, ": truncated GLB: its JSON chunk says ", json_bytes, " bytes, ", bytes.size() - 20, " follow"));
+  for (uint64_t at = 20 + json_bytes; at < bytes.size();) {
+    const uint64_t left = bytes.size() - at;
+    if (left < 8)
+      throw Error(cat(path, ": truncated GLB: the chunk at byte ", at, " has ", left, " of its 8 header bytes"));
+    const bool second = at == 20 + json_bytes;
+    if (second && u32(at + 4) != 0x004E4942u)
+      throw Error(cat(path, ": GLB whose second chunk is of type ", in_quotes(bytes.substr(at + 4, 4)), ", not BIN"));
+    const uint64_t length = u32(at);
+    if (length > left - 8)
+      throw Error(cat(path, ": truncated GLB: its ", second ? std::string("BIN chunk") : cat("chunk at byte ", at),
+                      " says ", length, " bytes, ", left - 8, " follow"));
+    at += 8 + length;
+  }
   return bytes.substr(20, size_t(json_bytes));
 }
 

@@ -10,8 +10,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <vector>
@@ -256,6 +258,55 @@ TEST(GltfErrors, AMalformedGlbHeaderIsRefused) {
   EXPECT_EQ(error_loading(path), "short.glb: truncated GLB: 12 bytes, its headers need 20");
   std::ofstream(path, std::ios::binary | std::ios::trunc) << "glTF" << std::string(16, '\x01');
   EXPECT_EQ(error_loading(path), "short.glb: GLB version 16843009 (2 is read)");
+}
+
+/// Every chunk of a GLB must lie inside the file (tinygltf 2.7 checks the BIN chunk's length
+/// without its 8-byte header and read past the end of the file, a SIGSEGV at a page's end): a
+/// BIN chunk claiming 8 bytes or 1 byte more than follow, a BIN header cut short, a second
+/// chunk that is not BIN and a third chunk claiming more than follow are each refused with one
+/// line; the file as written, and with a third chunk that fits, loads. The GLB header's total
+/// length is kept equal to the file's size in each, so only the chunk is wrong.
+TEST(GltfErrors, EveryGlbChunkMustLieInsideTheFile) {
+  const std::string path = written(test::one_triangle().model, "chunks.glb", GltfForm::binary);
+  std::string good;
+  {
+    std::ifstream in(path, std::ios::binary);
+    good.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const auto u32 = [](const std::string& b, size_t at) {
+    uint32_t v;
+    std::memcpy(&v, b.data() + at, 4);
+    return v;
+  };
+  const auto put32 = [](std::string& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); };
+  const size_t bin_at = 20 + u32(good, 12);
+  const uint32_t bin_bytes = u32(good, bin_at);
+  ASSERT_EQ(bin_at + 8 + bin_bytes, good.size());
+  ASSERT_EQ(good.substr(bin_at + 4, 4), std::string("BIN\0", 4));
+  // `bytes` as the file, its header's total length set to its size.
+  const auto error_with = [&](std::string bytes) {
+    put32(bytes, 8, uint32_t(bytes.size()));
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    return error_loading(path);
+  };
+  EXPECT_EQ(error_with(good), "no error");
+  for (uint32_t more : {8u, 1u}) {
+    std::string b = good;
+    put32(b, bin_at, bin_bytes + more);
+    EXPECT_EQ(error_with(b), "chunks.glb: truncated GLB: its BIN chunk says " + std::to_string(bin_bytes + more) +
+                                 " bytes, " + std::to_string(bin_bytes) + " follow");
+  }
+  EXPECT_EQ(error_with(good.substr(0, bin_at + 4)),
+            "chunks.glb: truncated GLB: the chunk at byte " + std::to_string(bin_at) + " has 4 of its 8 header bytes");
+  std::string other = good;
+  other.replace(bin_at + 4, 4, "EXT\x01");
+  EXPECT_EQ(error_with(other), "chunks.glb: GLB whose second chunk is of type \"EXT?\", not BIN");
+  std::string third = good;
+  third += std::string("\x10\0\0\0EXT\0", 8) + "abcd";  // claims 16 bytes, 4 follow
+  EXPECT_EQ(error_with(third),
+            "chunks.glb: truncated GLB: its chunk at byte " + std::to_string(good.size()) + " says 16 bytes, 4 follow");
+  put32(third, good.size(), 4);
+  EXPECT_EQ(error_with(third), "no error");
 }
 
 }  // namespace
