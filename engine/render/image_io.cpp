@@ -1,12 +1,14 @@
 #include "engine/render/image_io.h"
 
 #include <OpenImageIO/imageio.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 
 #include "engine/error.h"
+#include "engine/input_file.h"
 #include "engine/output_file.h"
 #include "engine/render/srgb8.h"
 
@@ -82,6 +84,10 @@ void write_aovs(const std::string& path, const Aovs& a) {
 }
 
 Image read_image(const std::string& path) {
+  // The input rule (engine/input_file.h) before OIIO opens the file: a FIFO would block its
+  // open and /dev/zero (or a link to it named .png) would feed it forever.
+  uint64_t size = 0;
+  ::close(open_regular_file(path, size));
   auto in = OIIO::ImageInput::open(path);
   RP_CHECK(in, "cannot read '", path, "': ", OIIO::geterror());
   const OIIO::ImageSpec& spec = in->spec();

@@ -2,6 +2,9 @@
 command: unknown backends and variants, bad shapes and values, scene files and arrays, and the
 policy for rays outside the valid-ray rule (misses, with a warning, an error or nothing)."""
 
+import os
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -126,3 +129,20 @@ def test_rays_outside_the_valid_ray_rule_are_misses_with_the_commands_warning(sc
             warnings.simplefilter("error")
             trace(origins, directions, tnear, tfar, invalid="miss")  # no warning
             trace(origins[:1], directions[:1])  # every ray valid: no warning
+
+
+def test_read_image_refuses_special_files_before_reading(tmp_path):
+    """read_image takes the input rule of load_scene: a FIFO, /dev/zero and links to it named
+    .png or .exr are refused with its one-line message before anything is read (read_image
+    blocked on the FIFO and spun on /dev/zero). Each in a child process with a time limit, so
+    that a regression fails here instead of hanging the suite."""
+    os.mkfifo(tmp_path / "fifo.png")
+    (tmp_path / "zero.png").symlink_to("/dev/zero")
+    (tmp_path / "zero.exr").symlink_to("/dev/zero")
+    (tmp_path / "folder.exr").mkdir()
+    child = "import sys, raypack\ntry:\n    raypack.read_image(sys.argv[1])\nexcept raypack.Error as e:\n    print(e)\n"
+    for path, kind in [(tmp_path / "fifo.png", "a FIFO"), (tmp_path / "zero.png", "a character device"),
+                       (tmp_path / "zero.exr", "a character device"), ("/dev/zero", "a character device"),
+                       (tmp_path / "folder.exr", "a directory")]:
+        done = subprocess.run([sys.executable, "-c", child, str(path)], capture_output=True, text=True, timeout=60)
+        assert done.stdout == f"{path}: cannot read: not a regular file ({kind})\n", done.stderr
