@@ -197,6 +197,59 @@ void write_file(const std::string& path, std::string_view bytes) {
   out.commit();
 }
 
+void check_output(const std::string& path) { OutputFile probe(path); }
+
+namespace {
+
+/// What makes two names one file: the device and inode of a file that exists; else its
+/// folder, resolved, and its name.
+struct FileKey {
+  bool exists = false;
+  bool device = false;  ///< a character device (/dev/null), which outputs may share
+  dev_t dev = 0;
+  ino_t ino = 0;
+  std::string where;
+
+  explicit FileKey(const std::string& path) {
+    namespace fs = std::filesystem;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) == 0) {
+      exists = true;
+      device = S_ISCHR(st.st_mode);
+      dev = st.st_dev;
+      ino = st.st_ino;
+      return;
+    }
+    const fs::path p(path);
+    const fs::path folder = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    std::error_code ec;
+    const fs::path real = fs::canonical(folder, ec);
+    where = ((ec ? fs::absolute(folder, ec).lexically_normal() : real) / p.filename()).string();
+  }
+  bool same(const FileKey& o) const {
+    return exists == o.exists && (exists ? dev == o.dev && ino == o.ino : where == o.where);
+  }
+};
+
+}  // namespace
+
+void check_distinct(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs) {
+  std::vector<std::pair<const NamedFile*, FileKey>> seen;
+  for (const NamedFile& f : inputs)
+    if (!f.path.empty() && f.path != "default" && f.path != "-") seen.emplace_back(&f, FileKey(f.path));
+  const size_t n_inputs = seen.size();
+  for (const NamedFile& f : outputs) {
+    if (f.path.empty()) continue;
+    const FileKey key(f.path);
+    for (size_t i = 0; i < seen.size(); ++i) {
+      if (!key.same(seen[i].second) || (i >= n_inputs && key.device)) continue;
+      throw Error(cat(f.flag, " ", f.path, ": is the same file as ", i < n_inputs ? "the input " : "the output ",
+                      seen[i].first->flag, " ", seen[i].first->path));
+    }
+    seen.emplace_back(&f, key);
+  }
+}
+
 void set_signal_message(std::string_view message) {
   RP_CHECK(message.empty() || (message.size() < sizeof g_signal_message && message.find("%s") != std::string_view::npos),
            "signal message: at most ", sizeof g_signal_message - 1, " bytes, with %s for the signal");

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rp {
 
@@ -62,6 +63,24 @@ class OutputFile {
 
 /// Writes `bytes` to `path` by the rule above.
 void write_file(const std::string& path, std::string_view bytes);
+
+/// Checks, before any work, that an OutputFile at `path` can be made now: what the constructor
+/// checks, and a temporary file made in its folder and removed again. Leaves nothing behind;
+/// throws the rp::Error the constructor would.
+void check_output(const std::string& path);
+
+/// A file a command reads or writes, with the flag that named it (for messages).
+struct NamedFile {
+  std::string flag;  ///< "--scene", "-o", ...
+  std::string path;  ///< as given; "" is skipped (an output not asked for)
+};
+
+/// Refuses, before any work, an output that is the same file as an input or as another
+/// output: the same path, or another name for the same file (a symbolic link, a hard link,
+/// "./x" for "x"); for a file that does not exist yet, the same folder and name. Outputs that
+/// are character devices (/dev/null) may repeat; "default" and "-" as inputs name no file.
+/// Throws rp::Error "<flag> <path>: is the same file as <flag> <path>".
+void check_distinct(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
 
 /// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every uncommitted temporary
 /// file of every live OutputFile, then end the process by the same signal (so the exit

@@ -138,6 +138,14 @@ void check_file_name(const std::string& flag, const std::string& path, void (*ch
   }
 }
 
+void check_distinct_files(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs) {
+  try {
+    check_distinct(inputs, outputs);
+  } catch (const Error& e) {
+    throw UsageError(e.what());
+  }
+}
+
 Scene load_scene_or_default(const std::string& path, const std::string& up_axis) {
   const std::optional<int> up = parse_up_axis(up_axis);
   return with_memory_context("loading " + path, [&] { return load_scene(path, up); });

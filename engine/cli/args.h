@@ -15,6 +15,7 @@
 #include "engine/backend.h"
 #include "engine/error.h"
 #include "engine/math.h"
+#include "engine/output_file.h"
 #include "engine/scene.h"
 
 namespace CLI {
@@ -76,6 +77,10 @@ void check_method(const std::string& backend_flag, const std::string& backend, c
 /// Throws UsageError naming `flag` when check(path) (e.g. rp::check_ray_file_name) refuses
 /// the file name, so a bad name is found before any work.
 void check_file_name(const std::string& flag, const std::string& path, void (*check)(const std::string&));
+
+/// Throws UsageError when an output is the same file as an input or another output
+/// (rp::check_distinct, engine/output_file.h), before any work.
+void check_distinct_files(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
 
 /// The scene at `path` ('default' or a file), with an out-of-memory failure named as such;
 /// `up_axis` as --up-axis takes it (a usage error naming the flag when it is not x, y or z).

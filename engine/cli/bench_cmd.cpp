@@ -300,7 +300,29 @@ CLI::App* ChartArgs::add_to(CLI::App& app) {
   return c;
 }
 
+namespace {
+
+/// Refuses, before any work, charts (and their -scaling and -pareto companions) or a JSON
+/// output that cannot be written or that name an input or each other.
+void check_bench_outputs(std::vector<NamedFile> inputs, const std::string& json_flag, const std::string& json,
+                         const std::string& chart_flag, const std::string& chart, bool pareto) {
+  std::vector<NamedFile> outputs{{json_flag, json}};
+  if (!chart.empty()) {
+    outputs.push_back({chart_flag, chart});
+    outputs.push_back({chart_flag + " (its -scaling chart)", companion_chart(chart, "-scaling")});
+    if (pareto) outputs.push_back({chart_flag + " (its -pareto chart)", companion_chart(chart, "-pareto")});
+  }
+  check_distinct_files(inputs, outputs);
+  for (const NamedFile& o : outputs) {
+    if (o.path.empty()) continue;
+    check_file_name(o.flag, o.path, o.flag == json_flag ? check_output : check_chart_output);
+  }
+}
+
+}  // namespace
+
 int run_chart(const ChartArgs& a) {
+  check_bench_outputs({{"json", a.json}, {"--stability", a.stability}}, "", "", "-o", a.output, !a.stability.empty());
   std::string files;
   for (const std::string& f : draw_charts(a.json, a.output, a.stability)) files += (files.empty() ? "" : ", ") + f;
   say(a.quiet ? nullptr : stderr, "raypack: wrote %s\n", files.c_str());
@@ -321,6 +343,11 @@ int run_bench(const BenchArgs& a) {
         a.scenes.size());
   usage(!a.occlusion || !a.ray_file.empty(), "bench: --any-hit applies to --rays only");
   if (!a.ray_file.empty()) check_file_name("--rays", a.ray_file, check_ray_file_name);
+  {
+    std::vector<NamedFile> inputs{{"--rays", a.ray_file}, {"--stability", a.stability}};
+    for (const std::string& s : a.scenes) inputs.push_back({"--scene", s});
+    check_bench_outputs(inputs, "--json", a.json, "--chart", a.chart, !a.stability.empty());
+  }
   const std::optional<int> up = parse_up_axis(a.up_axis);
   for (const std::string& k : a.kinds)
     usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
@@ -479,11 +506,9 @@ std::vector<std::string> draw_charts(const std::string& json_path, const std::st
 }
 
 std::vector<std::string> draw_charts(const Json& j, const std::string& chart, const std::string& stability) {
-  namespace fs = std::filesystem;
   check_bench_results(j);
   chart_format(chart);  // an unknown format is refused before anything is drawn
-  const fs::path file(chart);
-  const std::string scaling = ((file.parent_path() / file.stem()).string() + "-scaling") + file.extension().string();
+  const std::string scaling = companion_chart(chart, "-scaling");
   constexpr double kFloor = 1e-7;  // where a zero mismatch rate is drawn
   const Json& machine = j.contains("machine") ? j["machine"] : Json::object();
   const std::string title = cat("cpu ", machine.value("cpu", std::string("?")), ", ", machine.value("threads", 0),

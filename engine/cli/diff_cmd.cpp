@@ -76,6 +76,11 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
     if ((a.rays == "primary" || a.rays == "diffuse" || a.rays == "random") && !std::filesystem::exists(a.rays))
       throw UsageError(cat("--rays: there is no ray file '", a.rays, "'; generated rays are chosen with --kind ", a.rays));
     if (!a.rays.empty()) check_file_name("--rays", a.rays, check_ray_file_name);
+    if (comm.root()) {  // rank 0 writes the outputs
+      check_distinct_files({{"--scene", a.scene}, {"--rays", a.rays}}, {{"--json", a.json}, {"--image", a.image}});
+      if (!a.json.empty()) check_file_name("--json", a.json, check_output);
+      if (!a.image.empty()) check_file_name("--image", a.image, check_image_output);
+    }
   });
   const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene, a.up_axis); });
   const auto t0 = std::chrono::steady_clock::now();

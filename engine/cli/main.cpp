@@ -16,7 +16,6 @@
 #include "engine/cli/diff_cmd.h"
 #include "engine/cli/domains_cmd.h"
 #include "engine/cli/info_cmd.h"
-#include "engine/cli/plot.h"
 #include "engine/cli/ranks.h"
 #include "engine/cli/render_cmd.h"
 #include "engine/cli/stability_cmd.h"
@@ -77,16 +76,6 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
     return e.failure().status;
   }
   try {
-    // A chart format the extension does not name is a bad flag, found before any work.
-    for (const auto& [flag, file] : {std::pair{"--chart", bench_args.chart}, std::pair{"--chart", stability_args.chart},
-                                     std::pair{"-o", *chart ? chart_args.output : std::string()}}) {
-      if (file.empty()) continue;
-      try {
-        chart_format(file);
-      } catch (const rp::Error& e) {
-        throw UsageError(rp::cat(flag, ": ", e.what()));
-      }
-    }
     if (*render) return run_render(render_args, comm);
     if (*trace) return run_trace(trace_args, comm);
     if (*diff) return run_diff(diff_args, comm);

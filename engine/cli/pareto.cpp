@@ -49,8 +49,7 @@ std::map<std::string, HardFailures> read_hard_failures(const std::string& path) 
 std::string draw_pareto(const Json& bench, const std::string& stability_path, const std::string& chart) {
   namespace fs = std::filesystem;
   const std::map<std::string, HardFailures> failures = read_hard_failures(stability_path);
-  const fs::path file(chart);
-  const std::string out = ((file.parent_path() / file.stem()).string() + "-pareto") + file.extension().string();
+  const std::string out = companion_chart(chart, "-pareto");
   constexpr double kFloor = 1e-5;  // where a zero failure rate is drawn
 
   // Per ray kind and method: the log-sum of its fastest method's Mrays/s over the scenes.

@@ -1,6 +1,8 @@
 #include "engine/cli/plot.h"
 
 #include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -22,8 +24,29 @@ namespace {
 /// A descriptor closed on scope exit.
 struct Fd {
   int fd = -1;
-  ~Fd() {
+  ~Fd() { close(); }
+  void close() {
     if (fd >= 0) ::close(fd);
+    fd = -1;
+  }
+};
+
+/// A child process, waited for; one left running when an error unwinds is killed first.
+struct Child {
+  pid_t pid = -1;
+  ~Child() {
+    if (pid > 0) {
+      ::kill(pid, SIGKILL);
+      wait();
+    }
+  }
+  /// Waits for the child to end; its status for WIFEXITED and the rest.
+  int wait() {
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0)
+      if (errno != EINTR) break;
+    pid = -1;
+    return status;
   }
 };
 
@@ -70,6 +93,17 @@ void require_gnuplot() {
     start = end + 1;
   }
   throw Error("chart: gnuplot is not installed (apt-get install gnuplot-nox; .ci/setup.sh does it)");
+}
+
+std::string companion_chart(const std::string& chart, const std::string& suffix) {
+  const std::filesystem::path file(chart);
+  return ((file.parent_path() / file.stem()).string() + suffix) + file.extension().string();
+}
+
+void check_chart_output(const std::string& file) {
+  chart_format(file);
+  require_gnuplot();
+  check_output(file);
 }
 
 std::string gnuplot_string(std::string_view text) {
@@ -128,41 +162,74 @@ void plot_to(const std::string& file, const std::string& size, const std::string
       ::unlink(name.c_str());
     }
   }
-  int pipe_fds[2];
-  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) throw Error(cat("chart: cannot make a pipe: ", std::strerror(errno)));
-  Fd script_read{pipe_fds[0]}, script_write{pipe_fds[1]};
+  // The script goes in through one pipe and the chart comes back through another, both
+  // served by one poll loop; the chart is written here by OutputFile, which checks every
+  // write (gnuplot does not report a full disk).
+  int in_fds[2], out_fds[2];
+  if (::pipe2(in_fds, O_CLOEXEC) != 0) throw Error(cat("chart: cannot make a pipe: ", std::strerror(errno)));
+  Fd script_read{in_fds[0]}, script_write{in_fds[1]};
+  if (::pipe2(out_fds, O_CLOEXEC) != 0) throw Error(cat("chart: cannot make a pipe: ", std::strerror(errno)));
+  Fd chart_read{out_fds[0]}, chart_write{out_fds[1]};
 
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_adddup2(&actions, script_read.fd, STDIN_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, out.fd(), STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, chart_write.fd, STDOUT_FILENO);
   posix_spawn_file_actions_adddup2(&actions, err.fd, STDERR_FILENO);
   char arg0[] = "gnuplot";
   char* argv[] = {arg0, nullptr};
-  pid_t pid = 0;
-  const int spawned = ::posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  Child gnuplot;
+  const int spawned = ::posix_spawnp(&gnuplot.pid, "gnuplot", &actions, nullptr, argv, environ);
   posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) throw Error(cat("chart: cannot run gnuplot: ", std::strerror(spawned)));
+  if (spawned != 0) {
+    gnuplot.pid = -1;
+    throw Error(cat("chart: cannot run gnuplot: ", std::strerror(spawned)));
+  }
   ::close(script_read.fd);
   script_read.fd = -1;
+  ::close(chart_write.fd);
+  chart_write.fd = -1;
+  ::fcntl(script_write.fd, F_SETFL, O_NONBLOCK);
 
-  // The script; a gnuplot that stops reading early (an error) makes this fail with EPIPE
+  // A gnuplot that stops reading early (an error) makes a script write fail with EPIPE
   // (SIGPIPE is ignored by the CLI), which its exit status then explains.
   const char* p = program.data();
   size_t left = program.size();
-  while (left > 0) {
-    const ssize_t w = ::write(script_write.fd, p, left);
-    if (w < 0 && errno == EINTR) continue;
-    if (w < 0) break;
-    p += w;
-    left -= size_t(w);
+  if (left == 0) script_write.close();
+  char buffer[1 << 16];
+  while (script_write.fd >= 0 || chart_read.fd >= 0) {
+    pollfd fds[2];
+    nfds_t n = 0;
+    if (script_write.fd >= 0) fds[n++] = {script_write.fd, POLLOUT, 0};
+    if (chart_read.fd >= 0) fds[n++] = {chart_read.fd, POLLIN, 0};
+    if (::poll(fds, n, -1) < 0) {
+      if (errno == EINTR) continue;
+      throw Error(cat("chart: waiting for gnuplot: ", std::strerror(errno)));
+    }
+    for (nfds_t i = 0; i < n; ++i) {
+      if (fds[i].revents == 0) continue;
+      if (fds[i].fd == script_write.fd) {
+        const ssize_t w = ::write(script_write.fd, p, left);
+        if (w < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+        if (w < 0) {
+          script_write.close();
+          continue;
+        }
+        p += w;
+        left -= size_t(w);
+        if (left == 0) script_write.close();
+      } else {
+        const ssize_t r = ::read(chart_read.fd, buffer, sizeof buffer);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) {
+          chart_read.close();
+          continue;
+        }
+        out.write(buffer, size_t(r));
+      }
+    }
   }
-  ::close(script_write.fd);
-  script_write.fd = -1;
-
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) throw Error(cat("chart: waiting for gnuplot: ", std::strerror(errno)));
+  const int status = gnuplot.wait();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || left > 0)
     throw Error(cat("chart: gnuplot failed for '", file, "': ", first_error_line(err.fd)));
   out.commit();

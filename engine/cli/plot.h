@@ -22,6 +22,13 @@ ChartFormat chart_format(const std::string& file);
 /// Throws rp::Error with the install hint when no gnuplot is on PATH.
 void require_gnuplot();
 
+/// The chart drawn beside `chart`: "<folder>/<stem><suffix><extension>" ("-scaling", "-pareto").
+std::string companion_chart(const std::string& chart, const std::string& suffix);
+
+/// Checks, before any work, that plot_to(file, ...) can write `file`: its format, gnuplot on
+/// PATH, and an output rp::OutputFile can make (check_output). Throws rp::Error.
+void check_chart_output(const std::string& file);
+
 /// `text` as a gnuplot single-quoted string (quotes included): a quote is doubled, control
 /// characters become '?'. gnuplot does no substitution of any kind inside single quotes.
 std::string gnuplot_string(std::string_view text);
@@ -41,7 +48,9 @@ std::string legend_cell(const std::vector<std::string>& labels, double x, double
 
 /// Draws `file` with gnuplot: `script` (without `set terminal` and `set output`) run after
 /// `set terminal <terminal size> noenhanced`, the terminal chosen by the file's extension.
-/// Throws rp::Error with gnuplot's first error line; `file` is then left as it was.
+/// gnuplot writes the chart into a pipe and rp::OutputFile writes it to `file`, checking every
+/// write. Throws rp::Error with gnuplot's first error line, or the failed write; `file` is
+/// then left as it was.
 void plot_to(const std::string& file, const std::string& size, const std::string& script);
 
 }  // namespace rp::cli

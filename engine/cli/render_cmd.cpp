@@ -25,18 +25,17 @@ struct Resolution {
   int width, height;
 };
 
-constexpr int kMaxEdge = 32768;
-constexpr long long kMaxPixels = 1ll << 28;
-
 Resolution parse_resolution(const std::string& text) {
   static const std::regex re(R"(^\s*(\d{1,9})\s*[xX]\s*(\d{1,9})\s*$)");
   std::smatch m;
   if (!std::regex_match(text, m, re))
     throw UsageError(cat("--resolution: '", text, "' is not WIDTHxHEIGHT (e.g. 1920x1080)"));
   const long long w = std::stoll(m[1]), h = std::stoll(m[2]);
-  if (w < 1 || h < 1 || w > kMaxEdge || h > kMaxEdge || w * h > kMaxPixels)
-    throw UsageError(cat("--resolution: ", text, " is out of range (each side 1..", kMaxEdge, ", at most ", kMaxPixels,
-                         " pixels)"));
+  try {
+    check_image_size("--resolution", w, h);
+  } catch (const Error& e) {
+    throw UsageError(e.what());
+  }
   return {int(w), int(h)};
 }
 
@@ -147,7 +146,7 @@ CLI::App* RenderArgs::add_to(CLI::App& app) {
   c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
   c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
   add_backend_options(c, backend, variant);
-  c->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 65536))->capture_default_str();
+  c->add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, kMaxSpp))->capture_default_str();
   add_threads_option(c, threads);
   c->add_option("--seed", seed, "Seed of the per-pixel sample streams")->capture_default_str();
   c->add_option("--max-depth", max_depth, "Mirror bounces after the primary hit")
@@ -191,6 +190,11 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
     Flags flags{res, render_settings(a, res), {}};
     for (const std::string& l : a.lights) flags.lights.push_back(parse_light(l));
     check_method("--backend", a.backend, "--variant", a.variant);
+    if (comm.root()) {  // rank 0 writes the outputs
+      check_distinct_files({{"--scene", a.scene}}, {{"-o", a.output}, {"--aov", a.aov}});
+      check_file_name("-o", a.output, check_image_output);
+      if (!a.aov.empty()) check_file_name("--aov", a.aov, check_aov_output);
+    }
     return flags;
   });
   const Resolution& res = f.res;

@@ -102,6 +102,9 @@ int run_stability(const StabilityArgs& a) {
     }
     if (!known) throw UsageError(cat("--family: unknown family '", f, "' (", names, ")"));
   }
+  check_distinct_files({{"--scene", a.scene}}, {{"--json", a.json}, {"--chart", a.chart}});
+  if (!a.json.empty()) check_file_name("--json", a.json, check_output);
+  if (!a.chart.empty()) check_file_name("--chart", a.chart, check_chart_output);
   const ThreadLimit limit(a.threads);
   stability::Options o;
   o.rays = a.count;

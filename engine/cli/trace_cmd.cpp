@@ -46,8 +46,10 @@ int run_trace(const TraceArgs& a, const dist::Comm& comm) {
   const Coherence coherence = dist::together(comm, [&] {
     check_method("--backend", a.backend, "--variant", a.variant);
     const Coherence c = parse_coherence("--coherence", a.coherence);
+    check_distinct_files({{"--scene", a.scene}, {"--rays", a.rays}}, {{"-o", a.output}});
     check_file_name("--rays", a.rays, check_ray_file_name);
     check_file_name("-o", a.output, check_hit_file_name);
+    check_file_name("-o", a.output, check_output);  // every rank writes its share
     return c;
   });
   const ThreadLimit limit(a.threads);

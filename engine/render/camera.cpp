@@ -7,8 +7,15 @@
 
 namespace rp {
 
+void check_image_size(const std::string& what, int64_t width, int64_t height) {
+  RP_CHECK(width >= 1 && height >= 1 && width <= kMaxImageEdge && height <= kMaxImageEdge &&
+               width * height <= kMaxImagePixels,
+           what, ": ", width, "x", height, " is out of range (each side 1..", kMaxImageEdge, ", at most ",
+           kMaxImagePixels, " pixels)");
+}
+
 Camera::Camera(const CameraDesc& d, int width, int height) : model_(d.model), width_(width), height_(height) {
-  RP_CHECK(width > 0 && height > 0, "camera: resolution ", width, "x", height, " must be positive");
+  check_image_size("camera: resolution", width, height);
   RP_CHECK(d.vfov_degrees > 0.0f && d.vfov_degrees < 180.0f, "camera: vertical fov ", d.vfov_degrees,
            " degrees must be in (0, 180)");
   RP_CHECK(is_finite(d.eye) && is_finite(d.look_at) && is_finite(d.up), "camera: non-finite eye, look-at or up");

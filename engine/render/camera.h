@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <string>
 #include <utility>
 
 #include "engine/lanes.h"
@@ -32,12 +33,21 @@ namespace rp {
 ///   P = eye + d f / (d . w); the ray starts at a point L of the lens disk (radius
 ///   `aperture`, concentric mapping of the lens sample) and points at P (Pharr, Jakob,
 ///   Humphreys, PBRT 4th ed., 5.2.3). aperture 0 is the pinhole.
+/// The largest image raypack makes or reads: each side at most kMaxImageEdge pixels and at most
+/// kMaxImagePixels in all (2^28: 3 GiB of float RGB), whoever asks (the CLI, Python, an image file).
+inline constexpr int kMaxImageEdge = 32768;
+inline constexpr int64_t kMaxImagePixels = int64_t(1) << 28;
+
+/// Throws rp::Error "<what>: WxH is out of range (each side 1..32768, at most 268435456 pixels)"
+/// unless a width x height image lies within the limits above.
+void check_image_size(const std::string& what, int64_t width, int64_t height);
+
 class Camera {
  public:
-  /// Throws rp::Error for an eye or look-at point outside the coordinate range (engine/ray.h:
-  /// every ray it makes must be valid), a degenerate placement (eye == look_at, up parallel
-  /// to the view direction), a field of view out of range, an aperture that reaches outside
-  /// the range or a focus distance outside [0, 2^31].
+  /// Throws rp::Error for a size beyond check_image_size, an eye or look-at point outside the coordinate range
+  /// (engine/ray.h: every ray it makes must be valid), a degenerate placement (eye == look_at, up parallel to the view
+  /// direction), a field of view out of range, an aperture that reaches outside the range or a focus distance outside
+  /// [0, 2^31].
   Camera(const CameraDesc& desc, int width, int height);
 
   /// Ray through image position (px, py) in pixels: (0, 0) is the top-left corner, pixel (i,

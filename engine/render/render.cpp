@@ -408,7 +408,7 @@ struct TileRenderer::Impl {
 TileRenderer::TileRenderer(const Scene& scene, const Backend& backend, const Camera& camera, const RenderSettings& st) {
   RP_CHECK(camera.width() == st.width && camera.height() == st.height, "render: camera resolution ",
            camera.width(), "x", camera.height(), " differs from settings ", st.width, "x", st.height);
-  RP_CHECK(st.spp >= 1, "render: spp ", st.spp, " must be >= 1");
+  RP_CHECK(st.spp >= 1 && st.spp <= kMaxSpp, "render: spp ", st.spp, " is out of range (1..", kMaxSpp, ")");
   RP_CHECK(st.max_depth >= 0, "render: max depth ", st.max_depth, " must be >= 0");
   if (st.sampler == Sampler::uniform) {
     const int m = int(std::sqrt(double(st.spp)));

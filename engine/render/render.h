@@ -30,9 +30,12 @@ enum class Sampler : uint8_t {
   adaptive,    ///< rays through the pixel-grid corners, cells subdivided where colours differ
 };
 
+/// The most samples per pixel a render takes (the CLI's --spp and Python's spp alike).
+inline constexpr int kMaxSpp = 65536;
+
 struct RenderSettings {
   int width = 1024, height = 768;
-  int spp = 1;  ///< samples per pixel, >= 1 (not used by the adaptive sampler)
+  int spp = 1;  ///< samples per pixel, 1..kMaxSpp (not used by the adaptive sampler)
   Sampler sampler = Sampler::stratified;
   uint64_t seed = 0;       ///< seeds the per-pixel sample streams
   int max_depth = 3;       ///< reflection and refraction bounces after the primary hit

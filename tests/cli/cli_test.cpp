@@ -5,6 +5,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -170,10 +171,11 @@ TEST_F(Cli, RendersAnObjFileWithTheSimdBackend) {
   EXPECT_EQ(img.height, 32);
 }
 
-TEST_F(Cli, UnwritableOutputIsAnErrorWithStatusOneAndNoFile) {
+TEST_F(Cli, AnOutputInAMissingFolderIsABadFlagAndNoFile) {
   const fs::path out = dir_ / "missing-dir" / "x.png";
   const Result r = run("render --resolution 16x16 -o " + out.string());
-  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: -o: " + out.string() + ": cannot write: No such file or directory\n");
   EXPECT_NE(r.output.find(out.string()), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out));
 }
@@ -281,7 +283,7 @@ TEST_F(Cli, RenderWritesAovsAsOneExr) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_GT(fs::file_size(aov), 100u);
   r = run("render --resolution 24x16 -q -o " + out.string() + " --aov " + (dir_ / "aov.png").string());
-  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("AOVs are written as OpenEXR"), std::string::npos) << r.output;
 }
 
@@ -489,10 +491,10 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_ / "store"), fs::directory_iterator()), 1);
 }
 
-TEST_F(Cli, AFailingImageWriterLeavesNoTemporaryBehind) {
-  // OIIO has no writer for .xyz: the error comes after the output file was opened.
+TEST_F(Cli, AnOutputWithoutAnImageWriterIsABadFlagThatLeavesNothing) {
+  // OIIO has no writer for .xyz: refused with the flags, before an output file is opened.
   const Result r = run("render --resolution 16x16 -q -o " + (dir_ / "image.xyz").string());
-  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("no image writer for extension '.xyz'"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::is_empty(dir_)) << "left " << fs::directory_iterator(dir_)->path();
 }
@@ -688,3 +690,140 @@ TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
 }
 
 }  // namespace
+
+/// A bench file with one result, enough for `raypack chart` to draw both charts.
+void write_small_bench_json(const fs::path& p) {
+  std::ofstream(p) << R"({"machine": {"cpu": "test", "threads": 1, "date": "today"}, "scenes": [{"scene": "default",
+    "triangles": 10, "results": [{"kind": "diffuse", "method": "simd x", "mrays_per_s": 1.5, "mismatch_rate": 0.001}]}]})";
+}
+
+// What a full disk does to a writer, without a full disk: a file-size limit (ulimit -f, in
+// KiB blocks) makes every write past it fail as a full disk's does (EFBIG instead of ENOSPC),
+// in raypack and in the gnuplot it starts; SIGXFSZ is ignored, as a full disk sends none.
+TEST_F(Cli, AWriteThatFailsMidFileFailsTheCommandAndKeepsTheOldFile) {
+  write_small_bench_json(dir_ / "b.json");
+  std::ofstream(dir_ / "rays.csv") << "ox,oy,oz,dx,dy,dz\n";
+  for (int i = 0; i < 200; ++i) std::ofstream(dir_ / "rays.csv", std::ios::app) << "5,10,5,0,-1,0\n";
+  struct Case {
+    std::string args, output;
+    int limit = 2;  ///< KiB; 0 fails the first write (a chart of diff's classes is a few hundred bytes)
+  };
+  const std::string d = dir_.string() + "/";
+  const Case cases[] = {
+      {"render --resolution 256x256 -o " + d + "old.png", "old.png"},
+      {"render --resolution 256x256 -o " + d + "old.exr", "old.exr"},
+      {"render --resolution 256x256 -o " + d + "old.tif", "old.tif"},
+      // The image fits under the limit; the AOVs do not.
+      {"render --resolution 16x16 -o " + d + "small.png --aov " + d + "old-aov.exr", "old-aov.exr"},
+      {"chart " + d + "b.json -o " + d + "old-chart.png", "old-chart.png"},
+      {"chart " + d + "b.json -o " + d + "old-chart.svg", "old-chart.svg"},
+      {"diff --kind primary --count 4096 --image " + d + "old-diff.png", "old-diff.png", 0},
+      {"trace --rays " + d + "rays.csv -o " + d + "old-hits.csv", "old-hits.csv"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir_ / c.output) << "the old file";
+    const Result r = run(c.args + " -q", "trap '' XFSZ; ulimit -f " + std::to_string(c.limit) + "; ");
+    EXPECT_EQ(r.status, 1) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.output + ": cannot write: File too large"), std::string::npos)
+        << c.args << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << c.args << ": " << r.output;
+    EXPECT_EQ(file_bytes(dir_ / c.output), "the old file") << c.args;
+    for (const auto& e : fs::directory_iterator(dir_))
+      EXPECT_EQ(e.path().filename().string().rfind(".raypack-", 0), std::string::npos)
+          << c.args << " left " << e.path();
+  }
+  // The same commands without the limit write what they could not (the limit was the cause).
+  const Result r = run("chart " + d + "b.json -q -o " + d + "old-chart.svg");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_GT(fs::file_size(dir_ / "old-chart.svg"), 2048u);
+}
+
+TEST_F(Cli, AnOutputThatIsAnInputOrAnotherOutputIsRefusedBeforeAnyWork) {
+  const std::string d = dir_.string() + "/";
+  std::ofstream(dir_ / "r.csv") << "ox,oy,oz,dx,dy,dz\n5,10,5,0,-1,0\n";
+  std::ofstream(dir_ / "scene.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  write_small_bench_json(dir_ / "b.json");
+  fs::create_symlink(dir_ / "r.csv", dir_ / "link.csv");
+  fs::create_hard_link(dir_ / "r.csv", dir_ / "hard.csv");
+  fs::create_directory(dir_ / "sub");
+  struct Case {
+    std::string args, message;
+  };
+  const Case cases[] = {
+      {"trace --rays " + d + "r.csv -o " + d + "r.csv",
+       "-o " + d + "r.csv: is the same file as the input --rays " + d + "r.csv"},
+      {"trace --rays " + d + "r.csv -o " + d + "link.csv",
+       "-o " + d + "link.csv: is the same file as the input --rays " + d + "r.csv"},
+      {"trace --rays " + d + "r.csv -o " + d + "hard.csv",
+       "-o " + d + "hard.csv: is the same file as the input --rays " + d + "r.csv"},
+      {"trace --rays " + d + "r.csv -o " + d + "sub/../r.csv",
+       "-o " + d + "sub/../r.csv: is the same file as the input --rays " + d + "r.csv"},
+      {"trace --scene " + d + "scene.obj --rays " + d + "r.csv -o " + d + "scene.obj",
+       "-o " + d + "scene.obj: is the same file as the input --scene " + d + "scene.obj"},
+      {"bench --scene " + d + "scene.obj --json " + d + "scene.obj",
+       "--json " + d + "scene.obj: is the same file as the input --scene " + d + "scene.obj"},
+      // Two outputs that do not exist yet, by two names of one path.
+      {"render -o " + d + "same.exr --aov " + d + "sub/../same.exr",
+       "--aov " + d + "sub/../same.exr: is the same file as the output -o " + d + "same.exr"},
+      {"diff --json " + d + "d.png --image " + d + "d.png",
+       "--image " + d + "d.png: is the same file as the output --json " + d + "d.png"},
+      {"chart " + d + "b.json -o " + d + "b.json",
+       "-o " + d + "b.json: is the same file as the input json " + d + "b.json"},
+      {"chart " + d + "b.json -o " + d + "c.png --stability " + d + "c-pareto.png",
+       "-o (its -pareto chart) " + d + "c-pareto.png: is the same file as the input --stability " + d + "c-pareto.png"},
+      {"stability --scene " + d + "scene.obj --json " + d + "scene.obj",
+       "--json " + d + "scene.obj: is the same file as the input --scene " + d + "scene.obj"},
+  };
+  std::ofstream(dir_ / "c-pareto.png") << "stability";
+  for (const Case& c : cases) {
+    const std::string before =
+        file_bytes(dir_ / "r.csv") + file_bytes(dir_ / "scene.obj") + file_bytes(dir_ / "b.json");
+    const Result r = run(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
+    EXPECT_EQ(r.output, "raypack: " + c.message + "\n") << c.args;
+    EXPECT_EQ(file_bytes(dir_ / "r.csv") + file_bytes(dir_ / "scene.obj") + file_bytes(dir_ / "b.json"), before)
+        << c.args;
+    EXPECT_FALSE(fs::exists(dir_ / "same.exr") || fs::exists(dir_ / "d.png")) << c.args;
+  }
+}
+
+TEST_F(Cli, EveryOutputIsCheckedBeforeAnyWork) {
+  // Each command would fail on its input (a scene that cannot be read): the output's message
+  // comes first, with status 2, and no output is written.
+  const std::string d = dir_.string() + "/", bad = " --scene " + d + "absent.obj";
+  write_small_bench_json(dir_ / "b.json");
+  fs::create_directory(dir_ / "c-scaling.png");
+  struct Case {
+    std::string args, message;
+  };
+  const Case cases[] = {
+      {"render -o " + d + "x.foo" + bad, "-o: cannot write '" + d + "x.foo': no image writer for extension '.foo'"},
+      {"render -o " + d + "x.sgi" + bad,
+       "-o: cannot write '" + d + "x.sgi': the sgi writer cannot report a failed write"},
+      {"render -o " + d + "x.png --aov " + d + "a.png" + bad,
+       "--aov: cannot write AOVs to '" + d + "a.png': AOVs are written as OpenEXR (.exr)"},
+      {"render -o " + d + "nowhere/x.png" + bad, "-o: " + d + "nowhere/x.png: cannot write: No such file or directory"},
+      {"render -o " + d + "c-scaling.png" + bad, "-o: " + d + "c-scaling.png: cannot write: it is a directory"},
+      {"diff --json " + d + "d.json --image " + d + "d.foo" + bad,
+       "--image: cannot write '" + d + "d.foo': no image writer"},
+      {"diff --json " + d + "nowhere/d.json" + bad,
+       "--json: " + d + "nowhere/d.json: cannot write: No such file or directory"},
+      {"trace --rays " + d + "absent.csv -o " + d + "nowhere/h.csv" + bad,
+       "-o: " + d + "nowhere/h.csv: cannot write: No such file or directory"},
+      {"chart " + d + "b.json -o " + d + "c.png",
+       "-o (its -scaling chart): " + d + "c-scaling.png: cannot write: it is a directory"},
+      {"bench --json " + d + "bench.json --chart " + d + "c.png" + bad,
+       "--chart (its -scaling chart): " + d + "c-scaling.png: cannot write: it is a directory"},
+      {"stability --json " + d + "s.json --chart " + d + "nowhere/s.svg" + bad,
+       "--chart: " + d + "nowhere/s.svg: cannot write: No such file or directory"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
+    EXPECT_EQ(r.output.rfind("raypack: " + c.message, 0), 0u) << c.args << ": " << r.output;
+    for (const char* written : {"x.png", "d.json", "c.png", "bench.json", "s.json"})
+      EXPECT_FALSE(fs::exists(dir_ / written)) << c.args << " wrote " << written;
+  }
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().rfind(".raypack-", 0), std::string::npos) << "left " << e.path();
+}
