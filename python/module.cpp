@@ -30,6 +30,7 @@
 #include "engine/render/camera.h"
 #include "engine/render/image_io.h"
 #include "engine/render/render.h"
+#include "python/interrupt.h"
 #include "python/ray_arrays.h"
 
 namespace rp::python {
@@ -70,18 +71,32 @@ SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, c
                         const py::handle& planes) {
   const auto positions = table<float>("vertices", vertices, 3, "(V, 3)");  // held while v reads it
   const auto v = positions.unchecked<2>();
-  const auto idx = table<int64_t>("indices", indices, 3, "(T, 3)");
+  // Indices are integers: a float array would be truncated (2.9 -> 2) and a uint64 one wrap
+  // to negative numbers, so both are taken as they are and checked.
+  const py::array given = py::array::ensure(indices);
+  const char kind = given ? given.dtype().kind() : '?';
+  if (kind != 'i' && kind != 'u')
+    throw py::type_error(cat("indices: ", given ? cat("dtype ", std::string(py::str(given.dtype()))) : "this",
+                             " is not an array of integers"));
   TriangleMesh mesh;
   mesh.name = "arrays";
   mesh.positions.resize(size_t(v.shape(0)));
   for (py::ssize_t i = 0; i < v.shape(0); ++i) mesh.positions[size_t(i)] = {v(i, 0), v(i, 1), v(i, 2)};
-  mesh.indices.resize(size_t(idx.size()));
-  const int64_t* in = idx.data();
-  for (size_t i = 0; i < mesh.indices.size(); ++i) {
-    RP_CHECK(in[i] >= 0 && in[i] < int64_t(kInvalidId), "indices: ", in[i], " (triangle ", i / 3,
-             ") is not a vertex index");
-    mesh.indices[i] = uint32_t(in[i]);
-  }
+  const auto take = [&](const auto& idx) {
+    mesh.indices.resize(size_t(idx.size()));
+    const auto* in = idx.data();
+    for (size_t i = 0; i < mesh.indices.size(); ++i) {
+      bool negative = false;
+      if constexpr (std::is_signed_v<std::remove_cvref_t<decltype(in[i])>>) negative = in[i] < 0;
+      RP_CHECK(!negative && uint64_t(in[i]) < kInvalidId, "indices: ", in[i], " (triangle ", i / 3,
+               ") is not a vertex index");
+      mesh.indices[i] = uint32_t(in[i]);
+    }
+  };
+  if (kind == 'u')
+    take(table<uint64_t>("indices", given, 3, "(T, 3)"));
+  else
+    take(table<int64_t>("indices", given, 3, "(T, 3)"));
   Scene scene;
   scene.add_mesh(std::move(mesh));
   if (!spheres.is_none()) {
@@ -227,8 +242,8 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
   else if (sampler == "random") settings.sampler = Sampler::random;
   else if (sampler == "adaptive") settings.sampler = Sampler::adaptive;
   else RP_CHECK(sampler == "stratified", "sampler: '", sampler, "' is not uniform, random, stratified or adaptive");
-  RP_CHECK(width >= 1 && height >= 1 && width <= 32768 && height <= 32768 && int64_t(width) * height <= (int64_t(1) << 28),
-           "resolution: ", width, "x", height, " is out of range (each side 1..32768, at most 2^28 pixels)");
+  check_image_size("resolution", width, height);
+  RP_CHECK(spp >= 1 && spp <= kMaxSpp, "spp: ", spp, " is out of range (1..", kMaxSpp, ")");
   RP_CHECK(max_depth >= 0 && max_depth <= 64, "max_depth: ", max_depth, " is out of range (0..64)");
   CameraDesc desc = scene.scene->camera().value_or(frame_bounds(scene.scene->bounds(), scene.scene->up_axis()));
   const auto vec = [](const std::array<float, 3>& a) { return Vec3f(a[0], a[1], a[2]); };
@@ -240,17 +255,20 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
   std::optional<BackendHandle> built;
   const Backend& b = backend_of(backend, variant, scene, "render", built);
   Image image;
-  {
-    py::gil_scoped_release release;
-    with_threads(threads, [&] { image = render(*scene.scene, b, camera, settings).image; });
-  }
+  // Ctrl-C stops the render between tiles (python/interrupt.h).
+  interruptible(true, [&](const std::atomic<bool>& stop) {
+    const ProgressFn stop_between_tiles = [&](double) {
+      if (stop.load(std::memory_order_relaxed)) throw Stopped();
+    };
+    with_threads(threads, [&] { image = render(*scene.scene, b, camera, settings, stop_between_tiles).image; });
+  });
   return image_array(std::move(image));
 }
 
 void save_image(const std::filesystem::path& path, const py::handle& pixels) {
   const auto a = numbers<float, py::array::c_style | py::array::forcecast>("image", pixels);
-  if (a.ndim() != 3 || a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1 || a.shape(0) > 32768 || a.shape(1) > 32768)
-    throw Error(cat("image: shape ", shape_text(a), " is not (height, width, 3) with sides 1..32768"));
+  if (a.ndim() != 3 || a.shape(2) != 3) throw Error(cat("image: shape ", shape_text(a), " is not (height, width, 3)"));
+  check_image_size(cat("image: shape ", shape_text(a)), a.shape(1), a.shape(0));
   Image image{.width = int(a.shape(1)), .height = int(a.shape(0)), .rgb = {a.data(), a.data() + a.size()}};
   py::gil_scoped_release release;
   write_image(path.string(), image);

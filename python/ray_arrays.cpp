@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "engine/error.h"
+#include "python/interrupt.h"
 
 namespace rp::python {
 
@@ -178,14 +179,22 @@ void with_threads(int threads, const std::function<void()>& f) {
   arena.execute(f);
 }
 
+namespace {
+
+/// Calls with at least this many rays run interruptibly (python/interrupt.h): long enough that
+/// a thread of their own costs nothing measurable.
+constexpr size_t kLongCallRays = size_t(1) << 18;
+
+}  // namespace
+
 HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArrays& rays, Coherence coherence,
                         bool normals, int threads, size_t& invalid) {
   HitArrays out(rays.size(), normals);
   std::atomic<size_t> bad = 0;
-  {
-    py::gil_scoped_release release;
+  interruptible(rays.size() >= kLongCallRays, [&](const std::atomic<bool>& stop) {
     with_threads(threads, [&] {
       for_each_chunk(rays.size(), [&](size_t begin, size_t n) {
+        if (stop.load(std::memory_order_relaxed)) return;
         ChunkBuffers& b = chunk_buffers();
         const std::span<Ray> r(b.rays.data(), n);
         const std::span<Hit> h(b.hits.data(), n);
@@ -194,7 +203,7 @@ HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArr
         out.store(scene, begin, r, h);
       });
     });
-  }
+  });
   invalid = bad;
   return out;
 }
@@ -205,16 +214,16 @@ py::array_t<bool> trace_any(const Backend& backend, const RayArrays& rays, Coher
   // numpy's bool is one byte holding 0 or 1, what Backend::occluded writes.
   uint8_t* const occluded = reinterpret_cast<uint8_t*>(out.mutable_data());
   std::atomic<size_t> bad = 0;
-  {
-    py::gil_scoped_release release;
+  interruptible(rays.size() >= kLongCallRays, [&](const std::atomic<bool>& stop) {
     with_threads(threads, [&] {
       for_each_chunk(rays.size(), [&](size_t begin, size_t n) {
+        if (stop.load(std::memory_order_relaxed)) return;
         const std::span<Ray> r(chunk_buffers().rays.data(), n);
         bad += rays.gather(begin, r);
         backend.occluded(r, std::span(occluded + begin, n), coherence);
       });
     });
-  }
+  });
   invalid = bad;
   return out;
 }

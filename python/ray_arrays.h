@@ -118,7 +118,8 @@ void with_threads(int threads, const std::function<void()>& f);
 
 /// The closest hit of every ray through `backend` (built over `scene`), in chunks of
 /// kParallelChunk rays over TBB's threads (rp::for_each_chunk, as rp::intersect_parallel cuts a
-/// batch: the same backend calls, so the same bits), the GIL released; with `normals`, the
+/// batch: the same backend calls, so the same bits), the GIL released and, for a long call,
+/// stopped by Ctrl-C (python/interrupt.h); with `normals`, the
 /// geometric normals too. Returns the hits and sets `invalid` to the number of rays outside the
 /// valid-ray rule.
 HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArrays& rays, Coherence coherence,

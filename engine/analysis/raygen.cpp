@@ -88,6 +88,7 @@ RaySet diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const H
 }
 
 RaySet random_rays(const Scene& scene, size_t count, uint64_t seed) {
+  RP_CHECK(count <= kMaxRandomRays, "random rays: ", count, " is out of range (0..", kMaxRandomRays, ")");
   Box3f b = scene.bounds();
   if (b.empty()) b = Box3f(Vec3f{-1.0f}, Vec3f{1.0f});
   const Vec3f c = b.center();

@@ -38,7 +38,8 @@ constexpr TileBlock tile_block(int b) {
 /// or one framing its bounds), as the renderer orders them: 16x16-pixel tiles in row order,
 /// each in 4x2-pixel blocks in row order, so every 8 consecutive rays form a packet and every
 /// 256 a tile. Pixels past the right or bottom edge of a partial block are left out, so only
-/// images whose sides are multiples of 4 and 2 give whole packets throughout.
+/// images whose sides are multiples of 4 and 2 give whole packets throughout. Throws rp::Error
+/// for a size beyond check_image_size (engine/render/camera.h).
 RaySet primary_rays(const Scene& scene, int width, int height);
 
 /// From each hit of `primary` (hits[i] for primary.rays[i]): a shadow ray to the first point
@@ -50,8 +51,12 @@ RaySet shadow_rays(const Scene& scene, const RaySet& primary, std::span<const Hi
 /// geometric normal, from a seeded stream (the same seed gives the same rays).
 RaySet diffuse_rays(const Scene& scene, const RaySet& primary, std::span<const Hit> hits, uint64_t seed);
 
+/// The most rays random_rays makes in one call (as `raypack diff --count` takes): 2^28.
+inline constexpr size_t kMaxRandomRays = size_t(1) << 28;
+
 /// `count` rays from random points on the sphere around the scene's bounds (radius twice the
-/// bounding sphere's) towards random points inside the bounds, seeded.
+/// bounding sphere's) towards random points inside the bounds, seeded. Throws rp::Error for a
+/// count beyond kMaxRandomRays.
 RaySet random_rays(const Scene& scene, size_t count, uint64_t seed);
 
 }  // namespace rp

@@ -51,14 +51,24 @@ def test_bad_shapes_name_the_argument(scene):
         (lambda: raypack.Scene.from_arrays(np.zeros((3, 3)), [[0, 1, 2]], spheres=[[0, 0, 0]]),
          "spheres: shape (1, 3) is not (S, 4): centre x, y, z and radius"),
         (lambda: raypack.write_image("x.exr", np.zeros((4, 4))),
-         "image: shape (4, 4) is not (height, width, 3) with sides 1..32768"),
+         "image: shape (4, 4) is not (height, width, 3)"),
+        (lambda: raypack.write_image("x.exr", np.zeros((0, 4, 3))),
+         "image: shape (0, 4, 3): 4x0 is out of range (each side 1..32768, at most 268435456 pixels)"),
+        (lambda: raypack.write_image("x.exr", np.broadcast_to(np.float32(0), (40000, 1, 3))),
+         "image: shape (40000, 1, 3): 1x40000 is out of range (each side 1..32768, at most 268435456 pixels)"),
     ]
     for call, message in cases:
         assert message_of(call) == message
     with pytest.raises(TypeError, match="^origins: a str is not numbers numpy can make float32$"):
         backend.intersect("up", np.ones(3))
-    with pytest.raises(TypeError, match="^indices: a list is not numbers numpy can make int64$"):
+    with pytest.raises(TypeError, match="^indices: dtype <U1 is not an array of integers$"):
         raypack.Scene.from_arrays(np.eye(3), [["a", "b", "c"]])
+    # Indices are never truncated (2.9 is not vertex 2) nor wrapped (2^64-1 is not -1).
+    with pytest.raises(TypeError, match="^indices: dtype float64 is not an array of integers$"):
+        raypack.Scene.from_arrays(np.eye(3), [[0.0, 1.0, 2.9]])
+    assert message_of(lambda: raypack.Scene.from_arrays(np.eye(3), np.array([[0, 1, 2**64 - 1]], np.uint64))) == (
+        "indices: 18446744073709551615 (triangle 0) is not a vertex index")
+    assert raypack.Scene.from_arrays(np.eye(3), np.array([[0, 1, 2]], np.uint16)) is not None
 
 
 def test_bad_values_name_the_argument(scene):
@@ -68,9 +78,15 @@ def test_bad_values_name_the_argument(scene):
     assert message_of(lambda: backend.intersect(o, d, invalid="ignore")) == "invalid: 'ignore' is not warn, raise or miss"
     assert message_of(lambda: raypack.render(scene, sampler="halton")) == (
         "sampler: 'halton' is not uniform, random, stratified or adaptive")
-    assert message_of(lambda: raypack.render(scene, spp=0)) == "render: spp 0 must be >= 1"
+    # The command's limits: spp, the image size, and the rays primary_rays and random_rays make.
+    assert message_of(lambda: raypack.render(scene, spp=0)) == "spp: 0 is out of range (1..65536)"
+    assert message_of(lambda: raypack.render(scene, spp=2**31 - 1)) == "spp: 2147483647 is out of range (1..65536)"
     assert message_of(lambda: raypack.render(scene, width=0)) == (
-        "resolution: 0x768 is out of range (each side 1..32768, at most 2^28 pixels)")
+        "resolution: 0x768 is out of range (each side 1..32768, at most 268435456 pixels)")
+    assert message_of(lambda: raypack.primary_rays(scene, 2**31 - 1, 2**31 - 1)) == (
+        "camera: resolution: 2147483647x2147483647 is out of range (each side 1..32768, at most 268435456 pixels)")
+    assert message_of(lambda: raypack.random_rays(scene, 2**62)) == (
+        "random rays: 4611686018427387904 is out of range (0..268435456)")
     assert message_of(lambda: raypack.diff(scene, o, d, tie_tolerance=2)) == "tie_tolerance: 2 is outside [0, 1]"
     other = raypack.Backend("embree", raypack.load_scene("default"))
     assert message_of(lambda: raypack.render(scene, other, width=8, height=8)) == (
@@ -146,3 +162,70 @@ def test_read_image_refuses_special_files_before_reading(tmp_path):
                        (tmp_path / "folder.exr", "a directory")]:
         done = subprocess.run([sys.executable, "-c", child, str(path)], capture_output=True, text=True, timeout=60)
         assert done.stdout == f"{path}: cannot read: not a regular file ({kind})\n", done.stderr
+
+
+def test_long_calls_stop_at_ctrl_c():
+    """A SIGINT during a long occluded() or render() raises KeyboardInterrupt while the call
+    runs, not after it has finished. Each call is timed once whole, then interrupted a tenth of
+    the way in: the interrupt must arrive well before a whole call's time (a ratio within one
+    run of one child, not a time limit)."""
+    child = (
+        "import os, signal, threading, time\n"
+        "import numpy as np, raypack\n"
+        "s = raypack.load_scene('default')\n"
+        "b = raypack.Backend('embree', s)\n"
+        "n = 1 << 26\n"
+        "o = np.broadcast_to(np.float32([0, 3.4, 8.5]), (n, 3))\n"
+        "d = np.broadcast_to(np.float32([0, -0.27, -1]), (n, 3))\n"
+        "calls = {'occluded': lambda: b.occluded(o, d),\n"
+        "         'render': lambda: raypack.render(s, width=512, height=512, spp=32)}\n"
+        "for name, call in calls.items():\n"
+        "    t = time.monotonic(); call(); whole = time.monotonic() - t\n"
+        "    threading.Timer(whole / 10, lambda: os.kill(os.getpid(), signal.SIGINT)).start()\n"
+        "    t = time.monotonic()\n"
+        "    try:\n"
+        "        call()\n"
+        "        print(name, 'finished')\n"
+        "    except KeyboardInterrupt:\n"
+        "        print(name, round((time.monotonic() - t) / whole, 2))\n")
+    done = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.split("\n")[:2]
+    for line, name in zip(lines, ["occluded", "render"]):
+        got, fraction = line.split()
+        assert got == name and fraction != "finished" and float(fraction) < 0.6, done.stdout
+
+
+def test_write_image_on_a_full_disk_fails_and_keeps_the_old_file(tmp_path):
+    """Every write of the image writer is checked: past a file-size limit (what a full disk does
+    to a write, EFBIG for ENOSPC) write_image raises and the old file stays whole."""
+    for name in ["old.png", "old.exr", "old.tif"]:
+        (tmp_path / name).write_bytes(b"the old file")
+        child = ("import resource, signal, sys\nimport numpy as np, raypack\n"
+                 "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+                 "resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048))\n"
+                 "image = np.random.default_rng(1).random((256, 256, 3), np.float32)\n"
+                 "try:\n    raypack.write_image(sys.argv[1], image)\nexcept raypack.Error as e:\n    print(e)\n")
+        done = subprocess.run([sys.executable, "-c", child, str(tmp_path / name)], capture_output=True, text=True,
+                              timeout=120)
+        assert done.stdout == f"{tmp_path / name}: cannot write: File too large\n", done.stderr
+        assert (tmp_path / name).read_bytes() == b"the old file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.exr", "old.png", "old.tif"]
+
+
+def test_read_image_refuses_a_header_claiming_more_pixels_than_it_may(tmp_path):
+    """A few bytes of PNG can claim 50000x50000 pixels: the size is checked before memory is
+    asked for, with the limit every image has."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 50000, 50000, 8, 2, 0, 0, 0)) +
+           chunk(b"IDAT", zlib.compress(b"\0")) + chunk(b"IEND", b""))
+    (tmp_path / "huge.png").write_bytes(png)
+    assert len(png) < 100
+    assert message_of(lambda: raypack.read_image(tmp_path / "huge.png")) == (
+        f"cannot read '{tmp_path / 'huge.png'}': its size: 50000x50000 is out of range "
+        "(each side 1..32768, at most 268435456 pixels)")
