@@ -18,19 +18,20 @@
 #include <tbb/info.h>
 
 #include "backends/registry.h"
+#include "engine/analysis/diff.h"
+#include "engine/analysis/raygen.h"
+#include "engine/analysis/reference.h"
 #include "engine/cli/args.h"
 #include "engine/cli/build_info.h"
 #include "engine/cli/pareto.h"
 #include "engine/cli/plot.h"
-#include "engine/analysis/diff.h"
 #include "engine/error.h"
 #include "engine/input_file.h"
 #include "engine/json_text.h"
-#include "engine/output_file.h"
 #include "engine/loaders/load.h"
-#include "engine/analysis/raygen.h"
+#include "engine/ordered_json.h"
+#include "engine/output_file.h"
 #include "engine/rayfile.h"
-#include "engine/analysis/reference.h"
 #include "engine/text.h"
 
 namespace rp::cli {
@@ -491,7 +492,7 @@ std::vector<std::string> draw_charts(const std::string& json_path, const std::st
   check_json_depth(json_path, text);
   Json j;
   try {
-    j = Json::parse(text);
+    j = parse_ordered_json(text);
   } catch (const Json::exception& e) {
     throw Error(cat(json_path, ": not a raypack bench file: ", json_reason(e.what())));
   }

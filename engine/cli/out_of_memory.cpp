@@ -20,11 +20,9 @@ void* allocate(size_t n, size_t alignment) {
     void* p = alignment <= alignof(std::max_align_t) ? std::malloc(n)
                                                       : std::aligned_alloc(alignment, (n + alignment - 1) / alignment * alignment);
     if (p) return p;
+    g_failed_bytes.store(n, std::memory_order_relaxed);  // a handler may throw too
     std::new_handler handler = std::get_new_handler();
-    if (!handler) {
-      g_failed_bytes.store(n, std::memory_order_relaxed);
-      throw std::bad_alloc();
-    }
+    if (!handler) throw std::bad_alloc();
     handler();
   }
 }

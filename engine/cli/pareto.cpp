@@ -11,6 +11,7 @@
 #include "engine/error.h"
 #include "engine/input_file.h"
 #include "engine/json_text.h"
+#include "engine/ordered_json.h"
 
 namespace rp::cli {
 
@@ -30,7 +31,7 @@ std::map<std::string, HardFailures> read_hard_failures(const std::string& path) 
   check_json_depth(path, text);
   std::map<std::string, HardFailures> out;
   try {
-    const Json j = Json::parse(text);
+    const Json j = parse_ordered_json(text);
     if (!(j.is_object() && j.contains("results") && j["results"].is_array()))
       throw Error(cat(path, ": not a raypack stability file (no \"results\")"));
     for (const Json& r : j["results"]) {

@@ -132,6 +132,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -139,6 +140,8 @@
 #include "engine/input_file.h"
 #include "engine/json_text.h"
 #include "engine/loaders/load.h"
+#include "engine/memory_reserve.h"
+#include "engine/ordered_json.h"
 #include "engine/text.h"
 
 namespace rp {
@@ -172,12 +175,16 @@ std::string member(const std::string& path, std::string_view key) {
 
 std::string element(const std::string& path, size_t i) { return cat(path, "[", i, "]"); }
 
+/// The names, comma-separated; past kShownNames of them, "and N more" (a message stays one
+/// readable line whatever the file declares).
+constexpr size_t kShownNames = 12;
 std::string join(std::span<const std::string_view> names) {
   std::string out;
-  for (std::string_view n : names) {
+  for (size_t i = 0; i < names.size() && i < kShownNames; ++i) {
     if (!out.empty()) out += ", ";
-    out += n;
+    out += names[i];
   }
+  if (names.size() > kShownNames) out += cat(" and ", names.size() - kShownNames, " more");
   return out;
 }
 
@@ -421,6 +428,7 @@ class SceneReader {
       uint32_t id = 0;
       add(mp, [&] { id = scene_.add_material(std::move(m)); });
       materials_.emplace_back(name, id);
+      material_ids_.emplace(name, id);
     }
   }
 
@@ -430,8 +438,7 @@ class SceneReader {
     if (v == nullptr) return 0;
     const std::string mp = member(path, "material");
     const std::string name = string(*v, mp);
-    for (const auto& [n, id] : materials_)
-      if (n == name) return id;
+    if (const auto it = material_ids_.find(name); it != material_ids_.end()) return it->second;
     std::vector<std::string_view> names;
     for (const auto& entry : materials_) names.push_back(entry.first);
     fail(mp, cat("unknown material ", show(*v), " (",
@@ -732,6 +739,7 @@ class SceneReader {
       const std::string mp = member(path, name);
       object(value, mp);
       check_keys(value, mp, kDeclaredMeshKeys);
+      declared_ids_.emplace(name, declared_.size());
       declared_.push_back({name, mp, mesh_file(value, mp), {}});
     }
   }
@@ -741,14 +749,14 @@ class SceneReader {
     const std::string mp = member(path, "mesh");
     const Json& name_value = require(v, path, "mesh");
     const std::string name = string(name_value, mp);
-    const auto it = std::find_if(declared_.begin(), declared_.end(), [&](const DeclaredMesh& d) { return d.name == name; });
-    if (it == declared_.end()) {
+    const auto it = declared_ids_.find(name);
+    if (it == declared_ids_.end()) {
       std::vector<std::string_view> names;
       for (const DeclaredMesh& d : declared_) names.push_back(d.name);
       fail(mp, cat("unknown mesh ", show(name_value), " (",
                    names.empty() ? std::string("no meshes are declared") : "meshes: " + join(names), ")"));
     }
-    it->placements.emplace_back(transform_of(v, path), path);
+    declared_[it->second].placements.emplace_back(transform_of(v, path), path);
   }
 
   /// Each declared mesh: baked where one object places it, stored once and instanced where
@@ -776,7 +784,9 @@ class SceneReader {
   std::string file_, dir_;
   Scene& scene_;
   std::vector<std::pair<std::string, uint32_t>> materials_;  ///< name, id; in file order
+  std::unordered_map<std::string, uint32_t> material_ids_;   ///< name -> id, for look-ups
   std::vector<DeclaredMesh> declared_;                       ///< "meshes", in file order
+  std::unordered_map<std::string, size_t> declared_ids_;     ///< name -> place in declared_
 };
 
 }  // namespace
@@ -784,9 +794,10 @@ class SceneReader {
 void load_json_scene(const std::string& path, Scene& scene) {
   const std::string text = read_file(path);
   check_json_depth(path, text);  // messages print values recursively: the depth is bounded first
+  const MemoryReserve reserve(json_unwind_reserve(text.size()));  // outlives root: see memory_reserve.h
   Json root;
   try {
-    root = Json::parse(text, nullptr, true, /*ignore_comments=*/false);
+    root = parse_ordered_json(text);
   } catch (const Json::parse_error& e) {
     const TextPosition at = position_of(text, e.byte);
     throw Error(cat(path, ": line ", at.line, ", column ", at.column, ": ", json_reason(e.what())));

@@ -689,8 +689,6 @@ TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
 }
 
-}  // namespace
-
 /// A bench file with one result, enough for `raypack chart` to draw both charts.
 void write_small_bench_json(const fs::path& p) {
   std::ofstream(p) << R"({"machine": {"cpu": "test", "threads": 1, "date": "today"}, "scenes": [{"scene": "default",
@@ -827,3 +825,36 @@ TEST_F(Cli, EveryOutputIsCheckedBeforeAnyWork) {
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().rfind(".raypack-", 0), std::string::npos) << "left " << e.path();
 }
+
+TEST_F(Cli, RunningOutOfMemoryWhileLoadingIsAlwaysTheOneLineMessage) {
+  if (rp::test::kSanitized)
+    GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
+  // A JSON scene of 300,000 instances: under address-space limits from too small to enough,
+  // every run either loads or fails with the one-line message (never std::terminate's abort,
+  // once a failed allocation unwound into nlohmann::json's noexcept destructor).
+  std::ofstream(dir_ / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  {
+    std::ofstream out(dir_ / "many.json");
+    out << R"({"meshes": {"tri": {"file": "tri.obj"}}, "objects": [)";
+    for (int i = 0; i < 300000; ++i) out << (i ? "," : "") << R"({"type": "instance", "mesh": "tri"})";
+    out << "]}";
+  }
+  int loaded = 0, refused = 0;
+  for (int mib = 500; mib <= 1400; mib += 60) {
+    const Result r =
+        run("info --no-backends " + (dir_ / "many.json").string(), "ulimit -v " + std::to_string(mib * 1024) + "; ");
+    if (r.status == 0) {
+      ++loaded;
+      continue;
+    }
+    ++refused;
+    EXPECT_EQ(r.status, 1) << mib << " MiB: " << r.output;
+    EXPECT_EQ(r.output.rfind("raypack: ", 0), 0u) << mib << " MiB: " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << mib << " MiB: " << r.output;
+    EXPECT_NE(r.output.find("out of memory"), std::string::npos) << mib << " MiB: " << r.output;
+  }
+  EXPECT_GT(refused, 0) << "no limit was small enough to matter";
+  EXPECT_GT(loaded, 0) << "no limit was large enough to load";
+}
+
+}  // namespace

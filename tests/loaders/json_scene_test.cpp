@@ -6,16 +6,20 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "engine/error.h"
 #include "engine/loaders/load.h"
+#include "engine/ordered_json.h"
+#include "engine/text.h"
 #include "scratch.h"
 #include "tests/support/build_paths.h"
 
@@ -643,6 +647,104 @@ TEST(JsonSceneErrors, MeshFileProblemsCarryTheLoadersMessage) {
   write_file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
   EXPECT_EQ(json_error(with_object(R"({"type": "mesh", "file": "bad.obj"})")),
             "scene.json: $.objects[0].file: bad.obj: line 4: vertex index 9 is past the file's 3 vertices");
+}
+
+}  // namespace
+}  // namespace rp
+
+namespace rp {
+namespace {
+
+/// Random JSON text: nested objects and arrays, keys drawn from a few so that they repeat.
+std::string random_json(std::mt19937& rng, int depth) {
+  const int kind = int(rng() % (depth > 3 ? 4 : 6));
+  switch (kind) {
+    case 0:
+      return std::to_string(int(rng() % 2000) - 1000);
+    case 1:
+      return std::to_string(double(rng() % 100000) / 7.0);
+    case 2:
+      return "\"s" + std::to_string(rng() % 5) + "\\u00e9\"";
+    case 3:
+      return rng() % 2 ? "true" : "null";
+    case 4: {
+      std::string a = "[";
+      for (int i = 0, n = int(rng() % 5); i < n; ++i) a += (i ? "," : "") + random_json(rng, depth + 1);
+      return a + "]";
+    }
+    default: {
+      std::string o = "{";
+      for (int i = 0, n = int(rng() % 6); i < n; ++i)
+        o += (i ? ",\"k" : "\"k") + std::to_string(rng() % 4) + "\":" + random_json(rng, depth + 1);
+      return o + "}";
+    }
+  }
+}
+
+TEST(OrderedJson, GivesNlohmannsDocumentAndErrors) {
+  // The linear-time parse against nlohmann's own: the same keys in the same order (a repeated
+  // key in its first place with its last value), the same values, the same error offsets.
+  std::mt19937 rng(7);
+  for (int i = 0; i < 2000; ++i) {
+    const std::string text = random_json(rng, 0);
+    const nlohmann::ordered_json want = nlohmann::ordered_json::parse(text);
+    const nlohmann::ordered_json got = parse_ordered_json(text);
+    ASSERT_EQ(got.dump(), want.dump()) << text;
+  }
+  for (const std::string bad :
+       {"", "{", "{\"a\":1,}", "[1 2]", "{\"a\" 1}", "1 2", "/* c */ 1", "[1e999]", "\"\\x\""}) {
+    size_t want = 0, got = 0;
+    std::string want_what, got_what;
+    try {
+      const nlohmann::ordered_json doc = nlohmann::ordered_json::parse(bad);
+      ADD_FAILURE() << bad << " parsed as " << doc.dump();
+    } catch (const nlohmann::ordered_json::exception& e) {
+      want_what = e.what();
+      if (const auto* p = dynamic_cast<const nlohmann::ordered_json::parse_error*>(&e)) want = p->byte;
+    }
+    try {
+      const nlohmann::ordered_json doc = parse_ordered_json(bad);
+      ADD_FAILURE() << bad << " parsed as " << doc.dump();
+    } catch (const nlohmann::ordered_json::exception& e) {
+      got_what = e.what();
+      if (const auto* p = dynamic_cast<const nlohmann::ordered_json::parse_error*>(&e)) got = p->byte;
+    }
+    EXPECT_FALSE(want_what.empty()) << bad;
+    EXPECT_EQ(got_what, want_what) << bad;
+    EXPECT_EQ(got, want) << bad;
+  }
+}
+
+/// A scene of n materials and n meshes placed once each, and the seconds its load takes (the
+/// median of three).
+double load_seconds_of_names(size_t n) {
+  std::string text = "{\"materials\": {";
+  for (size_t i = 0; i < n; ++i) text += cat(i ? ", " : "", "\"m", i, "\": {}");
+  text += "}, \"meshes\": {";
+  for (size_t i = 0; i < n; ++i) text += cat(i ? ", " : "", "\"k", i, "\": {\"file\": \"tri.obj\"}");
+  text += "}, \"objects\": [";
+  for (size_t i = 0; i < n; ++i) text += cat(i ? ", " : "", "{\"type\": \"instance\", \"mesh\": \"k", i, "\"}");
+  text += cat(", {\"type\": \"sphere\", \"material\": \"m", n - 1, "\"}]}");
+  test::write_file("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string path = test::write_file(cat("names-", n, ".json"), text);
+  std::vector<double> seconds;
+  for (int run = 0; run < 3; ++run) {
+    const auto start = std::chrono::steady_clock::now();
+    const Scene scene = load_scene(path);
+    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    EXPECT_EQ(scene.materials().size(), n + 1);
+    EXPECT_EQ(scene.materials().back().name, cat("m", n - 1)) << "ids follow the file's order";
+  }
+  std::sort(seconds.begin(), seconds.end());
+  return seconds[1];
+}
+
+TEST(JsonScene, LoadingTimeGrowsLinearlyWithTheNamesAFileDeclares) {
+  // A complexity check, not a speed limit: four times the names must take well under the 16
+  // times a quadratic step gives (materials and meshes looked up by name, keys inserted into
+  // ordered objects); the two sizes are timed in one run of one process.
+  const double small = load_seconds_of_names(10000), large = load_seconds_of_names(40000);
+  EXPECT_LT(large / small, 8.0) << "10000 names: " << small << " s, 40000 names: " << large << " s";
 }
 
 }  // namespace
