@@ -3,14 +3,15 @@
 ///
 /// - the default scene (`scene`), or the first when there is none; its node hierarchy walked
 ///   from its roots, each node's transform its `matrix` (column-major, which must be affine)
-///   or T * R * S from `translation`, `rotation` (a unit quaternion x, y, z, w; normalised on
-///   reading) and `scale`, composed parent * child in double;
+///   or T * R * S from `translation`, `rotation` (a unit quaternion x, y, z, w: its length
+///   within 0.00769 of 1, glTF-Validator's tolerance, and normalised on reading) and `scale`,
+///   composed parent * child in double;
 /// - meshes: every triangle primitive (mode 4, and strips 5 and fans 6 turned into triangles;
-///   indexed or not, indices of any unsigned type) of a glTF mesh becomes part of one
-///   TriangleMesh, a primitive's material on its triangles; NORMAL kept when every primitive of
-///   the mesh has it. A mesh one node places is baked into world coordinates; a mesh several
-///   nodes place is stored once in its own coordinates and each node is an instance
-///   (Scene::add_instance);
+///   indexed or not, indices of an unsigned integer type: componentType 5121, 5123 or 5125) of
+///   a glTF mesh becomes part of one TriangleMesh, a primitive's material on its triangles;
+///   NORMAL kept when every primitive of the mesh has it. A mesh one node places is baked into
+///   world coordinates; a mesh several nodes place is stored once in its own coordinates and
+///   each node is an instance (Scene::add_instance);
 /// - the first camera met in that walk, when perspective: eye, look-at one unit down its -Z,
 ///   up its +Y, `yfov` as the vertical field of view (the image's aspect replaces
 ///   `aspectRatio`; `znear`, `zfar` are not used);
@@ -23,25 +24,57 @@
 ///   KHR_materials_emissive_strength) to emission, baseColorFactor's alpha to opacity when
 ///   alphaMode is "BLEND". Not used: textures of every kind, metallic and roughness, normal and
 ///   occlusion maps, alpha masks, doubleSided (raypack's surfaces are seen from both sides),
-///   every other material extension; images are neither decoded nor opened.
+///   every other material extension; images are neither decoded nor opened;
+/// - external buffers only from the glTF's folder and below: a buffer's URI, %-decoded as
+///   tinygltf decodes it, is a relative path that must stay inside that folder both as written
+///   ("../x.bin", "..%2Fx.bin" and "/etc/x" are refused, "sub/../x.bin" is read) and with every
+///   symbolic link followed (realpath(3) against the folder's canonical path: a link inside the
+///   folder to a file outside it is refused, one to a file inside it is read).
 ///
-/// Refused with one line naming the file and the JSON path: sparse accessors, Draco-compressed
-/// primitives without an uncompressed fallback, accessors whose elements do not fit their
-/// bufferView and buffer (bad offsets, strides, absurd counts: checked before anything is
-/// allocated for them), indices out of range, positions that are not 3 floats or lie outside
-/// the coordinate range, node cycles and nodes with two parents, non-affine matrices, missing
-/// or unreadable buffers (a device, a directory: engine/input_file.h's rule), required
-/// extensions that change geometry (Draco, meshopt, mesh quantization, GPU instancing), and
-/// whatever tinygltf refuses (its first line). Warned about and skipped: points and lines,
-/// primitives without positions, nodes whose transform is singular, a camera or light that
-/// cannot be used. Size limits: the file itself and each external buffer at most kMaxGltfBytes
-/// (a .glb below 4 GiB, tinygltf's own limit), JSON nested at most 64 levels (checked before
-/// parsing, as every JSON reader of raypack).
+/// Refused with one line naming the file and the JSON path, first by the JSON check before
+/// tinygltf reads the JSON (check_gltf_json, engine/loaders/gltf_check.h, lists each): values
+/// of the sections raypack uses that have the wrong type or lie outside glTF's range (indices
+/// naming nothing, negative offsets, counts or lengths of 0, non-numbers in a transform,
+/// factors outside [0, 1], a rotation that is not a unit quaternion, an unknown componentType,
+/// accessor, camera or light type, a required property missing), since
+/// tinygltf turns most of them into defaults without a word; buffer URIs leading out of the
+/// glTF's folder; and objects that would take tinygltf far more memory than the file (below).
+/// Then: Draco-compressed primitives without an uncompressed fallback, sparse accessors that
+/// a primitive reads (sparse ones it does not read, a morph target's, are left alone), accessors whose
+/// elements do not fit their bufferView and buffer (bad offsets, strides, absurd counts:
+/// checked before anything is allocated for them), indices that name no vertex or are not of
+/// an unsigned integer type, positions that are not 3 floats or lie outside the coordinate
+/// range, node cycles and nodes with two parents, non-affine matrices, buffers missing or
+/// unreadable (a device, a directory: engine/input_file.h's rule) or of another size than
+/// their byteLength, required extensions that change geometry (Draco, meshopt, mesh
+/// quantization, GPU instancing), an empty file or a truncated GLB, and whatever tinygltf
+/// still refuses (its first line). Warned about and skipped: points and lines, primitives
+/// without positions, nodes whose transform is singular, a camera or light that cannot be
+/// used; the warnings of one kind are one line, with how many more there were. Size limits:
+/// the file itself and each external buffer at most kMaxGltfBytes (a .glb below 4 GiB,
+/// tinygltf's own limit), JSON nested at most 64 levels (checked before parsing, as every JSON
+/// reader of raypack).
+///
+/// Memory: tinygltf builds every object the JSON lists, each far larger than its text (a
+/// tinygltf::Node is 456 bytes, a Material 2,144, where "{}," is 3 bytes of JSON), after its
+/// own JSON DOM. So before tinygltf parses, what it would take is estimated: 12 bytes per byte
+/// of JSON for the DOM (nlohmann-json's: 7 to 13 on glTF files, up to 28 on empty objects)
+/// plus, for each kind of object, its count times the size of its tinygltf type (every JSON
+/// value under "extras" or "extensions" a tinygltf::Value). A file is refused when that
+/// exceeds both 256 MiB and 32 bytes per byte of input (the file and each external buffer's
+/// byteLength, so that a GLB's BIN chunk or a large .bin gives its objects room): 32 is the
+/// DOM's 12 plus room for objects of any ordinary size (a named node with a transform
+/// takes about 4 bytes per byte of its JSON, a named material about 18), which a file of bare
+/// "{}" objects or a few bytes each exceeds many times. Not counted: raypack's own DOM of the
+/// JSON, the buffers' bytes, and what the Scene takes.
+///
+/// Over 600 lines: the tinygltf glue (file callbacks, GLB chunks, tinygltf's messages) and the
+/// mapping onto the Scene are one load's steps sharing its messages; the JSON check before them
+/// is engine/loaders/gltf_check.cpp.
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -56,6 +89,8 @@
 #include "engine/error.h"
 #include "engine/input_file.h"
 #include "engine/json_text.h"
+#include "engine/loaders/gltf_check.h"
+#include "engine/memory_reserve.h"
 #include "engine/loaders/load.h"
 #include "engine/loaders/tinygltf_config.h"
 #include "engine/text.h"
@@ -63,46 +98,54 @@
 namespace rp {
 namespace {
 
-/// The most bytes of a glTF file, and of each external buffer it names: 2 GiB.
-constexpr uint64_t kMaxGltfBytes = uint64_t(2) << 30;
-
-/// A string from the file, quoted (cut and made printable by rp::printable).
-std::string in_quotes(std::string_view text) { return cat("\"", printable(text), "\""); }
-
-/// What the file-system callbacks give tinygltf: the glTF file's folder, and the first
-/// failure, so that it can be reported with the buffer's JSON path.
+/// What the file-system callbacks give tinygltf: the external buffers the JSON check found
+/// inside the glTF's folder, and the first failure, reported with its buffer's JSON path.
 struct FileAccess {
-  std::string base_dir;  ///< with a trailing '/', or empty for the current folder
-  std::string failed_path;
+  std::vector<GltfBufferFile> buffers;
+  size_t next = 0;  ///< the first not yet read: tinygltf reads the buffers in order
+  std::optional<size_t> failed;
   std::string failure;
 };
 
-/// tinygltf asks whether a candidate path exists before reading it (the glTF's folder joined
-/// with the URI, then "./" joined with it): only the first is raypack's answer, so a buffer is
-/// never looked for in the current folder; ReadWholeFile opens it and says what is wrong.
+/// tinygltf asks whether a candidate path exists before reading it (its base folder joined
+/// with the URI, then "./" joined with it): only a path the JSON check resolved is raypack's
+/// answer, so no other file is ever looked for or opened.
 bool file_exists(const std::string& path, void* user) {
   const FileAccess& a = *static_cast<const FileAccess*>(user);
-  return a.base_dir.empty() ? true : path.rfind(a.base_dir, 0) == 0;
+  return std::any_of(a.buffers.begin() + ptrdiff_t(a.next), a.buffers.end(),
+                     [&](const GltfBufferFile& b) { return b.path == path; });
 }
 
 /// No expansion (tinygltf's own runs wordexp on the path).
 std::string expand_path(const std::string& path, void*) { return path; }
 
 /// Reads an external buffer by raypack's input rule: a regular file (not a device, FIFO or
-/// directory) of at most kMaxGltfBytes, its size known before anything is allocated.
+/// directory) of at most kMaxGltfBytes, exactly its byteLength, its size known before anything
+/// is allocated.
 bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
   FileAccess& a = *static_cast<FileAccess*>(user);
+  const auto it = std::find_if(a.buffers.begin() + ptrdiff_t(a.next), a.buffers.end(),
+                               [&](const GltfBufferFile& b) { return b.path == path; });
+  if (it == a.buffers.end()) {
+    if (err) *err += cat(path, ": not a buffer the glTF names");
+    return false;
+  }
+  a.next = size_t(it - a.buffers.begin()) + 1;
   try {
     uint64_t size = 0;
-    const int fd = open_regular_file(path, size);
+    const std::string& file = it->file;
+    const int fd = open_regular_file(file, size);
     ::close(fd);
-    if (size > kMaxGltfBytes) throw Error(cat(path, ": ", size, " bytes, more than the ", kMaxGltfBytes, " a buffer may have"));
-    const std::string bytes = read_file(path);
+    if (size > kMaxGltfBytes)
+      throw Error(cat(file, ": ", size, " bytes, more than the ", kMaxGltfBytes, " a buffer may have"));
+    if (size != it->byte_length)
+      throw Error(cat(file, ": ", size, " bytes, not the ", it->byte_length, " its byteLength says"));
+    const std::string bytes = read_file(file);
     out->assign(bytes.begin(), bytes.end());
     return true;
   } catch (const Error& e) {
-    if (a.failure.empty()) {
-      a.failed_path = path;
+    if (!a.failed) {
+      a.failed = size_t(it - a.buffers.begin());
       a.failure = e.what();
     }
     if (err) *err += e.what();
@@ -120,12 +163,19 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
-/// The JSON text of a GLB (its first chunk), after checking the 12-byte header and every chunk
-/// against the file's size: each chunk's 8-byte header and the length it claims inside the
-/// file, the second chunk (when there is one) BIN, the last ending where the file does.
-/// tinygltf 2.7 checks the BIN chunk's length without its header and would copy up to 8 bytes
-/// past the file. Throws one line naming the file for a truncated or malformed one.
-std::string_view glb_json(const std::string& path, std::string_view bytes) {
+/// A GLB's JSON text (its first chunk) and the bytes of its BIN chunk (the second, when
+/// there is one).
+struct GlbChunks {
+  std::string_view json;
+  std::optional<uint64_t> bin_bytes;
+};
+
+/// The chunks of a GLB, after checking the 12-byte header and every chunk against the file's
+/// size: each chunk's 8-byte header and the length it claims inside the file, the second chunk
+/// (when there is one) BIN, the last ending where the file does. tinygltf 2.7 checks the BIN
+/// chunk's length without its header and would copy up to 8 bytes past the file. Throws one
+/// line naming the file for a truncated or malformed one.
+GlbChunks glb_chunks(const std::string& path, std::string_view bytes) {
   const auto u32 = [&](size_t at) {
     uint32_t v;
     std::memcpy(&v, bytes.data() + at, 4);
@@ -133,6 +183,7 @@ std::string_view glb_json(const std::string& path, std::string_view bytes) {
   };
   if (bytes.size() < 20)
     throw Error(cat(path, ": truncated GLB: ", bytes.size(), " bytes, its headers need 20"));
+  if (bytes.substr(0, 4) != "glTF") throw Error(cat(path, ": not a GLB: its first 4 bytes are not \"glTF\""));
   if (u32(4) != 2) throw Error(cat(path, ": GLB version ", u32(4), " (2 is read)"));
   if (u32(8) != bytes.size())
     throw Error(cat(path, ": ", u32(8) < bytes.size() ? "GLB with trailing bytes" : "truncated GLB", ": the header says ",
@@ -141,51 +192,33 @@ std::string_view glb_json(const std::string& path, std::string_view bytes) {
   if (u32(16) != 0x4E4F534Au) throw Error(cat(path, ": GLB whose first chunk is not JSON"));
   if (20 + json_bytes > bytes.size())
     throw Error(cat(path, ": truncated GLB: its JSON chunk says ", json_bytes, " bytes, ", bytes.size() - 20, " follow"));
+  GlbChunks out{bytes.substr(20, size_t(json_bytes)), std::nullopt};
   for (uint64_t at = 20 + json_bytes; at < bytes.size();) {
     const uint64_t left = bytes.size() - at;
     if (left < 8)
       throw Error(cat(path, ": truncated GLB: the chunk at byte ", at, " has ", left, " of its 8 header bytes"));
     const bool second = at == 20 + json_bytes;
     if (second && u32(at + 4) != 0x004E4942u)
-      throw Error(cat(path, ": GLB whose second chunk is of type ", in_quotes(bytes.substr(at + 4, 4)), ", not BIN"));
+      throw Error(cat(path, ": GLB whose second chunk is of type ", gltf_quoted(bytes.substr(at + 4, 4)), ", not BIN"));
     const uint64_t length = u32(at);
     if (length > left - 8)
       throw Error(cat(path, ": truncated GLB: its ", second ? std::string("BIN chunk") : cat("chunk at byte ", at),
                       " says ", length, " bytes, ", left - 8, " follow"));
+    if (second) out.bin_bytes = length;
     at += 8 + length;
-  }
-  return bytes.substr(20, size_t(json_bytes));
-}
-
-/// `uri` with its %XX escapes decoded, as tinygltf decodes a buffer's URI before opening it.
-std::string percent_decoded(const std::string& uri) {
-  std::string out;
-  for (size_t i = 0; i < uri.size(); ++i) {
-    const auto hex = [&](size_t k) { return k < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[k])); };
-    if (uri[i] == '%' && hex(i + 1) && hex(i + 2)) {
-      out += char(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-      i += 2;
-    } else {
-      out += uri[i];
-    }
   }
   return out;
 }
 
-/// "$.buffers[i].uri" for the external buffer whose file is `file` (found in the JSON text by
-/// its URI, for the message of a buffer that could not be read), or "$.buffers".
-std::string buffer_path(std::string_view json, const std::string& base_dir, const std::string& file) {
-  const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
-  if (doc.is_object() && doc.contains("buffers") && doc["buffers"].is_array()) {
-    const nlohmann::json& buffers = doc["buffers"];
-    for (size_t i = 0; i < buffers.size(); ++i)
-      if (buffers[i].is_object() && buffers[i].contains("uri") && buffers[i]["uri"].is_string()) {
-        const std::string uri = buffers[i]["uri"].get<std::string>();
-        if (file == base_dir + uri || file == base_dir + percent_decoded(uri))
-          return cat("$.buffers[", i, "].uri: ", in_quotes(uri));
-      }
+/// Digits grouped by thousands: 1,599.
+std::string grouped(uint64_t n) {
+  const std::string digits = std::to_string(n);
+  std::string out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
   }
-  return "$.buffers";
+  return out;
 }
 
 /// The first line of a message tinygltf built of several.
@@ -231,27 +264,88 @@ class GltfReader {
       : file_(file), m_(model), scene_(scene), materials_(model.materials.size(), kInvalidId) {}
 
   void read() {
+    try {
+      read_scene();
+    } catch (...) {
+      print_warnings();
+      throw;
+    }
+    print_warnings();
+  }
+
+ private:
+  void read_scene() {
     check_required_extensions();
     if (m_.scenes.empty()) fail("$.scenes", "the file has no scene");
-    const int s = m_.defaultScene >= 0 ? m_.defaultScene : 0;
-    if (size_t(s) >= m_.scenes.size()) fail("$.scene", cat(s, " names no scene (", m_.scenes.size(), " scenes)"));
-    walk(s);
+    walk(m_.defaultScene >= 0 ? m_.defaultScene : 0);
     std::vector<MeshUse> uses(m_.meshes.size());
     for (const Placed& p : placed_) uses[size_t(p.mesh)].placements.emplace_back(p.to_world, p.node);
     for (size_t i = 0; i < uses.size(); ++i)
       if (!uses[i].placements.empty()) place_mesh(int(i), uses[i]);
   }
 
- private:
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
     throw Error(cat(file_, ": ", path, ": ", what));
   }
-  void warning(const std::string& path, const std::string& what) const { warn(cat(file_, ": ", path, ": ", what)); }
+
+  /// What check_gltf_json made true of the value at `path` (an index names an element, a
+  /// value lies in glTF's range): the reader relies on it to stay in bounds, so a breach, a bug
+  /// in raypack, is refused rather than read past.
+  void guaranteed(bool holds, const std::string& path) const {
+    RP_CHECK(holds, file_, ": ", path, ": not as the JSON check left it (a bug in raypack)");
+  }
+
+  /// Element i of section `v` of the model, the index at `path`.
+  template <class T>
+  const T& at(const std::vector<T>& v, int i, const std::string& path) const {
+    guaranteed(i >= 0 && size_t(i) < v.size(), path);
+    return v[size_t(i)];
+  }
+
+  /// A warning kept until the end of read(): the first of its kind (the same words at a path
+  /// differing only in its indices) with how many more there were, so that 2,000 nodes with
+  /// the same fault give one line, not 2,000.
+  struct Warning {
+    std::string path, what;
+    size_t more = 0;
+  };
+  void warning(const std::string& path, const std::string& what) {
+    const auto kind = [](const std::string& p) {
+      std::string k;
+      for (char c : p)
+        if (!std::isdigit(static_cast<unsigned char>(c))) k += c;
+      return k;
+    };
+    for (Warning& w : warnings_)
+      if (w.what == what && kind(w.path) == kind(path)) {
+        ++w.more;
+        return;
+      }
+    warnings_.push_back({path, what, 0});
+  }
+  /// Prints the warnings kept, each once: "(and 1,599 more nodes like it)" after the first of a
+  /// kind, the elements named as the last array of its path.
+  void print_warnings() {
+    for (const Warning& w : warnings_) {
+      std::string more;
+      if (w.more > 0) {
+        // The elements are named by the path's last array: "$.nodes[7]" -> "nodes".
+        const size_t open = w.path.rfind('[');
+        size_t start = open == std::string::npos ? 0 : open;
+        while (start > 0 && w.path[start - 1] != '.') --start;
+        const std::string noun =
+            open == std::string::npos ? std::string("elements") : w.path.substr(start, open - start);
+        more = cat(" (and ", grouped(w.more), " more ", noun, " like it)");
+      }
+      warn(cat(file_, ": ", w.path, ": ", w.what, more));
+    }
+    warnings_.clear();
+  }
 
   /// Extensions the file requires that change what its geometry is: refused, as the geometry
   /// would be wrong without them. Other required extensions (textures, materials) are warned
   /// about: raypack does not use what they change.
-  void check_required_extensions() const {
+  void check_required_extensions() {
     static constexpr std::string_view kGeometry[] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression",
                                                      "KHR_mesh_quantization", "EXT_mesh_gpu_instancing"};
     static constexpr std::string_view kUsed[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength"};
@@ -259,9 +353,9 @@ class GltfReader {
       const std::string& e = m_.extensionsRequired[i];
       const std::string path = cat("$.extensionsRequired[", i, "]");
       if (std::find(std::begin(kGeometry), std::end(kGeometry), e) != std::end(kGeometry))
-        fail(path, cat(in_quotes(e), " is not supported (its geometry cannot be read without it)"));
+        fail(path, cat(gltf_quoted(e), " is not supported (its geometry cannot be read without it)"));
       if (std::find(std::begin(kUsed), std::end(kUsed), e) == std::end(kUsed))
-        warning(path, cat(in_quotes(e), " is not supported; what it changes is not used"));
+        warning(path, cat(gltf_quoted(e), " is not supported; what it changes is not used"));
     }
   }
 
@@ -272,34 +366,25 @@ class GltfReader {
     Matrix to_world;
   };
 
-  /// The local transform of node n.
+  /// The local transform of node n (its numbers checked by check_gltf_json: as many as glTF
+  /// says, finite, the rotation a unit quaternion within its tolerance, made exactly one
+  /// here).
   Matrix local(int n) const {
     const tinygltf::Node& node = m_.nodes[size_t(n)];
-    const std::string path = cat("$.nodes[", n, "]");
-    const auto finite = [&](const std::vector<double>& v, const char* key) {
-      for (double x : v)
-        if (!std::isfinite(x)) fail(cat(path, ".", key), "holds a value that is not a finite number");
-    };
     if (!node.matrix.empty()) {
-      if (node.matrix.size() != 16) fail(path + ".matrix", cat(node.matrix.size(), " numbers, not 16"));
-      finite(node.matrix, "matrix");
       const std::optional<Matrix> a = affine_of(node.matrix);
-      if (!a) fail(path + ".matrix", "not an affine transform (its last row is not 0 0 0 1)");
+      if (!a) fail(cat("$.nodes[", n, "].matrix"), "not an affine transform (its last row is not 0 0 0 1)");
       return *a;
     }
     std::array<double, 3> t{0, 0, 0}, s{1, 1, 1};
     std::array<double, 4> q{0, 0, 0, 1};
-    const auto take = [&](const std::vector<double>& v, const char* key, auto& out) {
-      if (v.empty()) return;
-      if (v.size() != out.size()) fail(cat(path, ".", key), cat(v.size(), " numbers, not ", out.size()));
-      finite(v, key);
-      std::copy(v.begin(), v.end(), out.begin());
+    const auto take = [](const std::vector<double>& v, auto& out) {
+      if (v.size() == out.size()) std::copy(v.begin(), v.end(), out.begin());
     };
-    take(node.translation, "translation", t);
-    take(node.rotation, "rotation", q);
-    take(node.scale, "scale", s);
+    take(node.translation, t);
+    take(node.rotation, q);
+    take(node.scale, s);
     const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(len > 0.0)) fail(path + ".rotation", "a zero quaternion is no rotation");
     for (double& c : q) c /= len;
     return trs(t, q, s);
   }
@@ -307,7 +392,7 @@ class GltfReader {
   /// Walks scene s from its roots: every node once (a node met again is in a cycle or has two
   /// parents, which glTF forbids), depth-first without recursion.
   void walk(int s) {
-    const tinygltf::Scene& scene = m_.scenes[size_t(s)];
+    const tinygltf::Scene& scene = at(m_.scenes, s, "$.scene");
     std::vector<uint8_t> state(m_.nodes.size(), 0);  // 0 unseen, 1 on the current path, 2 done
     struct Frame {
       int node;
@@ -316,7 +401,7 @@ class GltfReader {
     };
     std::vector<Frame> stack;
     const auto enter = [&](int n, const Matrix& parent, const std::string& path) {
-      if (n < 0 || size_t(n) >= m_.nodes.size()) fail(path, cat(n, " names no node (", m_.nodes.size(), " nodes)"));
+      at(m_.nodes, n, path);
       if (state[size_t(n)] == 1) fail(path, cat("node ", n, " is its own ancestor (a cycle)"));
       if (state[size_t(n)] == 2) fail(path, cat("node ", n, " is reached twice (a node may have one parent only)"));
       state[size_t(n)] = 1;
@@ -346,8 +431,7 @@ class GltfReader {
     const tinygltf::Node& node = m_.nodes[size_t(n)];
     const std::string path = cat("$.nodes[", n, "]");
     if (node.mesh >= 0) {
-      if (size_t(node.mesh) >= m_.meshes.size())
-        fail(path + ".mesh", cat(node.mesh, " names no mesh (", m_.meshes.size(), " meshes)"));
+      at(m_.meshes, node.mesh, path + ".mesh");
       placed_.push_back({node.mesh, n, to_world});
     }
     if (node.camera >= 0) camera(n, to_world);
@@ -357,14 +441,12 @@ class GltfReader {
   // ---- cameras and lights ----
 
   void camera(int n, const Matrix& to_world) {
-    const tinygltf::Node& node = m_.nodes[size_t(n)];
-    const std::string path = cat("$.nodes[", n, "].camera");
-    if (size_t(node.camera) >= m_.cameras.size()) fail(path, cat(node.camera, " names no camera (", m_.cameras.size(), " cameras)"));
     if (camera_set_) return;  // the first one met
-    const tinygltf::Camera& c = m_.cameras[size_t(node.camera)];
+    const tinygltf::Node& node = m_.nodes[size_t(n)];
+    const tinygltf::Camera& c = at(m_.cameras, node.camera, cat("$.nodes[", n, "].camera"));
     const std::string cp = cat("$.cameras[", node.camera, "]");
     if (c.type != "perspective") {
-      warning(cp, cat("a ", in_quotes(c.type), " camera is not supported; it is not used"));
+      warning(cp, cat("a ", gltf_quoted(c.type), " camera is not supported; it is not used"));
       return;
     }
     const double fov = c.perspective.yfov * 180.0 / kPi;
@@ -383,23 +465,15 @@ class GltfReader {
     camera_set_ = true;
   }
 
+  /// The light `ext` (a node's KHR_lights_punctual object, its integer "light" and the light's
+  /// type and color checked by check_gltf_json) names.
   void light(int n, const tinygltf::Value& ext, const Matrix& to_world) {
-    const std::string path = cat("$.nodes[", n, "].extensions.KHR_lights_punctual");
-    if (!ext.IsObject() || !ext.Has("light") || !ext.Get("light").IsInt())
-      fail(path, "expected an object with an integer \"light\"");
     const int l = ext.Get("light").GetNumberAsInt();
-    if (l < 0 || size_t(l) >= m_.lights.size()) fail(path + ".light", cat(l, " names no light (", m_.lights.size(), " lights)"));
-    const tinygltf::Light& light = m_.lights[size_t(l)];
+    const tinygltf::Light& light = at(m_.lights, l, cat("$.nodes[", n, "].extensions.KHR_lights_punctual.light"));
     const std::string lp = cat("$.extensions.KHR_lights_punctual.lights[", l, "]");
     Vec3d colour(1.0);
-    if (!light.color.empty()) {
-      if (light.color.size() != 3) fail(lp + ".color", cat(light.color.size(), " numbers, not 3"));
-      colour = {light.color[0], light.color[1], light.color[2]};
-    }
+    if (light.color.size() == 3) colour = {light.color[0], light.color[1], light.color[2]};
     const Vec3f power = Vec3f(colour * light.intensity);
-    // The extension's three types; any other is a broken file, not a light to guess at.
-    if (light.type != "directional" && light.type != "point" && light.type != "spot")
-      fail(lp + ".type", cat(in_quotes(light.type), " is not a KHR_lights_punctual type (directional, point, spot)"));
     try {
       if (light.type == "directional") {
         scene_.add_light(DirectionalLight{Vec3f(normalize(to_world.vector({0, 0, -1}))), power});
@@ -417,10 +491,9 @@ class GltfReader {
   /// The scene's material for glTF material i (-1: the default grey), added on first use.
   uint32_t material(int i, const std::string& path) {
     if (i < 0) return 0;
-    if (size_t(i) >= m_.materials.size()) fail(path, cat(i, " names no material (", m_.materials.size(), " materials)"));
+    const tinygltf::Material& g = at(m_.materials, i, path);
     uint32_t& id = materials_[size_t(i)];
     if (id != kInvalidId) return id;
-    const tinygltf::Material& g = m_.materials[size_t(i)];
     const std::string mp = cat("$.materials[", i, "]");
     const std::vector<double>& base = g.pbrMetallicRoughness.baseColorFactor;
     Material m;
@@ -457,22 +530,23 @@ class GltfReader {
   /// every element inside its bufferView and buffer (checked in 64 bits before anything is
   /// read or allocated for it).
   View view(int a, const std::string& use, int type, std::initializer_list<int> component_types) const {
-    if (a < 0 || size_t(a) >= m_.accessors.size()) fail(use, cat(a, " names no accessor (", m_.accessors.size(), " accessors)"));
-    const tinygltf::Accessor& acc = m_.accessors[size_t(a)];
+    const tinygltf::Accessor& acc = at(m_.accessors, a, use);
     const std::string ap = cat("$.accessors[", a, "]");
+    // Refused where the reader reads one only: a model may have sparse accessors elsewhere
+    // (morph targets, animation), which it does not read.
     if (acc.sparse.isSparse) fail(ap + ".sparse", "sparse accessors are not supported");
     if (acc.type != type)
       fail(ap + ".type", cat(use, " needs ", type == TINYGLTF_TYPE_SCALAR ? "SCALAR" : "VEC3", " elements"));
-    if (std::find(component_types.begin(), component_types.end(), acc.componentType) == component_types.end())
-      fail(ap + ".componentType", cat(acc.componentType, " is not a component type ", use, " can have"));
+    if (std::find(component_types.begin(), component_types.end(), acc.componentType) == component_types.end()) {
+      std::string list;
+      for (int t : component_types) list += cat(list.empty() ? "" : ", ", t);
+      fail(ap + ".componentType", cat(acc.componentType, " is not a component type ", use, " can have (", list, ")"));
+    }
     if (acc.bufferView < 0) fail(ap, "has no bufferView (all zeros, or data in an extension): not supported");
-    if (size_t(acc.bufferView) >= m_.bufferViews.size())
-      fail(ap + ".bufferView", cat(acc.bufferView, " names no bufferView (", m_.bufferViews.size(), " bufferViews)"));
-    const tinygltf::BufferView& bv = m_.bufferViews[size_t(acc.bufferView)];
+    const tinygltf::BufferView& bv = at(m_.bufferViews, acc.bufferView, ap + ".bufferView");
     const std::string vp = cat("$.bufferViews[", acc.bufferView, "]");
-    if (bv.buffer < 0 || size_t(bv.buffer) >= m_.buffers.size())
-      fail(vp + ".buffer", cat(bv.buffer, " names no buffer (", m_.buffers.size(), " buffers)"));
-    const uint64_t buffer_bytes = m_.buffers[size_t(bv.buffer)].data.size();
+    const tinygltf::Buffer& buffer = at(m_.buffers, bv.buffer, vp + ".buffer");
+    const uint64_t buffer_bytes = buffer.data.size();
     if (uint64_t(bv.byteOffset) > buffer_bytes || uint64_t(bv.byteLength) > buffer_bytes - bv.byteOffset)
       fail(vp, cat(bv.byteLength, " bytes from byte ", bv.byteOffset, " do not fit in buffer ", bv.buffer, "'s ",
                    buffer_bytes, " bytes"));
@@ -481,7 +555,6 @@ class GltfReader {
     const uint64_t stride = bv.byteStride == 0 ? element : bv.byteStride;
     if (stride < element || stride > 252)
       fail(vp + ".byteStride", cat(bv.byteStride, " is outside [", element, ", 252] for ", element, "-byte elements"));
-    if (acc.count == 0) fail(ap + ".count", "0 elements");
     const uint64_t count = acc.count, offset = acc.byteOffset;
     // The last element ends at offset + (count - 1) * stride + element: no product overflows,
     // count being checked against the bytes first.
@@ -489,8 +562,7 @@ class GltfReader {
         offset + (count - 1) * stride + element > bv.byteLength)
       fail(ap, cat(count, " elements of ", element, " bytes, ", stride, " apart from byte ", offset, ", do not fit in ",
                    vp.substr(2), "'s ", bv.byteLength, " bytes"));
-    return {m_.buffers[size_t(bv.buffer)].data.data() + bv.byteOffset + offset, size_t(count), size_t(stride),
-            acc.componentType};
+    return {buffer.data.data() + bv.byteOffset + offset, size_t(count), size_t(stride), acc.componentType};
   }
 
   std::vector<Vec3f> vectors(const View& v) const {
@@ -530,7 +602,7 @@ class GltfReader {
     for (size_t k = 0; k < g.primitives.size(); ++k) {
       const tinygltf::Primitive& p = g.primitives[k];
       const std::string pp = cat("$.meshes[", i, "].primitives[", k, "]");
-      if (p.mode < 0 || p.mode > 6) fail(pp + ".mode", cat(p.mode, " is no primitive mode (0..6)"));
+      guaranteed(p.mode >= 0 && p.mode <= 6, pp + ".mode");
       if (p.mode < 4) {
         static constexpr const char* kNames[] = {"points", "lines", "a line loop", "a line strip"};
         warning(pp + ".mode", cat(p.mode, " (", kNames[p.mode], ") is not a triangle mode; the primitive is skipped"));
@@ -541,13 +613,12 @@ class GltfReader {
         warning(pp + ".attributes", "no POSITION; the primitive is skipped");
         continue;
       }
+      const std::string ap = pp + ".attributes.POSITION";
       if (p.extensions.count("KHR_draco_mesh_compression")) {
-        const int a = position->second;
-        if (a < 0 || size_t(a) >= m_.accessors.size() || m_.accessors[size_t(a)].bufferView < 0)
+        if (at(m_.accessors, position->second, ap).bufferView < 0)
           fail(pp + ".extensions.KHR_draco_mesh_compression", "Draco-compressed primitives are not supported");
         warning(pp + ".extensions.KHR_draco_mesh_compression", "not supported; the uncompressed accessors are read");
       }
-      const std::string ap = pp + ".attributes.POSITION";
       const std::vector<Vec3f> positions = vectors(view(position->second, ap, TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}));
       for (size_t v = 0; v < positions.size(); ++v)
         if (!in_coordinate_range(positions[v]))
@@ -561,7 +632,8 @@ class GltfReader {
                                 TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT}));
         for (size_t c = 0; c < corners.size(); ++c)
           if (corners[c] >= positions.size())
-            fail(ip, cat("index ", corners[c], " (element ", c, ") is out of range (", positions.size(), " vertices)"));
+            fail(ip, cat("element ", c, ": ", corners[c], " is not a vertex index (the primitive has ",
+                         positions.size(), " vertices)"));
       } else {
         corners.resize(positions.size());
         for (size_t c = 0; c < corners.size(); ++c) corners[c] = uint32_t(c);
@@ -627,7 +699,8 @@ class GltfReader {
     std::vector<std::pair<Matrix, int>> placements;
     for (const auto& [to_world, node] : use.placements) {
       if (!inverse(to_world)) {
-        warning(cat("$.nodes[", node, "]"), "its transform is singular (a zero scale); its mesh is not placed");
+        warning(cat("$.nodes[", node, "]"),
+                "its transform is singular (a zero scale) or too large to invert; its mesh is not placed");
         continue;
       }
       placements.emplace_back(to_world, node);
@@ -666,6 +739,7 @@ class GltfReader {
   std::vector<uint32_t> materials_;  ///< glTF material -> scene material (kInvalidId: not added yet)
   std::vector<Placed> placed_;
   bool camera_set_ = false;
+  std::vector<Warning> warnings_;
 };
 
 }  // namespace
@@ -674,29 +748,73 @@ void load_gltf(const std::string& path, Scene& scene) {
   const MappedFile file(path);
   if (file.size() > kMaxGltfBytes)
     throw Error(cat(path, ": ", file.size(), " bytes, more than the ", kMaxGltfBytes, " a glTF file may have"));
+  if (file.size() == 0) throw Error(cat(path, ": empty file"));
   const std::string_view bytes(file.data(), file.size());
-  const bool binary = bytes.size() >= 4 && bytes.substr(0, 4) == "glTF";
-  const std::string_view json = binary ? glb_json(path, bytes) : bytes;
-  check_json_depth(path, json);  // tinygltf's parser recurses
+  std::string extension = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  const bool binary = bytes.substr(0, 4) == "glTF" || extension == ".glb";
+  const GlbChunks glb = binary ? glb_chunks(path, bytes) : GlbChunks{bytes, std::nullopt};
+  check_json_depth(path, glb.json);  // nlohmann's parser and tinygltf's recurse
+  // Outlives both JSON documents (this one and tinygltf's): see engine/memory_reserve.h.
+  const MemoryReserve reserve(json_unwind_reserve(glb.json.size()));
 
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(glb.json.begin(), glb.json.end());
+  } catch (const nlohmann::json::parse_error& e) {
+    const TextPosition at = position_of(glb.json, e.byte);
+    throw Error(cat(path, ": line ", at.line, ", column ", at.column, ": ", json_reason(e.what())));
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(cat(path, ": ", json_reason(e.what())));  // a number too large for a double
+  }
   const size_t slash = path.find_last_of('/');
-  FileAccess access{slash == std::string::npos ? std::string() : path.substr(0, slash + 1), {}, {}};
+  // tinygltf joins a URI to the base folder with a '/', so "" would read "/x.bin": use ".".
+  const std::string base = slash == std::string::npos ? std::string(".")
+                           : slash == 0               ? std::string("/")
+                                                      : path.substr(0, slash);
+  FileAccess access;
+  access.buffers = check_gltf_json({path, base, binary, glb.bin_bytes, bytes.size(), glb.json.size()}, doc);
+
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks({&file_exists, &expand_path, &read_whole_file, &write_whole_file, &access});
   loader.SetImageLoader(&skip_image, nullptr);
   tinygltf::Model model;
   std::string err, warnings;
-  // tinygltf joins a URI to the base folder with a '/', so "" would read "/x.bin": use ".".
-  const std::string base = access.base_dir.empty() ? std::string(".") : slash == 0 ? std::string("/")
-                                                                                      : access.base_dir.substr(0, slash);
-  const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warnings,
-                                                       reinterpret_cast<const unsigned char*>(bytes.data()),
-                                                       unsigned(bytes.size()), base)
-                         : loader.LoadASCIIFromString(&model, &err, &warnings, bytes.data(), unsigned(bytes.size()), base);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warnings,
+                                              reinterpret_cast<const unsigned char*>(bytes.data()),
+                                              unsigned(bytes.size()), base)
+                : loader.LoadASCIIFromString(&model, &err, &warnings, bytes.data(), unsigned(bytes.size()), base);
+  } catch (const std::bad_alloc&) {
+    throw;  // out of memory: reported as such by the caller
+  } catch (const std::exception& e) {
+    // What the JSON check lets through should never make tinygltf throw; if it does, the
+    // message still names the file.
+    throw Error(cat(path, ": tinygltf failed: ", one_line(e.what())));
+  }
   if (!ok) {
-    if (!access.failure.empty())
-      throw Error(cat(path, ": ", buffer_path(json, access.base_dir.empty() ? "./" : access.base_dir, access.failed_path),
-                      ": ", access.failure));
+    if (access.failed) {
+      const GltfBufferFile& b = access.buffers[*access.failed];
+      throw Error(cat(path, ": $.buffers[", b.index, "].uri: ", gltf_quoted(b.uri), ": ", access.failure));
+    }
+    if (err.find("Failed to decode 'uri'") != std::string::npos) {
+      // A data URI whose bytes are not its buffer's byteLength: tinygltf quotes the whole URI.
+      const auto buffers = doc.find("buffers");
+      for (size_t i = 0; buffers != doc.end() && i < buffers->size(); ++i) {
+        const nlohmann::json& b = (*buffers)[i];
+        const auto uri = b.find("uri");
+        if (uri == b.end() || !tinygltf::IsDataURI(uri->get<std::string>())) continue;
+        std::vector<unsigned char> data;
+        std::string mime;
+        tinygltf::DecodeDataURI(&data, mime, uri->get<std::string>(), 0, false);
+        const uint64_t length = b.at("byteLength").get<uint64_t>();
+        if (data.size() != length)
+          throw Error(cat(path, ": $.buffers[", i, "].uri: its data holds ", data.size(), " bytes, not the ", length,
+                          " of its byteLength"));
+      }
+    }
     throw Error(cat(path, ": ", first_line(err)));
   }
   GltfReader(path, model, scene).read();

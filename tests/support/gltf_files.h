@@ -177,6 +177,19 @@ inline void write_gltf(const tinygltf::Model& model, const std::string& path, Gl
   std::ofstream(path, std::ios::binary | std::ios::trunc) << doc.dump(2);
 }
 
+/// The bytes of a GLB of JSON document `doc` and, unless empty, a BIN chunk of `bin` (each
+/// chunk padded to 4 bytes, JSON with spaces, BIN with zeros): for GLBs whose JSON tinygltf's
+/// writer cannot express.
+inline std::string glb_bytes(const nlohmann::json& doc, std::string bin) {
+  std::string json = doc.dump();
+  while (json.size() % 4) json += ' ';
+  while (bin.size() % 4) bin += '\0';
+  const auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  std::string chunks = u32(uint32_t(json.size())) + "JSON" + json;
+  if (!bin.empty()) chunks += u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+  return "glTF" + u32(2) + u32(uint32_t(12 + chunks.size())) + chunks;
+}
+
 /// The column-major 4x4 matrix of an affine map (glTF's node "matrix").
 inline std::vector<double> column_major(const Affine3d& a) {
   std::vector<double> m(16, 0.0);
@@ -444,6 +457,23 @@ inline std::vector<GltfCase> hostile_gltf_cases() {
     b.model.defaultScene = -1;
   });
   add("bad-missing-node.gltf", [](GltfBuilder& b) { b.model.nodes[0].children = {7}; });
+  add("bad-uri-outside.gltf", same, uri("../outside.bin"));
+  add("bad-uri-encoded.gltf", same, uri("..%2Foutside.bin"));
+  add("bad-translation-type.gltf", same, [](nlohmann::json& doc) { doc["nodes"][0]["translation"] = {"a", 0, 0}; });
+  add("bad-scene-index.gltf", same, [](nlohmann::json& doc) { doc["scene"] = -2; });
+  add("bad-negative-offset.gltf", same, [](nlohmann::json& doc) { doc["bufferViews"][1]["byteOffset"] = -4; });
+  add(
+      "bad-emissive-strength.gltf",
+      [](GltfBuilder& b) {
+        b.model.meshes[0].primitives[0].material = b.material({0.5f, 0.5f, 0.5f}, {1, 1, 1});
+      },
+      [](nlohmann::json& doc) {
+        doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = "x";
+      });
+  add("bad-rotation-overflow.gltf", [](GltfBuilder& b) { b.model.nodes[0].rotation = {1e300, 0, 0, 1e300}; });
+  add("bad-index-max.gltf", [](GltfBuilder& b) {
+    b.model.meshes[0].primitives[0].indices = b.indices({0, 0xFFFFFFFFu, 2}, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
+  });
   add("bad-light-type.gltf", [](GltfBuilder& b) {
     tinygltf::Light area;
     area.type = "area";
