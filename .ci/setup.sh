@@ -14,7 +14,7 @@ packages=(
   libopenimageio-dev openimageio-tools
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev
-  libtinyobjloader-dev libtinygltf-dev libgmp-dev gnuplot-nox ccache
+  libtinyobjloader-dev libtinygltf-dev libgmp-dev libxxhash-dev gnuplot-nox ccache
   libopenmpi-dev openmpi-bin
   pybind11-dev python3-dev python3-numpy python3-pytest
 )

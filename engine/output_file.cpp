@@ -1,6 +1,7 @@
 #include "engine/output_file.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -53,6 +54,35 @@ std::string temp_name(const std::string& file_name) {
   return cat(".raypack-", ::getpid(), "-", g_serial.fetch_add(1), "-", file_name);
 }
 
+/// Removes from `folder` the temporaries of `file_name` that a run killed before it could
+/// clean up left behind (SIGKILL, a crash, a node lost): ".raypack-<pid>-<n>-<file_name>"
+/// files whose maker holds no lock on them any more (every OutputFile holds one on its
+/// temporary while it lives) and whose pid is no live process here.
+void remove_stale_temporaries(const std::filesystem::path& folder, const std::string& file_name) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (fs::directory_iterator it(folder.empty() ? fs::path(".") : folder, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    // .raypack-<digits>-<digits>-<file_name>
+    if (!name.starts_with(".raypack-") || !name.ends_with("-" + file_name)) continue;
+    const std::string_view middle = std::string_view(name).substr(9, name.size() - 9 - file_name.size() - 1);
+    const size_t dash = middle.find('-');
+    if (dash == std::string_view::npos || dash == 0 || dash + 1 == middle.size() ||
+        middle.find_first_not_of("0123456789-") != std::string_view::npos ||
+        middle.find('-', dash + 1) != std::string_view::npos)
+      continue;
+    const long pid = std::strtol(std::string(middle.substr(0, dash)).c_str(), nullptr, 10);
+    if (pid == long(::getpid()) || (pid > 0 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM))) continue;
+    const int fd = ::open(it->path().c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) continue;
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && ::flock(fd, LOCK_EX | LOCK_NB) == 0)
+      ::unlink(it->path().c_str());
+    ::close(fd);
+  }
+}
+
 /// Writes all n bytes to fd; returns errno on failure, 0 on success.
 int write_all(int fd, const char* data, size_t n) {
   while (n > 0) {
@@ -71,14 +101,17 @@ int write_all(int fd, const char* data, size_t n) {
 char g_signal_message[512];
 
 extern "C" void remove_temporaries_and_reraise(int sig) {
+  bool removed = false;
   for (Slot& s : g_slots)
-    if (s.state.load() == 2) ::unlink(s.path);
+    if (s.state.load() == 2) removed |= ::unlink(s.path) == 0;
   if (g_signal_message[0] != '\0') {
     const char* name = sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP";
     const char* at = std::strstr(g_signal_message, "%s");
+    const char* outcome = removed ? "; unfinished outputs were removed\n" : "; no output was left unfinished\n";
     write_all(STDERR_FILENO, g_signal_message, size_t(at - g_signal_message));
     write_all(STDERR_FILENO, name, std::strlen(name));
     write_all(STDERR_FILENO, at + 2, std::strlen(at + 2));
+    write_all(STDERR_FILENO, outcome, std::strlen(outcome));
   }
   std::signal(sig, SIG_DFL);
   std::raise(sig);
@@ -119,15 +152,22 @@ OutputFile::OutputFile(const std::string& path) : path_(path) {
     target_ = path;
   }
 
-  const fs::path name = fs::path(path).filename();
+  // The temporary: beside the file it replaces, or in the temporary folder for a device.
+  fs::path folder;
+  std::string file_name;
   if (device) {
     std::error_code ec;
     const fs::path dir = fs::temp_directory_path(ec);
-    temp_ = ((ec ? fs::path("/tmp") : dir) / temp_name(name.empty() ? std::string("output") : name.string())).string();
+    folder = ec ? fs::path("/tmp") : dir;
+    file_name = fs::path(path).filename().string();
+    if (file_name.empty()) file_name = "output";
   } else {
     const fs::path t(target_);
-    temp_ = (t.parent_path() / temp_name(t.filename().string())).string();
+    folder = t.parent_path();
+    file_name = t.filename().string();
   }
+  remove_stale_temporaries(folder, file_name);
+  temp_ = (folder / temp_name(file_name)).string();
   slot_ = claim_slot(temp_);
   fd_ = ::open(temp_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
   if (fd_ < 0) {
@@ -136,6 +176,8 @@ OutputFile::OutputFile(const std::string& path) : path_(path) {
     slot_ = -1;
     fail(std::strerror(e));
   }
+  // Held while this lives: what marks the temporary as in use (remove_stale_temporaries).
+  ::flock(fd_, LOCK_EX | LOCK_NB);
   if (replaces) ::fchmod(fd_, replace_mode);  // best effort: the new file keeps the old one's mode
 }
 

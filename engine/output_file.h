@@ -16,7 +16,11 @@
 /// - a directory, or a path whose folder does not exist: rp::Error naming the path.
 /// Until commit(), the destructor removes the temporary file, and so does the handler that
 /// install_signal_cleanup() sets for SIGINT, SIGTERM and SIGHUP (an interrupted run leaves
-/// nothing behind). Every failure throws rp::Error "<path>: cannot write: <reason>".
+/// nothing behind). A run that could not clean up (SIGKILL, a crash, a lost node) leaves its
+/// temporary, which the next output of the same name in that folder removes: the maker holds
+/// a lock (flock) on its temporary for as long as it lives, so a temporary of that name whose
+/// lock is free and whose pid is no live process here is stale. Every failure throws
+/// rp::Error "<path>: cannot write: <reason>".
 
 #include <cstddef>
 #include <string>
@@ -89,6 +93,8 @@ void install_signal_cleanup();
 
 /// A line for those handlers to print on standard error before the process ends (none by
 /// default, and none after an empty one); "%s" in it stands for the signal's name (SIGTERM).
+/// The handler ends it with what it found: "; unfinished outputs were removed" when it
+/// removed a temporary, "; no output was left unfinished" when there was none, and a newline.
 /// Rank 0 of an MPI run sets one, because mpirun ends every rank by SIGTERM when one dies.
 /// Throws rp::Error beyond 511 bytes or without "%s".
 void set_signal_message(std::string_view message);

@@ -7,16 +7,17 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "engine/cli/args.h"
-#include "engine/cli/out_of_memory.h"
 #include "engine/analysis/diff.h"
-#include "engine/dist/diff_ranks.h"
-#include "engine/dist/ray_parts.h"
-#include "engine/render/image_io.h"
-#include "engine/output_file.h"
-#include "engine/rayfile.h"
 #include "engine/analysis/raygen.h"
 #include "engine/analysis/reference.h"
+#include "engine/cli/args.h"
+#include "engine/cli/out_of_memory.h"
+#include "engine/dist/diff_ranks.h"
+#include "engine/dist/ray_parts.h"
+#include "engine/dist/same_inputs.h"
+#include "engine/output_file.h"
+#include "engine/rayfile.h"
+#include "engine/render/image_io.h"
 
 namespace rp::cli {
 
@@ -83,6 +84,14 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
     }
   });
   const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene, a.up_axis); });
+  if (across) {  // each rank reads its own copies: they must be the same files
+    std::vector<dist::InputDigest> inputs{{"--scene", a.scene, dist::scene_digest(scene)}};
+    if (!a.rays.empty() && a.rays != "-")
+      inputs.push_back(dist::together(comm, [&] {
+        return dist::InputDigest{"--rays", a.rays, dist::file_digest(a.rays)};
+      }));
+    dist::check_same_inputs(comm, inputs);
+  }
   const auto t0 = std::chrono::steady_clock::now();
 
   // The rays: a file, or generated. Camera rays keep their pixels for the mismatch image.

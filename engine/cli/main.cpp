@@ -110,8 +110,9 @@ int main(int argc, char** argv) {
   // known, a signal that ends it while MPI shuts down (mpirun's answer to the other ranks' exit
   // status) has nothing to add.
   if (comm->size() > 1 && comm->root())
-    rp::set_signal_message("raypack: rank 0 stopped by %s: under mpirun, another rank died (mpirun names it) or the "
-                           "run was interrupted; unfinished outputs were removed\n");
+    rp::set_signal_message(
+        "raypack: rank 0 stopped by %s: under mpirun, another rank died (mpirun names it) or the "
+        "run was interrupted");
   const int status = run(*comm, argc, argv);
   rp::set_signal_message("");
   comm.reset();

@@ -10,10 +10,11 @@
 #include <optional>
 #include <regex>
 
-#include "engine/render/camera.h"
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
 #include "engine/dist/render_ranks.h"
+#include "engine/dist/same_inputs.h"
+#include "engine/render/camera.h"
 #include "engine/render/image_io.h"
 #include "engine/render/render.h"
 
@@ -208,6 +209,7 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
     return s;
   });
   const double load_s = seconds_since(t);
+  if (across) dist::check_same_inputs(comm, {{"--scene", a.scene, dist::scene_digest(scene)}});
   std::optional<Camera> camera_or;
   dist::together(comm, [&] {
     const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())));

@@ -5,12 +5,13 @@
 #include <chrono>
 #include <cstdio>
 
+#include "engine/analysis/raygen.h"
 #include "engine/cli/args.h"
 #include "engine/cli/out_of_memory.h"
 #include "engine/dist/ray_parts.h"
+#include "engine/dist/same_inputs.h"
 #include "engine/invalid_rays.h"
 #include "engine/rayfile.h"
-#include "engine/analysis/raygen.h"
 #include "engine/text.h"
 
 namespace rp::cli {
@@ -54,6 +55,14 @@ int run_trace(const TraceArgs& a, const dist::Comm& comm) {
   });
   const ThreadLimit limit(a.threads);
   const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene); });
+  if (across) {  // each rank reads its own copies: they must be the same files
+    std::vector<dist::InputDigest> inputs{{"--scene", a.scene, dist::scene_digest(scene)}};
+    if (a.rays != "-")
+      inputs.push_back(dist::together(comm, [&] {
+        return dist::InputDigest{"--rays", a.rays, dist::file_digest(a.rays)};
+      }));
+    dist::check_same_inputs(comm, inputs);
+  }
   // Across ranks each rank reads, traces and writes its share of the rays, in file order.
   const std::vector<Ray> rays =
       across ? dist::read_rays_across(comm, a.rays)

@@ -106,10 +106,6 @@ class Comm {
   /// Collective: rank 0's parts[r] on rank r (`parts` has size() entries on rank 0, and is not
   /// read elsewhere).
   virtual std::string scatter(std::span<const std::string> parts) const = 0;
-  /// Collective: writes each rank's `bytes` at byte `offset` of the existing file `path`
-  /// (absolute, on a file system every rank sees: MPI-IO). Throws rp::Error naming the path
-  /// on the ranks whose write failed, after the collective calls are done.
-  virtual void write_at(const std::string& path, uint64_t offset, std::string_view bytes) const = 0;
   /// Collective: this rank's source of the tiles of one render.
   virtual std::unique_ptr<TileSource> hand_out(const TileHandout& handout) const = 0;
 };

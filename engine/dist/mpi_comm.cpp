@@ -186,25 +186,6 @@ class MpiComm final : public Comm {
     return part;
   }
 
-  void write_at(const std::string& path, uint64_t offset, std::string_view bytes) const override {
-    MPI_File file;
-    int rc = MPI_File_open(comm_, path.c_str(), MPI_MODE_WRONLY, MPI_INFO_NULL, &file);
-    if (rc != MPI_SUCCESS) throw Error(cat(path, ": cannot write: ", mpi::error_string(rc)));
-    while (rc == MPI_SUCCESS && !bytes.empty()) {
-      const size_t n = std::min(bytes.size(), mpi::kMaxMessage);
-      MPI_Status status;
-      rc = MPI_File_write_at(file, MPI_Offset(offset), bytes.data(), int(n), MPI_BYTE, &status);
-      int written = 0;
-      if (rc == MPI_SUCCESS) MPI_Get_count(&status, MPI_BYTE, &written);
-      if (rc == MPI_SUCCESS && size_t(written) != n) rc = MPI_ERR_IO;
-      bytes.remove_prefix(n);
-      offset += n;
-    }
-    const int closed = MPI_File_close(&file);
-    if (rc == MPI_SUCCESS) rc = closed;
-    if (rc != MPI_SUCCESS) throw Error(cat(path, ": cannot write: ", mpi::error_string(rc)));
-  }
-
   std::unique_ptr<TileSource> hand_out(const TileHandout& handout) const override {
     return mpi::hand_out_tiles(comm_, handout);
   }

@@ -1,12 +1,43 @@
 #include "engine/dist/ray_parts.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <optional>
 
+#include "engine/error.h"
 #include "engine/output_file.h"
 
 namespace rp::dist {
+
+namespace {
+
+/// Writes `bytes` at byte `offset` of the existing file `path`, every write checked and the
+/// data on disk (fsync) before it returns; rp::Error naming the path otherwise. Each rank
+/// writes its share of a hit file through a descriptor of its own: nothing collective can
+/// fail on one rank and leave the others waiting.
+void write_at(const std::string& path, uint64_t offset, std::string_view bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) throw Error(cat(path, ": cannot write: ", std::strerror(errno)));
+  const auto fail = [&](int e) {
+    ::close(fd);
+    throw Error(cat(path, ": cannot write: ", std::strerror(e)));
+  };
+  while (!bytes.empty()) {
+    const ssize_t n = ::pwrite(fd, bytes.data(), bytes.size(), off_t(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(n < 0 ? errno : EIO);
+    bytes.remove_prefix(size_t(n));
+    offset += uint64_t(n);
+  }
+  if (::fsync(fd) != 0) fail(errno);
+  if (::close(fd) != 0) throw Error(cat(path, ": cannot write: ", std::strerror(errno)));
+}
+
+}  // namespace
 
 RecordRange share(const Comm& comm, uint64_t n) { return part_records(n, {comm.rank(), comm.size()}); }
 
@@ -58,7 +89,7 @@ void write_hits_across(const Comm& comm, const std::string& path, std::span<cons
     return;
   }
   const uint64_t offset = hit_file_head(path, total[0]).size() + comm.sum_before(records.size());
-  together(comm, [&] { comm.write_at(temp, offset, records); });
+  together(comm, [&] { write_at(temp, offset, records); });
   together(comm, [&] {
     if (comm.root()) out->commit();
   });

@@ -24,8 +24,10 @@ std::vector<Ray> read_rays_across(const Comm& comm, const std::string& path);
 /// Writes the hits of every rank (`hits`: this rank's share, in rank order) to the hit file
 /// `path`, the bytes write_hits() writes for the whole batch: rank 0 opens the output
 /// (rp::OutputFile: a temporary beside it) and writes the head, every rank writes its records
-/// at their offset with MPI-IO, and rank 0 renames the temporary over `path` once every write
-/// succeeded. Its folder must be on a file system every rank sees at the same path. A device
+/// at their offset through a descriptor of its own (pwrite, fsync: no collective file call, so
+/// a rank that cannot open the file fails the run on every rank instead of leaving them
+/// waiting), and rank 0 renames the temporary over `path` once every write succeeded. Its folder must be on a file
+/// system every rank sees at the same path. A device
 /// (/dev/stdout) is written by rank 0, which receives every rank's records. Collective; a
 /// failure on any rank throws on every rank, and leaves nothing at `path`.
 void write_hits_across(const Comm& comm, const std::string& path, std::span<const HitRecord> hits);

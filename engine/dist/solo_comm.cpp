@@ -44,23 +44,6 @@ std::string SoloComm::scatter(std::span<const std::string> parts) const {
   return parts[0];
 }
 
-void SoloComm::write_at(const std::string& path, uint64_t offset, std::string_view bytes) const {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
-  if (fd < 0) throw Error(cat(path, ": cannot write: ", std::strerror(errno)));
-  while (!bytes.empty()) {
-    const ssize_t n = ::pwrite(fd, bytes.data(), bytes.size(), off_t(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int e = errno;
-      ::close(fd);
-      throw Error(cat(path, ": cannot write: ", std::strerror(e)));
-    }
-    bytes.remove_prefix(size_t(n));
-    offset += uint64_t(n);
-  }
-  if (::close(fd) != 0) throw Error(cat(path, ": cannot write: ", std::strerror(errno)));
-}
-
 std::unique_ptr<TileSource> SoloComm::hand_out(const TileHandout& handout) const {
   return std::make_unique<LocalTiles>(handout.count);
 }

@@ -16,7 +16,6 @@ class SoloComm : public Comm {
   uint64_t sum_before(uint64_t) const override { return 0; }
   std::string gather(std::string_view bytes, bool) const override { return std::string(bytes); }
   std::string scatter(std::span<const std::string> parts) const override;
-  void write_at(const std::string& path, uint64_t offset, std::string_view bytes) const override;
   std::unique_ptr<TileSource> hand_out(const TileHandout& handout) const override;
 };
 

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -825,6 +828,26 @@ TEST_F(Cli, EveryOutputIsCheckedBeforeAnyWork) {
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().rfind(".raypack-", 0), std::string::npos) << "left " << e.path();
 }
+
+
+TEST_F(Cli, ATemporaryLeftByAKilledRunIsRemovedByTheNextOutputOfItsName) {
+  std::ofstream(dir_ / "rays.csv") << "ox,oy,oz,dx,dy,dz\n5,10,5,0,-1,0\n";
+  // What SIGKILL leaves: a temporary of h.csv from a process that is gone (a pid beyond any
+  // pid_max). Kept: one of another name, one whose maker lives (this test, holding its lock),
+  // and a file that only looks like one.
+  const std::string gone = ".raypack-2147483000-0-h.csv", other = ".raypack-2147483000-0-other.csv",
+                    live = ".raypack-" + std::to_string(::getpid()) + "-7-h.csv", odd = ".raypack-12x-0-h.csv";
+  for (const std::string& name : {gone, other, live, odd}) std::ofstream(dir_ / name) << "partial";
+  const int lock = ::open((dir_ / live).c_str(), O_RDONLY);
+  ASSERT_EQ(::flock(lock, LOCK_EX), 0);
+  const Result r = run("trace -q --rays " + (dir_ / "rays.csv").string() + " -o " + (dir_ / "h.csv").string());
+  ::close(lock);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir_ / "h.csv"));
+  EXPECT_FALSE(fs::exists(dir_ / gone)) << "the stale temporary is still there";
+  for (const std::string& name : {other, live, odd}) EXPECT_TRUE(fs::exists(dir_ / name)) << name << " was removed";
+}
+
 
 TEST_F(Cli, RunningOutOfMemoryWhileLoadingIsAlwaysTheOneLineMessage) {
   if (rp::test::kSanitized)

@@ -257,7 +257,58 @@ TEST(Mpi, ARankThatDiesEndsTheRunWithNoOutput) {
   EXPECT_NE(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("raypack: rank 0 stopped by SIGTERM: under mpirun, another rank died"), std::string::npos)
       << r.output;
+  // Killed mid-render, before the image was begun: nothing was unfinished, and it says so.
+  EXPECT_NE(r.output.find("; no output was left unfinished\n"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(tmp / "out.png"));
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, ARankThatCannotWriteTheOutputEndsTheRunAtOnce) {
+  TempDir tmp;
+  fs::create_directories(tmp / "here/out");
+  fs::create_directories(tmp / "there");
+  std::ofstream(tmp / "rays.csv") << "ox,oy,oz,dx,dy,dz\n5,10,5,0,-1,0\n5,10,5,0,1,0\n";
+  // Rank 1 runs where the output's folder does not exist (a node without the mount): every
+  // rank checks the output before any work, and the run ends on both with rank 1's line.
+  const std::string args = " trace --rays " + tmp / "rays.csv" + " -o out/h.bin";
+  const Result r = run_shell("timeout 120 env " + mpirun() + " -n 1 -wdir " + tmp / "here" + " " + kRaypack + args +
+                             " : -n 1 -wdir " + tmp / "there" + " " + kRaypack + args);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 1: -o: out/h.bin: cannot write: No such file or directory\n");
+  EXPECT_FALSE(fs::exists(tmp / "here/out/h.bin"));
+  EXPECT_TRUE(fs::is_empty(tmp / "here/out"));
+}
+
+TEST(Mpi, RanksThatReadDifferentFilesUnderOnePathAreRefused) {
+  TempDir tmp;
+  for (const char* node : {"a", "b"}) fs::create_directories(tmp / node);
+  // The same names on two "nodes": a scene that differs in one vertex, rays that differ in count.
+  std::ofstream(tmp / "a/scene.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::ofstream(tmp / "b/scene.obj") << "v 0 0 0\nv 1 0 0\nv 0 1.5 0\nf 1 2 3\n";
+  std::vector<rp::Ray> rays(1000, rp::Ray{{0.2f, 0.2f, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY});
+  rp::write_rays(tmp / "a/rays.bin", rays);
+  rays.resize(750);
+  rp::write_rays(tmp / "b/rays.bin", rays);
+  fs::copy_file(tmp / "a/scene.obj", tmp / "b/same.obj");
+  fs::copy_file(tmp / "a/scene.obj", tmp / "a/same.obj");
+  const auto on_two_nodes = [&](const std::string& args) {
+    return run_shell(mpirun() + " -n 1 -wdir " + tmp / "a" + " " + kRaypack + " " + args + " : -n 1 -wdir " +
+                     tmp / "b" + " " + kRaypack + " " + args);
+  };
+  const std::string differs = ": not what rank 0 read (another file under the same path on this rank's node?)\n";
+  Result r = on_two_nodes("render --scene scene.obj --resolution 16x16 -o " + tmp / "x.png");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 1: --scene scene.obj" + differs);
+  r = on_two_nodes("trace --scene same.obj --rays rays.bin -o " + tmp / "h.bin");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 1: --rays rays.bin" + differs);
+  r = on_two_nodes("diff --scene scene.obj --count 64");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_EQ(r.output, "raypack: rank 1: --scene scene.obj" + differs);
+  for (const char* out : {"x.png", "h.bin"}) EXPECT_FALSE(fs::exists(tmp / out)) << out;
+  // The same files on both: the run goes on.
+  r = on_two_nodes("trace --scene same.obj --rays " + tmp / "a/rays.bin" + " -q -o " + tmp / "h.bin");
+  EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(no_temporaries(tmp));
 }
 
