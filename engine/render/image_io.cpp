@@ -99,9 +99,12 @@ std::unique_ptr<OIIO::ImageOutput> image_writer(const std::string& path) {
 /// OIIO writer for the extension of `path`, through rp::OutputFile.
 void write_with_oiio(const std::string& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc format,
                      const void* pixels, OIIO::stride_t stride = OIIO::AutoStride) {
-  auto out = image_writer(path);
+  auto writer = image_writer(path);
   OutputFile file(path);
   DescriptorProxy proxy(file.fd());
+  // Declared after the proxy, so destroyed before it: a writer whose close failed closes again
+  // in its destructor (OpenEXR's does), writing through the proxy.
+  const std::unique_ptr<OIIO::ImageOutput> out = std::move(writer);
   const bool ok = out->set_ioproxy(&proxy) && out->open(file.temp_path(), spec) &&
                   out->write_image(format, pixels, stride) && out->close();
   if (proxy.failure() != 0) file.fail(std::strerror(proxy.failure()));
