@@ -852,18 +852,18 @@ TEST_F(Cli, ATemporaryLeftByAKilledRunIsRemovedByTheNextOutputOfItsName) {
 TEST_F(Cli, RunningOutOfMemoryWhileLoadingIsAlwaysTheOneLineMessage) {
   if (rp::test::kSanitized)
     GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
-  // A JSON scene of 300,000 instances: under address-space limits from too small to enough,
+  // A JSON scene of 150,000 instances: under address-space limits from too small to enough,
   // every run either loads or fails with the one-line message (never std::terminate's abort,
   // once a failed allocation unwound into nlohmann::json's noexcept destructor).
   std::ofstream(dir_ / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   {
     std::ofstream out(dir_ / "many.json");
     out << R"({"meshes": {"tri": {"file": "tri.obj"}}, "objects": [)";
-    for (int i = 0; i < 300000; ++i) out << (i ? "," : "") << R"({"type": "instance", "mesh": "tri"})";
+    for (int i = 0; i < 150000; ++i) out << (i ? "," : "") << R"({"type": "instance", "mesh": "tri"})";
     out << "]}";
   }
   int loaded = 0, refused = 0;
-  for (int mib = 500; mib <= 1400; mib += 60) {
+  for (int mib = 500; mib <= 1100; mib += 40) {
     const Result r =
         run("info --no-backends " + (dir_ / "many.json").string(), "ulimit -v " + std::to_string(mib * 1024) + "; ");
     if (r.status == 0) {
