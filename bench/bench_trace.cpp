@@ -198,7 +198,8 @@ void BM_Trace(benchmark::State& state, const std::string& label, const std::stri
 /// of each (their order alternating), and as the counter `speed_ratio` the median over the
 /// iterations of a's speed over b's. A shared machine slows both traces of one iteration
 /// alike, so their ratio holds where the rates of separately timed benchmarks drift (measured
-/// here: BM_Trace's rates move by 7-20% between repetitions of one run, this ratio by ~2%).
+/// here: BM_Trace's rates move between repetitions of one run several times as much as this
+/// ratio; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 void BM_Pair(benchmark::State& state, const std::string& a, const std::string& b, const std::string& scene_name,
              const std::string& kind, Coherence coh) {
   SceneFixture& f = fixture(scene_name);

@@ -3,7 +3,8 @@
 /// linear in their size.
 ///
 /// nlohmann's own parser inserts each key into an ordered_json object by a linear search for
-/// a key already there, so an object of n keys takes time n^2 (100,000 material names: 17 s).
+/// a key already there, so an object of n keys takes time n^2 (seconds on a file of many
+/// material names; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 /// parse_ordered_json builds the same document through nlohmann's SAX interface with a hash
 /// index per open object: the same keys in the same order, a repeated key keeping its first
 /// place and its last value, as nlohmann's parser gives.

@@ -20,7 +20,7 @@ namespace rp {
 namespace {
 
 // ---- temporary files the signal handler removes ----------------------------------------------
-// A fixed table, so the handler touches no allocator: a slot is claimed (0 -> 1), filled, then
+// A fixed table, so the handler touches no allocator: a slot is claimed (state 0 to 1), filled, then
 // published (2); the handler unlinks every published path. unlink, signal and raise are
 // async-signal-safe.
 

@@ -256,7 +256,8 @@ bool Scene::occluded_by_any_plane(const Ray& ray) const {
 }
 
 // Kept out of line: inside surface, its calls made GCC stop inlining fix_degenerate_normal
-// and normalize into the world primitives' path (10-15% of the default scene's shading).
+// and normalize into the world primitives' path (a measurable share of the default scene's
+// shading; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 [[gnu::noinline]] SurfacePoint Scene::instance_surface(const Ray& ray, const Hit& hit) const {
   // The point and normals in the instance's object space, from the object ray, then mapped.
   const Instance& in = instances_[hit.instance_id];

@@ -71,7 +71,7 @@ SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, c
                         const py::handle& planes) {
   const auto positions = table<float>("vertices", vertices, 3, "(V, 3)");  // held while v reads it
   const auto v = positions.unchecked<2>();
-  // Indices are integers: a float array would be truncated (2.9 -> 2) and a uint64 one wrap
+  // Indices are integers: a float array would be truncated (2.9 read as 2) and a uint64 one wrap
   // to negative numbers, so both are taken as they are and checked.
   const py::array given = py::array::ensure(indices);
   const char kind = given ? given.dtype().kind() : '?';
@@ -410,7 +410,8 @@ PYBIND11_MODULE(_raypack, m) {
       });
 
   m.def("load_scene", &load, "path"_a,
-        "Loads an .obj, .ply or .json scene file, or the embedded scene for 'default'; raises raypack.Error\n"
+        "Loads an .obj, .ply, .gltf, .glb or .json scene file, or the embedded scene for 'default'; raises "
+        "raypack.Error\n"
         "naming the file and line of the first problem.");
   m.def("backends", &backend_list,
         "Every backend: name, description, variants, coherent and incoherent methods, facts, and whether\n"

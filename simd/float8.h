@@ -18,7 +18,8 @@
 
 /// For the small 8-wide routines of a hot loop that GCC would otherwise call out of line once
 /// their caller grows (a call passes every Vec3x8 through memory): the leaf decode and the
-/// triangle test of the single-ray traversal cost 9-18% of its speed that way.
+/// triangle test of the single-ray traversal measurably lost speed that way (figures:
+/// docs/notes/2026-11-29-figures-from-code-comments.md).
 #define RP_SIMD_INLINE [[gnu::always_inline]] inline
 
 namespace rp::simd {

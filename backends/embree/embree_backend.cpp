@@ -529,7 +529,8 @@ class EmbreeBackend final : public Backend {
 
   /// `out` = {t, prim, u, v, inst}, member by member. A Hit assembled whole on the stack and
   /// copied is read back by a 16-byte load that its smaller stores cannot forward to: a
-  /// store-forwarding stall per ray, which cost 10-15% of the primary rays' speed on the bunny.
+  /// store-forwarding stall per ray, which measurably cost primary rays' speed (figures:
+  /// docs/notes/2026-11-29-figures-from-code-comments.md).
   static void put(Hit& out, float t, uint32_t prim, float u, float v, uint32_t inst) noexcept {
     out.t = t;
     out.prim_id = prim;

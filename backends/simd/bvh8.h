@@ -47,15 +47,15 @@ static_assert(sizeof(Bvh8Node) == 224);
 /// | 4n                  | the scene prim_ids                                             |
 /// | 12V                 | the vertices in SoA: x[V], then y[V], then z[V]                |
 ///
-/// On bunny and dragon a leaf averages 5.7–5.9 triangles and 23.2 bytes per triangle, where
-/// v0, the edges and a prim id per triangle took 40. Vertices are the mesh's floats, bit for
-/// bit (equal corners are merged by their bits), so two triangles sharing an edge see the
-/// same vertex values in every leaf, as the watertight test needs; Möller–Trumbore's edges
-/// are recomputed per test, in float, exactly as the scalar routine computes them. An 8-wide
-/// test reads a corner's coordinates as table lookups (one permute per 8 vertices, see
-/// simd::lookup), not gathers. An analytic primitive (sphere, quadric, polygon) has a leaf of
-/// its own whose one vertex is NaN, which neither triangle test ever hits, and is tested by
-/// its scalar routine.
+/// On the measured meshes a leaf takes well under the 40 bytes per triangle that v0, the edges
+/// and a prim id took (figures: docs/notes/2026-11-29-figures-from-code-comments.md). Vertices
+/// are the mesh's floats, bit for bit (equal corners are merged by their bits), so two
+/// triangles sharing an edge see the same vertex values in every leaf, as the watertight test
+/// needs; Möller–Trumbore's edges are recomputed per test, in float, exactly as the scalar
+/// routine computes them. An 8-wide test reads a corner's coordinates as table lookups (one
+/// permute per 8 vertices, see simd::lookup), not gathers. An analytic primitive (sphere,
+/// quadric, polygon) has a leaf of its own whose one vertex is NaN, which neither triangle test
+/// ever hits, and is tested by its scalar routine.
 inline constexpr uint32_t kMaxLeafVertices = 24;
 inline constexpr uint32_t kLeafPad = 8;  ///< floats after the last leaf: 8-wide loads of its last rows stay in the array
 

@@ -32,8 +32,8 @@ using simd::int4;
 
 /// A primitive's box and its prim_id, 32 bytes: two aligned 16-byte rows, each a box corner in
 /// its first three lanes. The SAH splits sort primitives by the box's centre (as Embree's
-/// builders do), which gave lower SAH costs here than the triangle's centre of mass (dragon
-/// 15.86 -> 15.40, bunny 10.35 -> 10.09, Sponza inside 21.41 -> 19.07); the lecture notes'
+/// builders do), which gave lower SAH costs on the measured scenes than the triangle's centre
+/// of mass (figures: docs/notes/2026-11-29-figures-from-code-comments.md); the lecture notes'
 /// median rule sorts by the centre of mass, which it computes (Builder::mass_center). The
 /// leaves' corners are gathered straight from the meshes (Collapser::make_chunk), so a ref
 /// need not hold them. Trivial, so that the build's array of them is allocated without a
@@ -63,9 +63,9 @@ struct Selection {
 
 /// Where the build reads a primitive's three corners (NaN for an analytic primitive): the
 /// scene's meshes (an index and three scattered vertices), or, for spatial splits, which clip
-/// triangles many times, a copy made once in prim_id order (one record each). Measured on
-/// dragon: the copy costs the default build more (0.243-0.262 -> 0.263-0.281 s) than its
-/// one-pass reads save, and takes the spatial build from 1.14 to 0.81-1.07 s.
+/// triangles many times, a copy made once in prim_id order (one record each). Measured: the
+/// copy costs the default build more than its one-pass reads save, and shortens the spatial
+/// build (figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 class CornerSource {
  public:
   /// `copy`: of the primitives the tree holds, `what` (Selection).
@@ -108,8 +108,8 @@ class CornerSource {
   /// The corners of primitives `ids` into out[3 i .. 3 i + 2]. Primitives in tree order are
   /// scattered over the mesh, so the loop reads ahead: a primitive's index row 16 primitives
   /// before its turn, its corners 8 before, so that many reads are in flight instead of one
-  /// (dragon: the leaves' gather 21 -> 15 ms on 2 threads). Each primitive's mesh is looked
-  /// up once, into a ring of the next 32.
+  /// (measured faster; figures: docs/notes/2026-11-29-figures-from-code-comments.md). Each
+  /// primitive's mesh is looked up once, into a ring of the next 32.
   void gather(std::span<const uint32_t> ids, Vec3f* out) const {
     const size_t n = ids.size();
     if (!copy_.empty()) {
@@ -216,8 +216,8 @@ constexpr int kBins = 32;  ///< bins per axis for large nodes; small nodes use f
 /// Bins for a node of n primitives: 32 near the root, where the split matters most, fewer
 /// below 560 (Embree's 4 + n / 20, but at least 6), where a sweep over mostly
 /// empty bins would cost more than it finds. Against 8 / 16 / 32 bins below 64 / 1024 / above:
-/// dragon's build 145 -> 140 ms (alternated runs), SAH cost dragon 15.78 -> 15.86, bunny
-/// 10.30 -> 10.35, Sponza inside 21.58 -> 21.41.
+/// a slightly faster build at about the same SAH cost (figures:
+/// docs/notes/2026-11-29-figures-from-code-comments.md).
 constexpr int bins_for(uint32_t n) { return n >= 560 ? kBins : std::max(6, int(4 + n / 20)); }
 constexpr float kTraversalCost = 1.0f;      ///< SAH cost of visiting a node
 constexpr float kIntersectionCost = 0.15f;  ///< binary build: SAH cost of one primitive test (8-wide leaf tests: cheap)
@@ -225,7 +225,8 @@ constexpr float kLeafCost = 0.5f;           ///< collapse: SAH cost of one leaf'
 constexpr float kPrimCost = 0.1f;           ///< ...plus this per primitive in it
 /// A node of at most this many primitives that may be a leaf is one, whatever its best split
 /// (leaf_cheaper: kIntersectionCost * n <= kTraversalCost <= a split's cost), so it is not
-/// binned: about half of the binary tree's nodes (dragon: 154k of 421k).
+/// binned: a large share of the binary tree's nodes on the measured meshes (figures:
+/// docs/notes/2026-11-29-figures-from-code-comments.md).
 constexpr uint32_t kAlwaysLeaf = uint32_t(kTraversalCost / kIntersectionCost);
 static_assert(kIntersectionCost * float(kAlwaysLeaf) <= kTraversalCost);
 constexpr uint32_t kParallelThreshold = 4096;
@@ -338,10 +339,9 @@ class Builder {
 
   /// Overlap of a node's children below which no spatial split is tried, relative to the root's
   /// area (Stich et al.'s alpha): only where object splits leave children overlapping does
-  /// cutting space pay for the references it adds. Stich et al. use 1e-5; measured on dragon
-  /// and Sponza inside, 1e-3 keeps nearly all of the SAH gain (Sponza 16.47 -> 16.55, dragon
-  /// 15.07 -> 15.26; 21.58 and 15.78 without spatial splits) and the diffuse-ray speed, with
-  /// half the build time (dragon 2.16 -> 1.14 s, Sponza 0.278 -> 0.112 s) and fewer references.
+  /// cutting space pay for the references it adds. Stich et al. use 1e-5; measured, 1e-3 keeps
+  /// nearly all of the SAH gain and the diffuse-ray speed, with a much shorter build and fewer
+  /// references (figures: docs/notes/2026-11-29-figures-from-code-comments.md).
   static constexpr float kMinOverlap = 1e-3f;
 
   /// Position of plane k (0..nbins) of the spatial bins of `box` on `axis`.
@@ -604,7 +604,7 @@ class Builder {
   /// analytic flag are gathered on the way (no second scan). Lomuto's scheme with the swap
   /// made whether or not the ref goes left, so which side a ref takes is data, not a branch:
   /// the two-pointer scheme this replaced guessed wrong about once per ref, and the guesses
-  /// were half of its time (dragon's binary build 97 -> 76 ms).
+  /// were a large part of its time (figures: docs/notes/2026-11-29-figures-from-code-comments.md).
   Split partition(PrimRef* base, uint32_t begin, uint32_t end, const BinnedSplit& o, const BinMap& map) const {
     const float4 inf = simd::splat4(std::numeric_limits<float>::infinity());
     const float4 ninf = simd::splat4(-std::numeric_limits<float>::infinity());
@@ -828,8 +828,8 @@ class Builder {
   /// Whether the subtree may be one leaf: at most max_leaf primitives, and an analytic
   /// primitive only alone. A leaf's box is the only cull before a primitive's test, and a
   /// quadric sharing a leaf with triangles would be tested by every ray that reaches them
-  /// (on the default scene, 1.3-2.6 times as many scalar analytic tests as Embree, whose
-  /// user geometry has a box per primitive).
+  /// (on the default scene, measured, several times as many scalar analytic tests as Embree,
+  /// whose user geometry has a box per primitive).
   bool may_leaf(const BuildNode& n) const { return n.count() <= opt_.max_leaf && (n.count() == 1 || !n.analytic); }
 
   const CornerSource& corners_;
@@ -854,7 +854,7 @@ struct CornerIndex {
 /// leaf has at most 24), probing on from the hashed slot past occupied slots whose vertex
 /// differs. A match and a new vertex then take the same instructions: the linear search
 /// this replaced branched on where its match lay, a guess that failed about once per
-/// corner (dragon: 11 -> 9 ms of the build).
+/// corner (measured slower; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 CornerIndex index_corners(std::span<const Vec3f> corners) {
   constexpr uint32_t kSlots = 32, kFree = 0xff;
   static_assert(kSlots > kMaxLeafVertices);

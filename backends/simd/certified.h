@@ -25,9 +25,10 @@
 /// of tnear or tfar has its hit at the end of its segment (a ray leaving its own surface, or a
 /// near-tie with the hit that set tfar), where any test decides by a rounded t. A rigorous
 /// bound on the t error, tried first, was some thousands of u X wide: wider than the
-/// renderer's ray-origin offset on large triangles, it sent 8.6% of Sponza's shadow lanes (43%
-/// of leaf tests) to the slow path. Deciding by Möller–Trumbore also keeps the bits of a
-/// reported t independent of the order in which a traversal met the leaves.
+/// renderer's ray-origin offset on large triangles, it sent many of Sponza's shadow lanes to the
+/// slow path (figures: docs/notes/2026-11-29-figures-from-code-comments.md). Deciding by
+/// Möller–Trumbore also keeps the bits of a reported t independent of the order in which a
+/// traversal met the leaves.
 ///
 /// One guard keeps a hit's t accurate where Möller–Trumbore's is not: a lane inside
 /// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) is settled too, whatever its t (so
@@ -322,8 +323,8 @@ struct Uncertain {
 /// settles, which make every lane's answer (where the test was certain, Möller–Trumbore's from
 /// Uncertain: the fast path's bits). So nothing of the fast path's answer need be kept across
 /// the settle's call, and the caller's answer stays in registers (passed to the settles by
-/// reference, it would live in memory through the traversal: watertight bunny primary 3%
-/// slower).
+/// reference, it would live in memory through the traversal, and the watertight variant
+/// measured slower).
 struct Settled {
   TriHit8 w;
   /// Lane l, for each lane l of `unsure`, answer(l) (an Intersection<float>); `un`'s
@@ -347,7 +348,8 @@ struct Settled {
 /// The answers of one ray (with `tfar`) against the triangles of `leaf`, the lanes `unsure`
 /// settled (the leaf's edges, normals and factors made again as CertifiedKernel::Block makes
 /// them). Out of line and cold: inlined, it would make the traversal around the kernel keep
-/// its vectors in memory (bunny diffuse rays 20% slower, though it ran for 0.3% of leaf tests).
+/// its vectors in memory (diffuse rays measured much slower, though it runs for a small fraction
+/// of leaf tests; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 [[gnu::noinline, gnu::cold]] inline void settle_single(const Leaf& leaf, const Ray& ray, float tfar, uint32_t unsure,
                                                        Settled& out) {
   const LeafView lv(leaf);

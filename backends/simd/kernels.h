@@ -121,8 +121,8 @@ struct SingleRay {
 /// empty child's planes give +-inf) and tnear + 0 is >= +0 (a -0 tnear becomes +0), so the
 /// entry's max is exact in integer order, and the padded exits' min is exact where they are
 /// >= +0 and negative, a miss either way, where they are not (simd::max_bits): one cycle a
-/// step where float max and min take four (dragon diffuse single rays 0.82 -> 0.84, bunny
-/// 0.80 -> 0.86 of Embree's rtcIntersect1 in one run).
+/// step where float max and min take four (diffuse single rays measured closer to Embree's
+/// rtcIntersect1; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 RP_SIMD_INLINE uint32_t slab_hits(const float8& tn_x, const float8& tn_y, const float8& tn_z, const float8& tf_x,
                                   const float8& tf_y, const float8& tf_z, float tnear, float tfar, const float8& slack,
                                   float pad, float8& t_enter) {

@@ -334,7 +334,7 @@ class LargePacketTraversal {
   };
 
   /// The traversal stack, left uninitialised: only pushed entries are read (zeroing kStackSize
-  /// boxes per group was 3% of the instructions on the dragon).
+  /// boxes per group was a measurable share of the instructions).
   struct Stack {
     union {
       Entry at[kStackSize];
@@ -574,7 +574,8 @@ class LargePacketTraversal {
   /// A pushed subtree of the instance tree: the members that reach it as bits (bit k: group
   /// member k), not a range as in the world's tree: over a field of many small instances the
   /// members between the first and the last that reach a box mostly miss it, and testing
-  /// them cost more than the group saved (10,000 dragons: 0.87x the 8-ray packets' speed).
+  /// them cost more than the group saved (slower than 8-ray packets on a large field of
+  /// instances; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
   struct MaskEntry {
     int32_t ref;
     uint64_t reach;
@@ -590,10 +591,11 @@ class LargePacketTraversal {
   /// Whether the rays of the m members `which` (lanes `lanes`) reaching an instance whose box
   /// is centred at `at` are dense enough there for a group to pay in its mesh's tree: the
   /// distance between the first two rays of one packet (neighbours in a tile) where they pass
-  /// `at` is at most kDenseGap times the typical leaf size of the mesh as placed. Measured:
-  /// 16 bunnies at 512 x 512 (gap 0.7-0.9 leaf sizes) 36.7 Mrays/s as groups against 26.2 as
-  /// 8-ray packets on primary rays; 10,000 dragons at 1280 x 720 (gap 20-25 leaf sizes)
-  /// 4.4-4.8 as groups against 5.5-6.0 (groups of 2 to 16 packets reaching one dragon lose).
+  /// `at` is at most kDenseGap times the typical leaf size of the mesh as placed. Measured on
+  /// primary rays: where the gap is below a leaf size (a few instances filling the image)
+  /// groups beat 8-ray packets; where it is many leaf sizes (a large field of small instances,
+  /// a few packets reaching each) groups lose (figures:
+  /// docs/notes/2026-11-29-figures-from-code-comments.md).
   static bool dense(const Work& w, const uint8_t* which, const uint32_t* lanes, int m, const Vec3f& at,
                     float leaf_size) {
     for (int j = 0; j < m; ++j) {

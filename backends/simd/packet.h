@@ -23,7 +23,7 @@ namespace rp::bvh8 {
 /// The triangle test of the default variant: Möller–Trumbore (normal-first factoring), its
 /// edges computed from the leaf's vertices. Block: a leaf's triangles as the test takes them
 /// (edges and normals), made once from the leaf's LeafView for every ray tested against it
-/// (a ray stream brings 9-33 rays to each leaf it visits on bunny, dragon and Sponza);
+/// (a ray stream brings several rays to each leaf it visits on the measured scenes);
 /// Single: one ray against a Block; Triangle: one primitive of a leaf in every lane (its lane
 /// of the leaf's Block, broadcast); Packet: the 8 rays of a packet against one Triangle.
 struct MtKernel {

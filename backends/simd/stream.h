@@ -43,15 +43,15 @@
 
 namespace rp::bvh8 {
 
-/// A stream with fewer rays than this goes on ray by ray from its node. (1024² diffuse rays,
-/// one thread, streams of 4,096 rays: 2, 4 and 8 within 1% of each other on dragon.)
+/// A stream with fewer rays than this goes on ray by ray from its node. (2, 4 and 8 measured
+/// alike on diffuse rays; figures: docs/notes/2026-11-29-figures-from-code-comments.md.)
 inline constexpr uint32_t kMinStream = 4;
 
 /// Rays in one stream at most: a longer batch is cut into streams of this many, so the rays'
-/// state stays in L2 and a thread's buffers stay small. (One thread, 1024² diffuse rays,
-/// bunny / dragon / Sponza inside against rtcIntersect1: streams of 1,024 rays 1.05 / 0.86 /
-/// 0.92, 2,048 1.07 / 0.87 / 0.98, 4,096 1.05 / 0.87 / 0.98, 16,384 1.00 / 0.82 / 0.97,
-/// 65,536 0.94 / 0.79 / 0.90, the whole batch 0.96 / 0.92 / 0.39, in the first version.)
+/// state stays in L2 and a thread's buffers stay small. (Measured on diffuse rays against
+/// rtcIntersect1 in the first version: streams of 2,048 to 4,096 rays did best, longer ones
+/// lost speed, and the whole batch as one stream lost most on Sponza; figures:
+/// docs/notes/2026-11-29-figures-from-code-comments.md.)
 inline constexpr size_t kMaxStream = 4096;
 
 template <class Kernel>

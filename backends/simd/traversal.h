@@ -194,7 +194,8 @@ class Traversal {
         }
       } else {
         // The leaf's size is in its first byte, and the rows past it wait for that byte: ask
-        // for the lines of a typical leaf at once (dragon diffuse: 290 -> 273 ns a ray).
+        // for the lines of a typical leaf at once (measured faster on diffuse rays; figures:
+        // docs/notes/2026-11-29-figures-from-code-comments.md).
         prefetch_leaf(ref);
         const Leaf leaf = bvh_.leaf(ref);
         if (const uint32_t id = analytic_leaf(leaf); id != kInvalidId) {

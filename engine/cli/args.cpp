@@ -82,7 +82,8 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& erro
 }
 
 void add_scene_option(CLI::App* app, std::string& scene) {
-  app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .gltf, .glb, .json)")
+      ->capture_default_str();
 }
 
 void add_up_axis_option(CLI::App* app, std::string& up_axis) {

@@ -524,7 +524,7 @@ std::vector<std::string> draw_charts(const Json& j, const std::string& chart, co
   const size_t n_kinds = kinds.size();
 
   // Speed against accuracy: one panel per scene and kind, a point per method (an inline data
-  // block "Mrays/s drawn-rate" each), every method in the same style in every panel and named
+  // block "rate drawn-mismatch-rate" each), every method in the same style in every panel and named
   // once in a legend column on the right; a scene without results of a kind leaves its panel
   // empty.
   std::vector<std::string> methods;  // in order of first appearance
@@ -567,7 +567,7 @@ std::vector<std::string> draw_charts(const Json& j, const std::string& chart, co
   g << "unset multiplot\n";
   plot_to(chart, cat(width, ",", height), g.str());
 
-  // Cost against scene size: Mrays/s on diffuse rays against triangles, a line per method.
+  // Cost against scene size: the diffuse-ray rate against triangles, a line per method.
   std::ostringstream c;
   std::vector<std::string> labels;
   for (const Json& r : scenes[0]["results"])

@@ -45,8 +45,8 @@ struct ChartArgs {
 /// Runs the benchmark, prints the table, writes JSON and charts when asked. Returns 0.
 int run_bench(const BenchArgs& args);
 
-/// Draws `chart` (Mrays/s against mismatch rate, a panel per scene and ray kind) and, beside
-/// it, <name>-scaling.<ext> (Mrays/s against triangle count), both in the format of the
+/// Draws `chart` (rate against mismatch rate, a panel per scene and ray kind) and, beside
+/// it, <name>-scaling.<ext> (rate against triangle count), both in the format of the
 /// extension (.png or .svg), from a saved bench JSON file, and <name>-pareto.<ext> (draw_pareto)
 /// when `stability` names a stability JSON file. Throws rp::Error naming the file. Returns the
 /// files written.

@@ -22,6 +22,7 @@ struct DomainsArgs {
   std::string backend = "simd", variant = "default";
   uint64_t seed = 1;
   int threads = 0;
+  bool quiet = false;  ///< -q: print nothing
 
   /// Adds the `domains` subcommand to `app` with these flags.
   CLI::App* add_to(CLI::App& app);

@@ -12,13 +12,16 @@ namespace rp::cli {
 
 CLI::App* InfoArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("info", "Counts, bounds and bytes of a scene and of each backend's structure");
-  c->add_option("scene,--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .json)")->capture_default_str();
+  c->add_option("scene,--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .gltf, .glb, .json)")
+      ->capture_default_str();
   c->add_flag("--no-backends", no_backends, "Skip building the backends");
+  add_quiet_flag(c, quiet);
   return c;
 }
 
 /// Counts, bounds, degenerate triangles and the bytes of the scene and of each backend.
 int run_info(const InfoArgs& a) {
+  std::FILE* const out = a.quiet ? nullptr : stdout;  // -q: the scene and backends are still checked
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = load_scene_or_default(a.scene);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -29,9 +32,9 @@ int run_info(const InfoArgs& a) {
     with_uvs += !m.uvs.empty();
   }
   const Box3f b = scene.bounds();
-  std::printf("scene        %s (loaded in %.3f s)\n", a.scene.c_str(), load_s);
-  std::printf("triangles    %u in %zu mesh(es), %zu vertices (%zu meshes with normals, %zu with uvs)\n",
-              scene.triangle_count(), scene.meshes().size(), vertices, with_normals, with_uvs);
+  say(out, "scene        %s (loaded in %.3f s)\n", a.scene.c_str(), load_s);
+  say(out, "triangles    %u in %zu mesh(es), %zu vertices (%zu meshes with normals, %zu with uvs)\n",
+      scene.triangle_count(), scene.meshes().size(), vertices, with_normals, with_uvs);
   if (!scene.instances().empty()) {
     size_t instanced_meshes = 0;
     uint64_t unique = 0;
@@ -40,49 +43,51 @@ int run_info(const InfoArgs& a) {
         ++instanced_meshes;
         unique += scene.meshes()[m].triangle_count();
       }
-    std::printf("instances    %zu placing %zu instanced mesh(es): %llu unique triangles, %llu instanced (placed) "
-                "triangles; %llu triangles in the world\n",
-                scene.instances().size(), instanced_meshes, (unsigned long long)unique,
-                (unsigned long long)scene.instanced_triangle_count(),
-                (unsigned long long)(scene.triangle_count() - unique + scene.instanced_triangle_count()));
+    say(out,
+        "instances    %zu placing %zu instanced mesh(es): %llu unique triangles, %llu instanced (placed) "
+        "triangles; %llu triangles in the world\n",
+        scene.instances().size(), instanced_meshes, (unsigned long long)unique,
+        (unsigned long long)scene.instanced_triangle_count(),
+        (unsigned long long)(scene.triangle_count() - unique + scene.instanced_triangle_count()));
   }
-  std::printf("analytic     %zu spheres, %zu quadrics, %zu polygons, %zu planes\n", scene.spheres().size(),
-              scene.quadrics().size(), scene.polygons().size(), scene.planes().size());
-  std::printf("primitives   %u\n", scene.prim_count());
-  std::printf("degenerate   %zu zero-area triangles\n", scene.degenerate_triangle_count());
-  if (b.empty()) std::printf("bounds       empty\n");
+  say(out, "analytic     %zu spheres, %zu quadrics, %zu polygons, %zu planes\n", scene.spheres().size(),
+      scene.quadrics().size(), scene.polygons().size(), scene.planes().size());
+  say(out, "primitives   %u\n", scene.prim_count());
+  say(out, "degenerate   %zu zero-area triangles\n", scene.degenerate_triangle_count());
+  if (b.empty())
+    say(out, "bounds       empty\n");
   else
-    std::printf("bounds       (%g, %g, %g) - (%g, %g, %g)\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
-  std::printf("materials    %zu; lights: %zu point, %zu directional; camera: %s\n", scene.materials().size(),
-              scene.point_lights().size(), scene.directional_lights().size(),
-              scene.camera() ? "from the scene" : "derived from the bounds");
+    say(out, "bounds       (%g, %g, %g) - (%g, %g, %g)\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+  say(out, "materials    %zu; lights: %zu point, %zu directional; camera: %s\n", scene.materials().size(),
+      scene.point_lights().size(), scene.directional_lights().size(),
+      scene.camera() ? "from the scene" : "derived from the bounds");
   const double prims = std::max(1.0, double(scene.prim_count()));
-  std::printf("scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
+  say(out, "scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
   if (a.no_backends) return 0;
   // With instances, the bytes of each level: the top (the world's own structure and the one
   // over the instances) and the instanced meshes' structures, each built once.
   const bool levels = !scene.instances().empty();
-  std::printf("\n%-8s %-10s %8s %14s %12s", "backend", "variant", "build s", "bytes", "bytes/prim");
-  if (levels) std::printf(" %14s %14s", "top level", "mesh level");
-  std::printf("\n");
+  say(out, "\n%-8s %-10s %8s %14s %12s", "backend", "variant", "build s", "bytes", "bytes/prim");
+  if (levels) say(out, " %14s %14s", "top level", "mesh level");
+  say(out, "\n");
   for (const BackendEntry& e : list_backends()) {
     if (!e.available) {
-      std::printf("%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
+      say(out, "%-8s unavailable: %s\n", e.name.c_str(), e.unavailable_reason.c_str());
       continue;
     }
     for (const std::string& variant : e.variants) {  // every variant: their memory differs (Embree's compact)
       const auto backend = build_backend(e.name, variant, scene, a.scene);
       const BackendInfo& i = backend->info();
-      std::printf("%-8s %-10s %8.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
-                  double(i.bytes) / prims);
-      if (levels) std::printf(" %14zu %14zu", i.levels.top, i.levels.meshes);
+      say(out, "%-8s %-10s %8.3f %14zu %12.1f", i.name.c_str(), i.variant.c_str(), i.build_seconds, i.bytes,
+          double(i.bytes) / prims);
+      if (levels) say(out, " %14zu %14zu", i.levels.top, i.levels.meshes);
       for (const auto& [key, value] : i.stats) {
         if (value == std::floor(value) && std::abs(value) < 9.0e15)  // counts as integers, never 1.99965e+07
-          std::printf("  %s=%lld", key.c_str(), (long long)value);
+          say(out, "  %s=%lld", key.c_str(), (long long)value);
         else
-          std::printf("  %s=%g", key.c_str(), value);
+          say(out, "  %s=%g", key.c_str(), value);
       }
-      std::printf("\n");
+      say(out, "\n");
     }
   }
   return 0;

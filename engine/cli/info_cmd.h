@@ -13,6 +13,7 @@ namespace rp::cli {
 struct InfoArgs {
   std::string scene = "default";
   bool no_backends = false;
+  bool quiet = false;  ///< -q: print nothing (the scene is loaded and the backends built all the same)
 
   /// Adds the `info` subcommand to `app` with these flags.
   CLI::App* add_to(CLI::App& app);

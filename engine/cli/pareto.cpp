@@ -53,7 +53,7 @@ std::string draw_pareto(const Json& bench, const std::string& stability_path, co
   const std::string out = companion_chart(chart, "-pareto");
   constexpr double kFloor = 1e-5;  // where a zero failure rate is drawn
 
-  // Per ray kind and method: the log-sum of its fastest method's Mrays/s over the scenes.
+  // Per ray kind and method: the log-sum of its fastest method's rate over the scenes.
   std::vector<std::string> kinds, methods, scene_names;
   std::map<std::pair<std::string, std::string>, std::pair<double, int>> speed;  // (kind, method) -> (sum log, scenes)
   for (const Json& sc : bench["scenes"]) {

@@ -25,7 +25,7 @@ struct HardFailures {
 std::map<std::string, HardFailures> read_hard_failures(const std::string& path);
 
 /// Draws <dir>/<stem>-pareto<ext> beside `chart` (.png or .svg by its extension): a panel per
-/// ray kind of `bench`, x the Mrays/s of each backend method (bench's "backend" key, e.g.
+/// ray kind of `bench`, x the rate (million rays a second) of each backend method (bench's "backend" key, e.g.
 /// simd/watertight: its fastest method for that kind, geometric mean over the file's scenes),
 /// y the failed rays over all rays of the hard families in the stability file at
 /// `stability_path` for the method of that name; one point per method found in both files,

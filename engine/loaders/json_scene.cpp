@@ -4,122 +4,12 @@
 /// first problem throws one line, "<file>: <JSON path>: <what>", e.g.
 ///   scene.json: $.objects[2].radus: unknown key (expected one of: type, center, radius, material)
 ///
-/// The format, exactly as read here:
-///
-///   {
-///     "camera":    {...},            optional (without one the CLI frames the scene)
-///     "materials": {"name": {...}},  optional; objects refer to materials by name
-///     "meshes":    {"name": {...}},  optional; mesh files declared once, placed by "instance" objects
-///     "lights":    [{...}, ...],     optional; none (absent or []) = load_scene's default lights
-///     "objects":   [{...}, ...]      required, at least one
-///   }
-///
-/// Unknown keys are errors everywhere. Every key is optional unless marked (required); the
-/// default follows "=". A repeated key keeps its last value (nlohmann's parser). Comments are
-/// not JSON and are refused. Numbers are read as 32-bit floats and must fit in one. A
-/// "vector" is an array of exactly 3 numbers; a "colour" is a vector of components >= 0; a
-/// "direction" is a vector of non-zero length, normalised on reading.
-///
-/// camera: "eye" vector = [0,0,5]; "look_at" vector = [0,0,0] (must differ from eye);
-///   "up" vector = [0,1,0] (must not be parallel to look_at - eye); "fov" number = 45, the
-///   vertical field of view in degrees, in (0, 180); "model" = "pinhole" (or "panoramic",
-///   "fisheye", "thin_lens"); "fisheye_fov" number = 180, in (0, 360]; "aperture" number = 0,
-///   the thin lens radius, >= 0; "focus_distance" number = 0 (0: the look-at distance), >= 0.
-///
-/// materials: an object whose keys are the names ("material": "<name>" in objects). Ids are
-///   given in file order after those already in the scene; an object without "material"
-///   uses material 0, the scene's default grey. Keys (see rp::Material):
-///   "diffuse" colour = [0.8,0.8,0.8]; "specular" colour = [0,0,0]; "shininess" number = 32,
-///   >= 0 (Blinn-Phong exponent); "emission" colour = [0,0,0]; "mirror" number = 0, in
-///   [0, 1]; "ior" number = 1, >= 1; "opacity" number = 1, in [0, 1].
-///
-/// meshes: an object whose keys are names ("mesh": "<name>" in "instance" objects), each an
-///   object of "file" (required; as a "mesh" object's) and "material" (a name defined in
-///   "materials"; as a "mesh" object's). A mesh placed by one "instance" object is baked into
-///   world coordinates, as a "mesh" object is; placed by several, it is stored once, in its
-///   file's coordinates, and each placement is an instance (engine/scene.h: its triangles keep
-///   one set of prim_ids, Hit::instance_id names the placement). Its triangles are numbered
-///   after every object's, in the order the meshes are declared; a mesh no object places is
-///   not loaded (a warning says so).
-///
-/// lights: an array of objects, each with "type" (required):
-///   "point":       "position" vector (required); "intensity" colour = [1,1,1] (irradiance
-///                  at distance r is intensity / r^2).
-///   "directional": "direction" direction = [0,-1,0], from the light into the scene;
-///                  "irradiance" colour = [1,1,1].
-///
-/// objects: an array of objects, each with "type" (required) and "material" (a name
-///   defined in "materials"; default: material 0):
-///   "sphere":  "center" vector = [0,0,0]; "radius" number = 1, > 0.
-///   "plane":   "normal" direction = [0,1,0]; "offset" number = 0: the plane of the points P
-///              with dot(normal, P) = offset (its signed distance from the origin along the
-///              normalised normal), seen from both sides.
-///   "polygon": "vertices" (required) an array of >= 3 vectors, in order around the
-///              boundary, not collinear, coplanar within 1e-4 of the diagonal of their box.
-///   "quadric": exactly one of "shape" (a named shape) or "coefficients" (a general quadric).
-///     Named shapes (rp::Quadric's constructors; all lengths are numbers > 0, default 1;
-///     "center" vector = [0,0,0]; "axis" = "y", one of "x", "y", "z": the symmetry axis):
-///       "ellipsoid":    "center", "radii" vector = [1,1,1], every component > 0.
-///       "cylinder":     "center", "radius_a", "radius_b", "half_height", "axis" (open tube).
-///       "cone":         "center" (the apex), "a", "b" (slopes), "half_height", "axis".
-///       "hyperboloid1": "center", "a", "b", "c", "half_height", "axis" (one sheet).
-///       "hyperboloid2": "center", "a", "b", "c", "half_height", "axis" (two sheets);
-///                       half_height must be > c (default 2c).
-///       "paraboloid":   "center" (the vertex), "a", "b", "height", "axis".
-///     The radial lengths a, b (radius_a, radius_b) go with the two other axes in x, y, z
-///     order: axis "y" puts a along x and b along z.
-///     General: "coefficients" an object with any of "A".."J" (numbers, default 0, at least
-///     one of A..I non-zero): A x^2 + B y^2 + C z^2 + D xy + E yz + F xz + G x + H y + I z +
-///     J = 0 in (x, y, z) = P - center; "center" vector = [0,0,0]; "clip" (required) an
-///     object with "min" and "max" (required vectors, min <= max per axis): the world-space
-///     box that keeps the part of the surface inside it.
-///   "mesh":    "file" (required) a .obj or .ply file (extension case-insensitive), relative to
-///              the directory of the scene file unless absolute; "transform" an object of
-///              "scale" = 1 (a number > 0 or a vector of components > 0; a mirroring scale
-///              would set the winding against the normals), "rotate" (an object of "axis"
-///              direction = [0,1,0] and "degrees" number = 0, counter-clockwise seen from the
-///              axis tip) and "translate" vector = [0,0,0], applied to positions
-///              in the order scale, rotate, translate whatever the key order, and to normals
-///              as the inverse transpose, renormalised. Without "material", the file's
-///              materials are appended to the scene and its meshes keep them; with it, every
-///              triangle takes that material and the file's materials are not added.
-///   "instance": "mesh" (required) the name of a mesh of "meshes"; "transform" as a "mesh"
-///              object's (scale, rotate, translate; a mirroring scale is refused). No
-///              "material": a mesh's placements share its materials.
-///
-/// Error messages, every one "<file>: " and then (the path in JSONPath notation, $ the root,
-/// $.a["not an identifier"]; values as the file has them, compact, cut to 40 characters
-/// with "..."):
-///   line L, column C: <nlohmann's reason>                          JSON syntax (columns in bytes)
-///   line L, column C: nesting deeper than 64 levels                 checked before parsing
-///   number overflow parsing '1e999'                                a number beyond double
-///   <path>.<key>: unknown key (expected one of: <keys>)
-///   <path>: missing key "<key>"
-///   <path>: expected a number, got "wide"        also: a string, an object, an array, 3 numbers,
-///                                                a number or 3 numbers, at least one object, an
-///                                                array of at least 3 vertices
-///   <path>: -1 is out of range (must be > 0)     also: >= 0, >= 1, in [0, 1], in (0, 180),
-///                                                > c = 1, >= min[k] = 2, fit in a 32-bit float,
-///                                                have a non-zero length, differ from eye (look_at),
-///                                                not be parallel to look_at - eye
-///   <path>.type: unknown object type "cube" (expected one of: sphere, plane, polygon, quadric, mesh, instance)
-///                likewise: unknown light type, unknown quadric shape, unknown axis
-///   <path>.material: unknown material "blue" (materials: red, white | no materials are defined)
-///   <path>.mesh: unknown mesh "tree" (meshes: rock, house | no meshes are declared)
-///   <path>: <a Scene check's message> for a placement, e.g. the mesh placed outside the range
-///   <path>: expected "shape" or "coefficients", not both
-///   <path>: missing key "shape" (or "coefficients")
-///   <path>.coefficients: {"J":-1} has no x, y or z term (one of A..I must be non-zero)
-///   <path>.vertices: [[0,0,0],[1,0,0],[2,0,0]] has zero area (the vertices are collinear)
-///   <path>.vertices[i]: [0,0,0] is 0.235702 off the polygon's plane (the vertices must be coplanar)
-///   <path>.file: "model.stl" is not a mesh file (expected .obj or .ply)
-///   <path>.file: <resolved path>: <the OBJ/PLY loader's message>   e.g. cannot open: No such file...
-///   <path>.file: <resolved path>: the file has no triangles
-///   <path>: <a Scene check's message>                              (kept as a safety net)
-
-///
-/// One file of about 800 lines on purpose: the format's specification above (125 lines) and
-/// the one reader that enforces it line by line, so a rule and its check are read together.
+/// The format, key by key, with every default, range and error message, is specified in
+/// docs/scene-formats.md ("The JSON scene format, key by key"); this reader enforces it rule
+/// by rule, and a change to either goes with a change to the other. In short: an object of
+/// "camera", "materials" (by name), "meshes" (mesh files declared once, placed by "instance"
+/// objects), "lights" and "objects" (required: spheres, planes, polygons, quadrics, meshes,
+/// instances); unknown keys are errors everywhere; numbers must fit a 32-bit float.
 
 #include <algorithm>
 #include <array>
