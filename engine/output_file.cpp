@@ -233,6 +233,19 @@ void OutputFile::commit() {
   slot_ = -1;
 }
 
+int pwrite_all(int fd, const void* data, size_t n, uint64_t offset) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::pwrite(fd, p, n, off_t(offset));
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return w < 0 ? errno : EIO;
+    p += w;
+    n -= size_t(w);
+    offset += uint64_t(w);
+  }
+  return 0;
+}
+
 void write_file(const std::string& path, std::string_view bytes) {
   OutputFile out(path);
   out.write(bytes.data(), bytes.size());

@@ -23,6 +23,7 @@
 /// rp::Error "<path>: cannot write: <reason>".
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -64,6 +65,10 @@ class OutputFile {
   int slot_ = -1;       ///< the signal-cleanup slot holding temp_
   bool committed_ = false;
 };
+
+/// Writes all `n` bytes at byte `offset` of the open file `fd` (pwrite until done, EINTR
+/// retried); returns 0, or the errno of the write that failed (EIO for a write of 0 bytes).
+int pwrite_all(int fd, const void* data, size_t n, uint64_t offset);
 
 /// Writes `bytes` to `path` by the rule above.
 void write_file(const std::string& path, std::string_view bytes);

@@ -26,13 +26,7 @@ void write_at(const std::string& path, uint64_t offset, std::string_view bytes) 
     ::close(fd);
     throw Error(cat(path, ": cannot write: ", std::strerror(e)));
   };
-  while (!bytes.empty()) {
-    const ssize_t n = ::pwrite(fd, bytes.data(), bytes.size(), off_t(offset));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) fail(n < 0 ? errno : EIO);
-    bytes.remove_prefix(size_t(n));
-    offset += uint64_t(n);
-  }
+  if (const int e = pwrite_all(fd, bytes.data(), bytes.size(), offset)) fail(e);
   if (::fsync(fd) != 0) fail(errno);
   if (::close(fd) != 0) throw Error(cat(path, ": cannot write: ", std::strerror(errno)));
 }

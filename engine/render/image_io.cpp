@@ -42,18 +42,9 @@ class DescriptorProxy final : public OIIO::Filesystem::IOProxy {
     return n;
   }
   size_t pwrite(const void* buf, size_t size, int64_t offset) override {
-    const char* p = static_cast<const char*>(buf);
-    size_t done = 0;
-    while (done < size) {
-      const ssize_t w = ::pwrite(fd_, p + done, size - done, offset + int64_t(done));
-      if (w < 0 && errno == EINTR) continue;
-      if (w <= 0) {
-        if (failure_ == 0) failure_ = w < 0 ? errno : EIO;
-        break;
-      }
-      done += size_t(w);
-    }
-    return done;
+    const int e = pwrite_all(fd_, buf, size, uint64_t(offset));
+    if (e != 0 && failure_ == 0) failure_ = e;
+    return e == 0 ? size : 0;
   }
   size_t read(void* buf, size_t size) override {
     const size_t n = pread(buf, size, m_pos);
