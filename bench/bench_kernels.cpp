@@ -1,4 +1,4 @@
-// BM_Kernel/<slab8|moller_trumbore8|certified8|sphere8>: the simd backend's 8-wide kernels per call, on
+// BM_Kernel/<slab8|moller_trumbore8|watertight8|sphere8>: the simd backend's 8-wide kernels per call, on
 // seeded random inputs, with the fraction of lanes that hit as a counter. This file is built
 // for AVX2+FMA; main() registers these benchmarks only when the CPU has both.
 
@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "backends/simd/kernels.h"
 #include "backends/simd/packet.h"
+#include "backends/simd/watertight.h"
 #include "engine/geometry/sphere.h"
 
 namespace rp::bvh8 {
@@ -100,13 +100,13 @@ void BM_MollerTrumbore8(benchmark::State& state) {
       });
 }
 
-/// The watertight variant's test x8 (certified.h): Möller–Trumbore with the bound on its edge
+/// The watertight variant's test x8 (watertight.h): Möller–Trumbore with the bound on its edge
 /// decisions, the exact test for the lanes it leaves uncertain.
-void BM_Certified8(benchmark::State& state) {
+void BM_Watertight8(benchmark::State& state) {
   triangle_kernel(
-      state, [](const Ray& r) { return CertifiedKernel::Single(r); },
-      [](const CertifiedKernel::Single& k, const LeafView& tv) {
-        return k.block(CertifiedKernel::Block(tv), float8(100.0f));
+      state, [](const Ray& r) { return WatertightKernel::Single(r); },
+      [](const WatertightKernel::Single& k, const LeafView& tv) {
+        return k.block(WatertightKernel::Block(tv), float8(100.0f));
       });
 }
 
@@ -137,7 +137,7 @@ void BM_Sphere8(benchmark::State& state) {
 void register_kernel_benchmarks() {
   benchmark::RegisterBenchmark("BM_Kernel/slab8", BM_Slab8);
   benchmark::RegisterBenchmark("BM_Kernel/moller_trumbore8", BM_MollerTrumbore8);
-  benchmark::RegisterBenchmark("BM_Kernel/certified8", BM_Certified8);
+  benchmark::RegisterBenchmark("BM_Kernel/watertight8", BM_Watertight8);
   benchmark::RegisterBenchmark("BM_Kernel/sphere8", BM_Sphere8);
 }
 

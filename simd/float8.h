@@ -355,6 +355,11 @@ inline Vec3x8 cross_fma(const Vec3x8& a, const Vec3x8& b) {
   return {xsimd::fms(a.y, b.z, a.z * b.y), xsimd::fms(a.z, b.x, a.x * b.z), xsimd::fms(a.x, b.y, a.y * b.x)};
 }
 
+/// Max-abs norm of each lane.
+inline float8 max_abs(const Vec3x8& a) {
+  return xsimd::max(xsimd::abs(a.x), xsimd::max(xsimd::abs(a.y), xsimd::abs(a.z)));
+}
+
 /// Dot product with two FMAs, in the order of rp::dot_fma: fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
 inline float8 dot_fma(const Vec3x8& a, const Vec3x8& b) {
   return xsimd::fma(a.x, b.x, xsimd::fma(a.y, b.y, a.z * b.z));

@@ -1,6 +1,7 @@
 #pragma once
 /// The 8-wide BVH of the simd backend: layout and build. Plain C++ (no SIMD types), so the
-/// layout can be inspected and tested anywhere; traversal lives in traversal.h and large_packet.h.
+/// layout can be inspected and tested anywhere; the traversal loops are single_ray.h,
+/// packet8.h, large_packet.h and stream.h (levels.h).
 
 #include <sys/mman.h>
 

@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <optional>
 #include <vector>
 
 #include "backends/simd/bvh8.h"
-#include "backends/simd/instances.h"
 #include "backends/simd/large_packet.h"
 #include "backends/simd/stream.h"
 #include "backends/simd/traversal.h"
+#include "backends/simd/watertight.h"
 #include "engine/error.h"
 
 namespace rp::bvh8 {
@@ -18,17 +17,15 @@ namespace rp::bvh8 {
 namespace {
 
 /// The trees of a scene's instanced meshes (build_mesh), each once, and the instance tree
-/// over its instances (build_instances): the second and top levels (instances.h).
-template <class Kernel>
-struct InstanceLevel {
+/// over its instances (build_instances): the second and top levels (levels.h).
+struct InstanceTrees {
   std::vector<Bvh8> meshes;  ///< one per instanced mesh that some instance places
-  std::vector<Traversal<Kernel>> traversals;  ///< meshes[k]'s
+  std::vector<Placed> placed;  ///< instance i of the scene: placed[i]
   InstanceTree tree;
-  std::optional<InstanceTraversal<Kernel>> traversal;
   size_t mesh_bytes = 0;
   double seconds = 0;
 
-  InstanceLevel(const Scene& scene, const BuildOptions& options) {
+  InstanceTrees(const Scene& scene, const BuildOptions& options) {
     if (scene.instances().empty()) return;
     const auto start = std::chrono::steady_clock::now();
     std::vector<uint32_t> tree_of(scene.meshes().size(), kInvalidId);
@@ -38,20 +35,14 @@ struct InstanceLevel {
         meshes.push_back(build_mesh(scene, in.mesh, options));
         mesh_bytes += meshes.back().stats.bytes;
       }
-    traversals.reserve(meshes.size());  // never reallocated: the instances point at them
-    std::vector<float> leaf_size;
-    for (const Bvh8& m : meshes) {
-      traversals.emplace_back(m, scene);
-      leaf_size.push_back(mean_leaf_size(m));
-    }
-    std::vector<typename InstanceTraversal<Kernel>::Placed> placed;
+    std::vector<float> leaf_size;  // meshes is complete: the instances point into it
+    for (const Bvh8& m : meshes) leaf_size.push_back(mean_leaf_size(m));
     for (const Instance& in : scene.instances()) {
       const float scale = float(std::cbrt(std::abs(double(in.object_to_world.determinant()))));
       const uint32_t k = tree_of[in.mesh];
-      placed.push_back({in.world_to_object, &traversals[k], leaf_size[k] * scale});
+      placed.push_back({in.world_to_object, &meshes[k], leaf_size[k] * scale});
     }
     tree = build_instances(scene);
-    traversal.emplace(tree, std::move(placed));
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 };
@@ -63,12 +54,11 @@ class SimdBackend final : public Backend {
               bool streams)
       : bvh_(build(scene, build_options)),
         level_(scene, build_options),
-        traversal_(bvh_, scene),
+        traversal_(bvh_, scene, level_.tree, level_.placed),
         large_(traversal_),
         stream_(traversal_),
         large_packets_(large_packets),
         streams_(streams) {
-    if (level_.traversal) traversal_.set_instances(&*level_.traversal);
     info_.name = "simd";
     info_.variant = variant;
     info_.build_seconds = bvh_.stats.seconds + level_.seconds;
@@ -133,7 +123,7 @@ class SimdBackend final : public Backend {
 
  private:
   Bvh8 bvh_;
-  InstanceLevel<Kernel> level_;
+  InstanceTrees level_;
   Traversal<Kernel> traversal_;
   LargePacketTraversal<Kernel> large_;
   StreamTraversal<Kernel> stream_;
@@ -173,7 +163,7 @@ std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& 
   if (v == "median")
     return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.rule = SplitRule::median}, large, stream);
   if (v == "watertight")
-    return std::make_unique<SimdBackend<CertifiedKernel>>(scene, v, BuildOptions{}, large, stream);
+    return std::make_unique<SimdBackend<WatertightKernel>>(scene, v, BuildOptions{}, large, stream);
   if (v == "spatial")
     return std::make_unique<SimdBackend<MtKernel>>(scene, v, BuildOptions{.spatial_splits = true}, large, stream);
   throw Error(cat("simd: unknown variant '", v, "' (default, median, watertight, spatial)"));

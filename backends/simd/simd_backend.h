@@ -13,8 +13,8 @@
 namespace rp::bvh8 {
 
 /// Variants: "default" (binned SAH build, Möller–Trumbore), "median" (the lecture notes' rule: longest
-/// axis, centroid median, balanced), "watertight" (SAH build, Möller–Trumbore with a certified
-/// error bound and exact edge decisions where it is uncertain, certified.h: no ray passes
+/// axis, centroid median, balanced), "watertight" (SAH build, Möller–Trumbore with a forward
+/// error bound and exact edge decisions where it is uncertain, watertight.h: no ray passes
 /// between triangles that share an edge or a vertex),
 /// "spatial" (SAH build with spatial splits, BuildOptions::spatial_splits; Möller–Trumbore: the
 /// same hits as "default", a tree with less overlap where triangles are long and thin, built

@@ -8,13 +8,13 @@
 /// at a time); the children are visited near-first along the stream's mean direction, each
 /// with its own stream. At a leaf the vertex block is decoded once for the whole stream and
 /// every ray takes the single-ray triangle test. A stream of fewer than kMinStream rays, and
-/// a leaf holding an analytic primitive, go on ray by ray (Traversal::closest / any, from
-/// that node).
+/// a leaf holding an analytic primitive, go on ray by ray (single_ray.h, from that node).
 ///
-/// In a scene with instances the batch then goes down the instance tree (instances.h) as a
-/// stream the same way; at an instance, the rays of its stream are mapped into its object
-/// space (rp::object_ray, the single-ray path's bits) and traced through the mesh's tree as a
-/// stream of their own, with the hits found so far (the map keeps t the world t).
+/// One loop (trace_stream) for both levels (levels.h) and every query (the stream policies
+/// below, over queries.h): in a scene with instances the batch then goes down the instance
+/// tree as a stream the same way; at an instance, the rays of its stream are mapped into its
+/// object space (rp::object_ray, the single-ray path's bits) and traced through the mesh's
+/// tree as a stream of their own, with the answers found so far (the map keeps t the world t).
 ///
 /// Why it pays over tracing the rays one by one: a ray alone walks the tree as a chain of
 /// dependent loads and branches no predictor can guess (how many children were hit, node or
@@ -28,7 +28,7 @@
 ///
 /// Answers are those of the single-ray traversal, bit for bit: the same slab test (one-FMA
 /// form; rays that need the exact form, SlabRay::exact, are traced alone), the same
-/// triangle test, and hits resolved by the rule of Traversal (the least (t, prim_id)), which
+/// triangle test, and hits resolved by the rule of levels.h (the least (t, prim_id)), which
 /// does not depend on the order leaves are met. AVX2+FMA translation units only.
 
 #include <algorithm>
@@ -57,7 +57,7 @@ inline constexpr size_t kMaxStream = 4096;
 template <class Kernel>
 class StreamTraversal {
  public:
-  explicit StreamTraversal(const Traversal<Kernel>& t) : t_(t), bvh_(t.bvh()) {}
+  explicit StreamTraversal(const Traversal<Kernel>& t) : t_(t) {}
 
   /// Closest hits of a batch of rays, the planes included.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
@@ -96,7 +96,7 @@ class StreamTraversal {
     std::vector<uint8_t> bits;  ///< each ray's hit mask at the node being split
     std::vector<Frame> frames;
   };
-  /// A thread's buffers: level 0 for the world's tree and the instance tree, level 1 for an
+  /// A thread's buffers: depth 0 for the world's tree and the instance tree, 1 for an
   /// instance's mesh (traced while the instance level's stream waits).
   static Scratch& scratch(int level) {
     static thread_local Scratch s[2];
@@ -112,8 +112,9 @@ class StreamTraversal {
       hits[i] = Hit{};
       hits[i].t = rays[i].tfar;
     }
-    closest_tree(rays, hits, scratch(0), kNoInstance);
-    if (const InstanceQueries<Kernel>* in = t_.instances()) closest_instances(*in, rays, hits);
+    ClosestStream q{rays, hits};
+    trace_stream(t_.world(), rays, q, scratch(0));
+    if (const InstanceLevel<Kernel>* in = t_.instances()) trace_stream(*in, rays, q, scratch(0));
     const bool planes = !t_.scene().planes().empty();
     for (size_t i = 0; i < rays.size(); ++i) {
       if (!hits[i].hit()) hits[i] = Hit{};
@@ -125,50 +126,71 @@ class StreamTraversal {
   void occluded_stream(std::span<const Ray> rays, std::span<uint8_t> out) const noexcept {
     // Planes first: in a scene without any, validity is left to enter_all.
     for (size_t i = 0; i < rays.size(); ++i) out[i] = t_.scene().occluded_by_planes(rays[i]) && valid_ray(rays[i]);
-    any_tree(rays, out, scratch(0));
-    if (const InstanceQueries<Kernel>* in = t_.instances()) any_instances(*in, rays, out);
+    AnyStream q{rays, out};
+    trace_stream(t_.world(), rays, q, scratch(0));
+    if (const InstanceLevel<Kernel>* in = t_.instances()) trace_stream(*in, rays, q, scratch(0));
   }
 
-  /// Closest hits in this traversal's tree of the valid rays of `rays` into `hits` (each t:
-  /// its ray's tfar, or a closer hit found already), naming instance `inst`.
-  void closest_tree(std::span<const Ray> rays, std::span<Hit> hits, Scratch& s, uint32_t inst) const noexcept {
-    if (bvh_.empty()) return;
-    const size_t n = rays.size();
-    prepare(n, s);
-    const uint32_t count = enter_all(
-        rays, s, [](size_t) { return false; }, [&](size_t i) { return hits[i].t; },
-        [&](size_t i) { t_.closest(rays[i], 0, hits[i], inst); });
-    traverse<false>(
-        bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_closest(f, s, rays, hits, inst); },
-        [&](uint32_t i, int32_t ref) {
-          t_.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i], inst);
-          s.rays[i].tfar = hits[i].t;
-        });
+  /// The valid rays of `rays` that query `q` still needs (q.skip) as one stream through level
+  /// `lv`: the one loop of the stream shape. A ray that needs the exact slab form
+  /// (SlabRay::exact), a stream of fewer than kMinStream rays and a leaf holding an analytic
+  /// primitive go on ray by ray (q.single, single_ray.h).
+  template <class Level, class Q>
+  static void trace_stream(const Level& lv, std::span<const Ray> rays, Q& q, Scratch& s) noexcept {
+    if (lv.empty()) return;
+    prepare(rays.size(), s);
+    const uint32_t count = enter_all(rays, s, q, [&](size_t i) { q.single(lv, i, SingleRay(rays[i]), 0); });
+    if (count) s.frames.push_back({0, 0, count, count});
+    while (!s.frames.empty()) {
+      const Frame f = s.frames.back();
+      s.frames.pop_back();
+      if (f.count < kMinStream || (is_leaf(f.ref) && analytic(lv, f.ref))) {
+        for (uint32_t k = 0; k < f.count; ++k) {
+          const uint32_t i = s.ids[f.begin + k];
+          s.rays[i].tfar = q.single(lv, i, SingleRay(rays[i], s.rays[i].slab), f.ref);
+        }
+      } else if (is_leaf(f.ref)) {
+        stream_leaf(lv, f, rays, q, s);
+      } else {
+        split<Q::kNearFirst>(lv, f, s);
+      }
+    }
   }
 
-  /// Any hits in this traversal's tree of the valid rays of `rays` not occluded already
-  /// (out[i] == 0), into `out`.
-  void any_tree(std::span<const Ray> rays, std::span<uint8_t> out, Scratch& s) const noexcept {
-    if (bvh_.empty()) return;
-    const size_t n = rays.size();
-    prepare(n, s);
-    const uint32_t count = enter_all(
-        rays, s, [&](size_t i) { return out[i] != 0; }, [&](size_t i) { return rays[i].tfar; },
-        [&](size_t i) { out[i] = t_.any(rays[i], 0); });
-    const auto done = [&](uint32_t i) {
-      out[i] = 1;
-      s.rays[i].tfar = -std::numeric_limits<float>::infinity();  // every box misses from now on
-    };
-    traverse<true>(
-        bvh_.nodes.data(), false, count, s, [&](const Frame& f) { leaf_any(f, s, rays, out, done); },
-        [&](uint32_t i, int32_t ref) {
-          if (!out[i] && t_.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
-        });
+  static bool analytic(const MeshLevel<Kernel>& lv, int32_t ref) {
+    return lv.analytic_leaf(lv.bvh.leaf(ref)) != kInvalidId;
+  }
+  static bool analytic(const InstanceLevel<Kernel>&, int32_t) { return false; }
+
+  /// The triangles of the leaf of `f` (decoded once) against each ray of its stream.
+  template <class Q>
+  static void stream_leaf(const MeshLevel<Kernel>& lv, const Frame& f, std::span<const Ray> rays, Q& q,
+                          Scratch& s) noexcept {
+    const Leaf leaf = lv.bvh.leaf(f.ref);
+    const typename Kernel::Block kb{LeafView(leaf)};
+    for (uint32_t k = 0; k < f.count; ++k) {
+      const uint32_t i = s.ids[f.begin + k];
+      q.triangles(leaf, kb, rays, i, lv.inst, s.rays[i].tfar);
+    }
   }
 
-  // ---- the instance level ----
+  /// An instance: the rays of its stream in its object space through its mesh, as a stream of
+  /// their own with the answers so far.
+  template <class Q>
+  static void stream_leaf(const InstanceLevel<Kernel>& lv, const Frame& f, std::span<const Ray> rays, Q& q,
+                          Scratch& s) noexcept {
+    const uint32_t id = leaf_offset(f.ref);
+    const Placed& pl = lv.placed[id];
+    ObjectBatch& ob = object_batch();
+    ob.rays.resize(f.count);
+    for (uint32_t k = 0; k < f.count; ++k)  // an invalid one misses the instance
+      ob.rays[k] = object_ray(rays[s.ids[f.begin + k]], pl.world_to_object);
+    auto oq = q.object(ob, std::span<const uint32_t>(s.ids.data() + f.begin, f.count));
+    trace_stream(lv.mesh(id), ob.rays, oq, scratch(1));
+    q.join(oq, std::span<const uint32_t>(s.ids.data() + f.begin, f.count), s);
+  }
 
-  /// The rays of one instance's stream in its object space, and their hits.
+  /// The rays of one instance's stream in its object space, and their answers.
   struct ObjectBatch {
     std::vector<Ray> rays;
     std::vector<Hit> hits;
@@ -179,84 +201,81 @@ class StreamTraversal {
     return b;
   }
 
-  /// The valid rays of `rays` (not those `skip` marks, when given) as one stream down the
-  /// instance tree, ray i with tfar_of(i): a ray that needs the exact slab form goes through
-  /// the instance level by itself (`alone(i)`); `at_instance(f)` takes an instance's stream,
-  /// `alone_from(i, ref)` ray i from node ref.
-  template <bool kAny, class TfarOf, class AtInstance, class Alone, class AloneFrom>
-  void instance_streams(const InstanceQueries<Kernel>& in, std::span<const Ray> rays, TfarOf&& tfar_of,
-                        const uint8_t* skip, AtInstance&& at_instance, Alone&& alone,
-                        AloneFrom&& alone_from) const noexcept {
-    const InstanceTree& tree = in.tree();
-    if (tree.empty()) return;
-    Scratch& s = scratch(0);
-    const size_t n = rays.size();
-    prepare(n, s);
-    const uint32_t count = enter_all(
-        rays, s, [&](size_t i) { return skip && skip[i]; }, tfar_of, [&](size_t i) { alone(uint32_t(i)); });
-    traverse<kAny>(tree.nodes.data(), true, count, s, at_instance, alone_from);
-  }
+  // ---- the queries ----
 
-  /// Closest hits among the instances of the valid rays of `rays`, into `hits`.
-  void closest_instances(const InstanceQueries<Kernel>& in, std::span<const Ray> rays,
-                         std::span<Hit> hits) const noexcept {
-    Scratch& s = scratch(0);
-    ObjectBatch& ob = object_batch();
-    const auto at_instance = [&](const Frame& f) {
-      const uint32_t id = leaf_offset(f.ref);
-      const typename InstanceQueries<Kernel>::Placed& pl = in.placed(id);
-      ob.rays.resize(f.count);
-      ob.hits.resize(f.count);
-      for (uint32_t k = 0; k < f.count; ++k) {
-        const uint32_t i = s.ids[f.begin + k];
-        ob.rays[k] = object_ray(rays[i], pl.world_to_object);  // an invalid one misses the instance
-        ob.hits[k] = hits[i];
+  /// Closest hits into `hits` (each t: its ray's tfar, or a closer hit found already).
+  struct ClosestStream {
+    static constexpr bool kNearFirst = true;
+    std::span<const Ray> rays;
+    std::span<Hit> hits;
+    static bool skip(size_t) { return false; }
+    float tfar(size_t i) const { return hits[i].t; }
+    /// Ray i through subtree `root` of `lv` alone; returns its search limit for the stream.
+    template <class Level>
+    float single(const Level& lv, size_t i, const SingleRay& sr, int32_t root) {
+      ClosestSingle<Kernel> q(rays[i], hits[i]);
+      trace_single<Kernel>(lv, rays[i], sr, root, q);
+      return hits[i].t;
+    }
+    /// A leaf's triangles against ray i, lowering its stream limit `tfar` on a hit.
+    RP_SIMD_INLINE void triangles(const Leaf& leaf, const typename Kernel::Block& kb, std::span<const Ray>, size_t i,
+                                  uint32_t inst, float& tfar) {
+      float t = hits[i].t;
+      if (closest_in_block<Kernel>(leaf, kb, typename Kernel::Single(rays[i]), t, hits[i], inst)) tfar = t;
+    }
+    /// The query of the rays `ids` in an instance's object space: their hits so far.
+    ClosestStream object(ObjectBatch& ob, std::span<const uint32_t> ids) const {
+      ob.hits.resize(ids.size());
+      for (size_t k = 0; k < ids.size(); ++k) ob.hits[k] = hits[ids[k]];
+      return {ob.rays, ob.hits};
+    }
+    void join(const ClosestStream& o, std::span<const uint32_t> ids, Scratch& s) {
+      for (size_t k = 0; k < ids.size(); ++k) {
+        hits[ids[k]] = o.hits[k];
+        s.rays[ids[k]].tfar = o.hits[k].t;
       }
-      StreamTraversal(*pl.mesh).closest_tree(ob.rays, ob.hits, scratch(1), id);
-      for (uint32_t k = 0; k < f.count; ++k) {
-        const uint32_t i = s.ids[f.begin + k];
-        hits[i] = ob.hits[k];
-        s.rays[i].tfar = hits[i].t;
-      }
-    };
-    instance_streams<false>(
-        in, rays, [&](size_t i) { return hits[i].t; }, nullptr, at_instance,
-        [&](uint32_t i) { in.closest(rays[i], hits[i]); },
-        [&](uint32_t i, int32_t ref) {
-          in.closest(rays[i], SingleRay(rays[i], s.rays[i].slab), ref, hits[i]);
-          s.rays[i].tfar = hits[i].t;
-        });
-  }
+    }
+  };
 
-  /// Any hits among the instances of the valid rays of `rays` not occluded already, into `out`.
-  void any_instances(const InstanceQueries<Kernel>& in, std::span<const Ray> rays,
-                     std::span<uint8_t> out) const noexcept {
-    Scratch& s = scratch(0);
-    ObjectBatch& ob = object_batch();
-    const auto done = [&](uint32_t i) {
+  /// Any hits into `out` (1: occluded); a ray occluded already is left out.
+  struct AnyStream {
+    static constexpr bool kNearFirst = false;
+    std::span<const Ray> rays;
+    std::span<uint8_t> out;
+    bool skip(size_t i) const { return out[i] != 0; }
+    float tfar(size_t i) const { return rays[i].tfar; }
+    /// Once a ray is occluded every box misses it.
+    static constexpr float kDone = -std::numeric_limits<float>::infinity();
+    template <class Level>
+    float single(const Level& lv, size_t i, const SingleRay& sr, int32_t root) {
+      if (out[i]) return kDone;
+      AnySingle<Kernel> q(rays[i]);
+      trace_single<Kernel>(lv, rays[i], sr, root, q);
+      if (!q.found) return rays[i].tfar;
       out[i] = 1;
-      s.rays[i].tfar = -std::numeric_limits<float>::infinity();
-    };
-    const auto at_instance = [&](const Frame& f) {
-      const typename InstanceQueries<Kernel>::Placed& pl = in.placed(leaf_offset(f.ref));
-      ob.rays.resize(f.count);
-      ob.out.assign(f.count, 0);
-      for (uint32_t k = 0; k < f.count; ++k) {
-        const uint32_t i = s.ids[f.begin + k];
-        ob.rays[k] = object_ray(rays[i], pl.world_to_object);
-        ob.out[k] = out[i];
+      return kDone;
+    }
+    RP_SIMD_INLINE void triangles(const Leaf& leaf, const typename Kernel::Block& kb, std::span<const Ray>, size_t i,
+                                  uint32_t, float& tfar) {
+      if (out[i]) return;
+      if (simd::movemask(typename Kernel::Single(rays[i]).block(kb, float8(rays[i].tfar)).hit) & ((1u << leaf.n) - 1)) {
+        out[i] = 1;
+        tfar = kDone;
       }
-      StreamTraversal(*pl.mesh).any_tree(ob.rays, ob.out, scratch(1));
-      for (uint32_t k = 0; k < f.count; ++k)
-        if (ob.out[k] && !out[s.ids[f.begin + k]]) done(s.ids[f.begin + k]);
-    };
-    instance_streams<true>(
-        in, rays, [&](size_t i) { return rays[i].tfar; }, out.data(), at_instance,
-        [&](uint32_t i) { out[i] = in.any(rays[i]); },
-        [&](uint32_t i, int32_t ref) {
-          if (!out[i] && in.any(rays[i], SingleRay(rays[i], s.rays[i].slab), ref)) done(i);
-        });
-  }
+    }
+    AnyStream object(ObjectBatch& ob, std::span<const uint32_t> ids) const {
+      ob.out.resize(ids.size());
+      for (size_t k = 0; k < ids.size(); ++k) ob.out[k] = out[ids[k]];
+      return {ob.rays, ob.out};
+    }
+    void join(const AnyStream& o, std::span<const uint32_t> ids, Scratch& s) {
+      for (size_t k = 0; k < ids.size(); ++k)
+        if (o.out[k] && !out[ids[k]]) {
+          out[ids[k]] = 1;
+          s.rays[ids[k]].tfar = kDone;
+        }
+    }
+  };
 
   static void prepare(size_t n, Scratch& s) {
     if (s.rays.size() < n) s.rays.resize(n);
@@ -264,20 +283,19 @@ class StreamTraversal {
     s.frames.clear();
   }
 
-  /// Enters the valid rays of `rays` that `skip(i)` does not exclude into the stream (ids
-  /// [0, count), in order), ray i with tfar_of(i) (its own tfar, or its closest hit so far);
+  /// Enters the valid rays of `rays` that q.skip(i) does not exclude into the stream (ids
+  /// [0, count), in order), ray i with q.tfar(i) (its own tfar, or its closest hit so far);
   /// a ray that needs the exact slab form (SlabRay::exact) goes to `alone(i)` instead.
   /// Returns the count. Eight rays at a time: one transpose loads them, valid_lanes decides
   /// rp::valid_ray and SlabRays8 works out their slab figures (the scalar routines' bits), so
   /// that a stream entering each instance it meets costs a few vector divisions per 8 rays.
-  template <class Skip, class TfarOf, class Alone>
-  static uint32_t enter_all(std::span<const Ray> rays, Scratch& s, Skip&& skip, TfarOf&& tfar_of,
-                            Alone&& alone) noexcept {
+  template <class Q, class Alone>
+  static uint32_t enter_all(std::span<const Ray> rays, Scratch& s, const Q& q, Alone&& alone) noexcept {
     const size_t n = rays.size();
     uint32_t count = 0;
     const auto take = [&](size_t i, const SlabRay& slab, float tnear) {
       if (slab.exact) return alone(i);
-      s.rays[i] = {slab, tnear + 0.0f, tfar_of(i)};
+      s.rays[i] = {slab, tnear + 0.0f, q.tfar(i)};
       s.ids[count++] = uint32_t(i);
     };
     size_t base = 0;
@@ -287,7 +305,7 @@ class StreamTraversal {
       const Vec3x8 org{m[0], m[1], m[2]}, dir{m[4], m[5], m[6]};
       uint32_t lanes = valid_lanes(org, dir, m[3], m[7]);
       for (uint32_t b = lanes; b; b &= b - 1)
-        if (skip(base + size_t(std::countr_zero(b)))) lanes &= ~(b & (~b + 1));
+        if (q.skip(base + size_t(std::countr_zero(b)))) lanes &= ~(b & (~b + 1));
       if (!lanes) continue;
       const SlabRays8 slab(org, dir);
       for (uint32_t b = lanes; b; b &= b - 1) {
@@ -296,36 +314,16 @@ class StreamTraversal {
       }
     }
     for (size_t i = base; i < n; ++i)
-      if (!skip(i) && valid_ray(rays[i])) take(i, SlabRay(rays[i]), rays[i].tnear);
+      if (!q.skip(i) && valid_ray(rays[i])) take(i, SlabRay(rays[i]), rays[i].tnear);
     return count;
   }
 
-  /// The traversal loop shared by both queries and both levels, over the tree of `nodes`
-  /// (this traversal's, or the instance tree when `instances`): `leaf(frame)` takes a leaf's
-  /// (or an instance's) stream, `alone(i, ref)` takes ray i through subtree ref by itself.
-  template <bool kAny, class LeafFn, class AloneFn>
-  void traverse(const Bvh8Node* nodes, bool instances, uint32_t count, Scratch& s, LeafFn&& leaf,
-                AloneFn&& alone) const noexcept {
-    if (count) s.frames.push_back({0, 0, count, count});
-    while (!s.frames.empty()) {
-      const Frame f = s.frames.back();
-      s.frames.pop_back();
-      if (f.count < kMinStream || (!instances && is_leaf(f.ref) && t_.analytic_leaf(bvh_.leaf(f.ref)) != kInvalidId)) {
-        for (uint32_t k = 0; k < f.count; ++k) alone(s.ids[f.begin + k], f.ref);
-      } else if (is_leaf(f.ref)) {
-        leaf(f);
-      } else {
-        split<kAny>(nodes, instances, f, s);
-      }
-    }
-  }
-
   /// Tests the stream of `f` against the child boxes of its node and pushes a frame for each
-  /// child some ray hits: for closest hits the child its rays enter first on average on top,
-  /// for any hits in slot order. Starts loading those children.
-  template <bool kAny>
-  void split(const Bvh8Node* nodes, bool instances, const Frame& f, Scratch& s) const noexcept {
-    const Bvh8Node& n = nodes[size_t(f.ref)];
+  /// child some ray hits: for a query that wants the nearest answer the child its rays enter
+  /// first on average on top, else in slot order. Starts loading those children.
+  template <bool kNearFirst, class Level>
+  static void split(const Level& lv, const Frame& f, Scratch& s) noexcept {
+    const Bvh8Node& n = lv.node(f.ref);
     if (s.bits.size() < size_t(f.count) + 8) s.bits.resize(size_t(f.count) + 8);
     uint8_t* bits = s.bits.data();
     // Pass 1: each ray's hit mask, and each child's stream size.
@@ -335,7 +333,7 @@ class StreamTraversal {
       const uint32_t i = s.ids[f.begin + k];
       float8 t_enter;
       const uint32_t b = test(n, s.rays[i], t_enter);
-      if constexpr (!kAny) entries = entries + xsimd::select(simd::mask_from_bits(b), t_enter, float8(0.0f));
+      if constexpr (kNearFirst) entries = entries + xsimd::select(simd::mask_from_bits(b), t_enter, float8(0.0f));
       bits[k] = uint8_t(b);
       sizes.add(b);
     }
@@ -359,17 +357,10 @@ class StreamTraversal {
       uint32_t* out = s.ids.data() + at[c];
       for (uint32_t k = 0; k < f.count; k += 8) out += simd::compress_store(in + k, simd::ByteBits8(bits + k).bit(c), out);
     }
-    if (instances) {  // instance tree nodes (an instance leaf has no data here)
-      for (uint32_t b = hit; b; b &= b - 1)
-        if (const int32_t c = n.child[std::countr_zero(b)]; !is_leaf(c))
-          for (uint32_t off = 0; off < sizeof(Bvh8Node); off += 64)
-            simd::prefetch(reinterpret_cast<const char*>(&nodes[size_t(c)]) + off);
-    } else {
-      t_.prefetch_children(n, hit);
-    }
+    lv.prefetch_children(n, hit);
     int order[8], k = 0;
     for (uint32_t b = hit; b; b &= b - 1) order[k++] = std::countr_zero(b);
-    if constexpr (!kAny) {  // by the mean entry distance of their rays: the nearest pushed last
+    if constexpr (kNearFirst) {  // by the mean entry distance of their rays: the nearest pushed last
       alignas(32) float key[8];
       entries.store_aligned(key);
       for (int c = 0; c < 8; ++c) key[c] = size[c] ? key[c] / float(size[c]) : 0.0f;
@@ -398,35 +389,7 @@ class StreamTraversal {
     return slab_hits(tn_x, tn_y, tn_z, tf_x, tf_y, tf_z, q.tnear, q.tfar, float8(r.pad), r.pad, t_enter);
   }
 
-  /// The triangles of the leaf of `f` (decoded once) against each ray of its stream.
-  void leaf_closest(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<Hit> hits,
-                    uint32_t inst) const noexcept {
-    const Leaf leaf = bvh_.leaf(f.ref);
-    const typename Kernel::Block kb{LeafView(leaf)};
-    for (uint32_t k = 0; k < f.count; ++k) {
-      const uint32_t i = s.ids[f.begin + k];
-      float tfar = hits[i].t;
-      if (Traversal<Kernel>::leaf_single(leaf, kb, typename Kernel::Single(rays[i]), tfar, hits[i], inst))
-        s.rays[i].tfar = tfar;
-    }
-  }
-
-  /// The same for any hits: `done(i)` for each ray a triangle occludes.
-  template <class Done>
-  void leaf_any(const Frame& f, Scratch& s, std::span<const Ray> rays, std::span<const uint8_t> out,
-                Done&& done) const noexcept {
-    const Leaf leaf = bvh_.leaf(f.ref);
-    const typename Kernel::Block kb{LeafView(leaf)};
-    const uint32_t slots = (1u << leaf.n) - 1;
-    for (uint32_t k = 0; k < f.count; ++k) {
-      const uint32_t i = s.ids[f.begin + k];
-      if (out[i]) continue;
-      if (simd::movemask(typename Kernel::Single(rays[i]).block(kb, float8(rays[i].tfar)).hit) & slots) done(i);
-    }
-  }
-
   const Traversal<Kernel>& t_;
-  const Bvh8& bvh_;
 };
 
 }  // namespace rp::bvh8

@@ -5,7 +5,7 @@
 /// around a shared vertex see the ray on consistent sides of their edges, so a ray that
 /// crosses a closed mesh's surface always hits one of its triangles: no leak through shared
 /// edges or vertices, at any translation or scale. The watertight variant of the simd backend
-/// runs this test on the lanes its certified filter leaves uncertain (backends/simd/certified.h).
+/// runs this test on the lanes its bounded filter leaves uncertain (backends/simd/watertight.h).
 
 #include "engine/geometry/intersection.h"
 #include "engine/math.h"

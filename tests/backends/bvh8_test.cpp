@@ -14,7 +14,7 @@
 
 #include "backends/registry.h"
 #include "backends/simd/bvh8.h"
-#include "backends/simd/kernels.h"
+#include "backends/simd/moller_trumbore.h"
 #include "backends/simd/packet.h"
 #include "engine/geometry/slab.h"
 #include "engine/geometry/triangle.h"

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "backends/simd/bvh8.h"
-#include "backends/simd/kernels.h"
+#include "backends/simd/moller_trumbore.h"
 #include "engine/geometry/triangle.h"
 
 namespace rp::bvh8 {

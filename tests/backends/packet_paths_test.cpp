@@ -291,7 +291,7 @@ TEST_P(PacketPaths, SharedEdgesOfAnInstanceGiveTheSameAnswersOnEveryPath) {
       rays_traced += int(rays.size());
     }
     // The tie goes to instance 0. Not asserted for the watertight variant: there the second
-    // instance meets the first's hit as tfar, where the certified filter's documented
+    // instance meets the first's hit as tfar, where the bounded filter's documented
     // exception lets Möller–Trumbore decide, whose t may be an ulp nearer than Woop's.
     if (GetParam() == "watertight") continue;
     std::vector<Hit> hits(rays.size());

@@ -1,4 +1,4 @@
-// The watertight variant's triangle test (backends/simd/certified.h): Möller–Trumbore with a
+// The watertight variant's triangle test (backends/simd/watertight.h): Möller–Trumbore with a
 // bound on the error of each edge decision, and the exact test (rp::intersect_triangle_exact)
 // where the bound leaves one uncertain. Asserted: no lane's edge decision ever differs from the
 // unfiltered exact test, nor its hit or miss but where tnear or tfar lies between the two
@@ -21,9 +21,9 @@
 #include <tuple>
 #include <vector>
 
-#include "backends/simd/certified.h"
 #include "backends/simd/packet.h"
 #include "backends/simd/traversal.h"
+#include "backends/simd/watertight.h"
 #include "engine/analysis/raygen.h"
 #include "engine/geometry/exact_triangle.h"
 #include "engine/loaders/load.h"
@@ -91,8 +91,12 @@ std::vector<Ray> hard_rays(std::mt19937& rng, const Fan& f, double scale) {
     const int i = int(rng() % uint32_t(f.k));
     Vec3d target;
     switch (n % 4) {
-      case 0: target = Vec3d(f.centre); break;
-      case 1: target = Vec3d(f.ring[i]); break;
+      case 0:
+        target = Vec3d(f.centre);
+        break;
+      case 1:
+        target = Vec3d(f.ring[i]);
+        break;
       default: {
         const double s = u01(rng);
         target = Vec3d(f.centre) * (1.0 - s) + Vec3d(f.ring[i]) * s;
@@ -118,8 +122,8 @@ std::vector<Ray> hard_rays(std::mt19937& rng, const Fan& f, double scale) {
 }
 
 /// The lanes the kernel sends to the exact test; Möller–Trumbore's answer in `raw`.
-uint32_t slow_lanes(const CertifiedRays& r, const float8& tfar, const CertifiedKernel::Block& b, TriHit8& raw) {
-  return certified_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, raw);
+uint32_t slow_lanes(const WatertightRays& r, const float8& tfar, const WatertightKernel::Block& b, TriHit8& raw) {
+  return watertight_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, raw);
 }
 
 /// The longest |coordinate| of triangle l's edges.
@@ -144,7 +148,7 @@ Intersection<float> woop(const Ray& r, const Fan& f, int l) {
 /// The per-lane edge bound is at least every |coordinate| of the exact edges v0 - v1 and
 /// v2 - v0 (in double) and 2^-32, and within a few ulps of the largest: on triangles of every
 /// size from 2^-40 to 2^30 and at every distance from the origin.
-TEST(Certified, EdgeBoundCoversTheExactEdges) {
+TEST(WatertightKernel, EdgeBoundCoversTheExactEdges) {
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   std::uniform_int_distribution<int> exponent(-40, 30);
@@ -170,21 +174,21 @@ TEST(Certified, EdgeBoundCoversTheExactEdges) {
   }
 }
 
-/// Every lane of the certified test, one ray against a leaf and 8 rays against one triangle,
+/// Every lane of the watertight test, one ray against a leaf and 8 rays against one triangle,
 /// makes the exact test's edge decisions, and hits or misses exactly as the exact test does
-/// unless tnear or tfar lies between the two tests' t (certified.h: there Möller–Trumbore's t
+/// unless tnear or tfar lies between the two tests' t (watertight.h: there Möller–Trumbore's t
 /// decides), at translations 0..10^6 (up to 10^5 times the fan's size) and scales
 /// 10^-3..10^3, with tfar infinite or tnear or tfar within ulps of a hit, and on rays leaving
 /// the surface. Those lanes pass inside by both tests, and their two t differ by rounding only
-/// (within 2e-4 of |t| + X / |d|; measured 1.04e-4, on settled lanes of rays nearly parallel
+/// (within 2e-4 of |t| + X / |d|; measured 1.04e-4, on lanes decided exactly, of rays nearly parallel
 /// to the triangle, whose t is Möller–Trumbore's unless |den| < 2^-12 X^2 D). A hit's t is
-/// Möller–Trumbore's, or for a settled lane nearly in the triangle's plane the exact test's.
+/// Möller–Trumbore's, or for a lane decided exactly nearly in the triangle's plane the exact test's.
 /// Both the filter's certain lanes and its slow path are exercised, and the certain lanes
 /// include rays within 2^-12 of shared edges. The float watertight test's decisions that
 /// differ from the exact ones are counted (not asserted). Under AddressSanitizer a tenth of the
 /// fans: the loop's cycle of 84 scale, shift and pick cases 23 times over, each count still
 /// several times its floor; the plain build runs all 20,000 with the same assertions.
-TEST(Certified, NeverChangesADecisionOfTheExactTest) {
+TEST(WatertightKernel, NeverChangesADecisionOfTheExactTest) {
   const int fans = test::kSanitized ? 2000 : 20000;
   std::mt19937 rng(19);
   long lanes = 0, certain = 0, unsure = 0, certain_hits = 0, near_certain = 0, woop_differs = 0;
@@ -210,10 +214,10 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
           (pick == 0 ? r.tnear : r.tfar) = near_hit;
         }
       }
-      const CertifiedKernel::Single kernel(r);
+      const WatertightKernel::Single kernel(r);
       TriHit8 raw;
-      const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), CertifiedKernel::Block(lv), raw);
-      const TriHit8 h = kernel.block(CertifiedKernel::Block(lv), float8(r.tfar));
+      const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), WatertightKernel::Block(lv), raw);
+      const TriHit8 h = kernel.block(WatertightKernel::Block(lv), float8(r.tfar));
       for (int l = 0; l < 8; ++l) {
         if (l >= f.k) {
           ASSERT_FALSE(lane_of(h, l).hit) << "lane " << l << " past a leaf of " << f.k;
@@ -224,14 +228,14 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
         const Intersection<float> got = lane_of(h, l), mt = lane_of(raw, l);
         ++lanes;
         woop_differs += woop(r, f, l).hit != e.hit;
-        const bool settled = slow >> l & 1u;
-        unsure += settled;
-        certain += !settled;
-        if (!settled) {
+        const bool decided = slow >> l & 1u;
+        unsure += decided;
+        certain += !decided;
+        if (!decided) {
           ASSERT_EQ(got.hit, mt.hit) << "iter " << iter << " lane " << l;
         }
         if (got.hit != e.hit) {
-          // The one case where Möller–Trumbore's t decides (certified.h): the ray passes inside
+          // The one case where Möller–Trumbore's t decides (watertight.h): the ray passes inside
           // by both tests, and tnear or tfar lies between the two tests' t (the exact test's
           // taken over the whole line), which differ by rounding only.
           Ray open = r;
@@ -249,13 +253,13 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
           continue;
         }
         if (!got.hit) continue;
-        // A hit's t is Möller–Trumbore's, or (a settled lane nearly in the plane) the exact test's.
-        if (settled && got.t != mt.t) {
+        // A hit's t is Möller–Trumbore's, or (a lane decided exactly, nearly in the plane) the exact test's.
+        if (decided && got.t != mt.t) {
           expect_same_bits(got, e);
         } else {
           ASSERT_EQ(std::bit_cast<uint32_t>(got.t), std::bit_cast<uint32_t>(mt.t)) << "iter " << iter;
         }
-        if (settled) continue;
+        if (decided) continue;
         certain_hits += 1;
         // Certain although the ray passes within 2^-12 (relative) of one of the triangle's edges.
         near_certain += std::min({e.u, e.v, 1.0f - e.u - e.v}) < 0x1p-12f;
@@ -268,13 +272,13 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
       RayPacket p;
       float8 tfar;
       ASSERT_EQ(load_packet(eight, p, tfar), 0xffu);
-      const CertifiedKernel::Packet packet(p, eight);
+      const WatertightKernel::Packet packet(p, eight);
       for (int j = 0; j < 8; ++j) {
         const Ray& r = eight[size_t(j)];
-        const TriHit8 one = CertifiedKernel::Single(r).block(CertifiedKernel::Block(lv), float8(r.tfar));
+        const TriHit8 one = WatertightKernel::Single(r).block(WatertightKernel::Block(lv), float8(r.tfar));
         for (int l = 0; l < f.k; ++l) {
-          const Intersection<float> a =
-              lane_of(packet.test(CertifiedKernel::Triangle(CertifiedKernel::Block(lv), uint32_t(l)), tfar, 0xffu), j);
+          const Intersection<float> a = lane_of(
+              packet.test(WatertightKernel::Triangle(WatertightKernel::Block(lv), uint32_t(l)), tfar, 0xffu), j);
           ASSERT_EQ(a.hit, lane_of(one, l).hit) << "iter " << iter << " ray " << j << " triangle " << l;
           if (a.hit) expect_same_bits(a, lane_of(one, l));
         }
@@ -282,7 +286,7 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
     }
   }
   std::printf(
-      "[ certain  ] %ld of %ld lanes (%ld hits, %ld of them within 2^-12 of an edge); %ld settled; "
+      "[ certain  ] %ld of %ld lanes (%ld hits, %ld of them within 2^-12 of an edge); %ld decided exactly; "
       "decided otherwise: %ld at tnear, %ld at tfar; t apart by at most %.3g of the reach; the float watertight "
       "test decides %ld lanes otherwise than the exact test\n",
       certain, lanes, certain_hits, near_certain, unsure, at_end[0], at_end[1], widest, woop_differs);
@@ -296,9 +300,9 @@ TEST(Certified, NeverChangesADecisionOfTheExactTest) {
 /// Rays from one point (a pinhole camera's): the tighter bound's factors from M taken once per
 /// triangle from the packet's beam (SharedOrigin) are those of each ray's own M bit for bit, also
 /// where the origin has coordinates of +0 in some lanes and -0 in others, and the packet test
-/// with that bound (which settles fewer lanes) gives the per-ray test's answers bit for bit;
+/// with that bound (which decides fewer lanes exactly) gives the per-ray test's answers bit for bit;
 /// rays from two points share nothing.
-TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
+TEST(WatertightKernel, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   int shared = 0, hits = 0;
@@ -308,7 +312,7 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     const double shift = iter % 4 == 0 ? 0.0 : std::min(std::pow(10.0, double(iter % 7)), 1e5 * scale);
     const Fan f = make_fan(rng, scale, Vec3d{1.0, 0.75, 0.5} * shift, iter % 4 == 3 ? int(rng() % 3) : -1);
     const std::vector<float> words = make_leaf(f.v[0], f.v[1], f.v[2], uint32_t(f.k));
-    const CertifiedKernel::Block kb{LeafView(Leaf(words.data()))};
+    const WatertightKernel::Block kb{LeafView(Leaf(words.data()))};
     Vec3f o(Vec3d(f.centre) + random_unit(rng) * (scale * std::pow(10.0, 1.0 + 2.0 * u01(rng))));
     if (iter % 5 == 0) o[int(rng() % 3)] = 0.0f;  // an origin coordinate of 0, as +0 and -0 below
     std::vector<Ray> eight;
@@ -330,7 +334,7 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
     const SharedOrigin so(kb.v0, kb.f, OnePoint(beam));
     ASSERT_TRUE(so.shared) << "iter " << iter;
     ++shared;
-    const CertifiedKernel::Packet packet(p, eight);
+    const WatertightKernel::Packet packet(p, eight);
     for (int l = 0; l < f.k; ++l) {
       const EdgeFactors fl(kb.f, l);
       const float xm = fl.xm.get(0), xx = fl.xx.get(0);
@@ -348,8 +352,8 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
         ASSERT_GE(so.thin.get(size_t(l)), fl.x_thin.get(0) * d) << "iter " << iter;
         widest_g = std::max(widest_g, double(so.g.get(size_t(l))) / (double(xm) * (36.0 / 116.0) * double(m) * d));
       }
-      const TriHit8 own = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l)), tfar, 0xffu);
-      const TriHit8 once = packet.test(CertifiedKernel::Triangle(kb, uint32_t(l), so), tfar, 0xffu);
+      const TriHit8 own = packet.test(WatertightKernel::Triangle(kb, uint32_t(l)), tfar, 0xffu);
+      const TriHit8 once = packet.test(WatertightKernel::Triangle(kb, uint32_t(l), so), tfar, 0xffu);
       for (int j = 0; j < 8; ++j) {
         ASSERT_EQ(lane_of(once, j).hit, lane_of(own, j).hit) << "iter " << iter << " ray " << j;
         if (lane_of(own, j).hit) {
@@ -376,10 +380,10 @@ TEST(Certified, RaysFromOnePointShareTheirBoundAndTheirAnswers) {
 /// watertight test on the same floats, beside the error of the float watertight test itself,
 /// on rays at random points of random triangles at translations 0..10^6 and scales 10^-3..10^3:
 /// the largest relative error stays within twice the watertight test's, the median within it.
-TEST(Certified, HitDistanceIsAsAccurateAsTheWatertightTest) {
+TEST(WatertightKernel, HitDistanceIsAsAccurateAsWoopsWatertightTest) {
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
-  std::vector<double> err_certified, err_woop;
+  std::vector<double> err_kernel, err_woop;
   for (int iter = 0; iter < 4000; ++iter) {
     const double scale = std::pow(10.0, 3.0 * int(iter % 3) - 3.0);
     const double shift = iter % 4 == 0 ? 0.0 : std::min(std::pow(10.0, double(iter % 7)), 1e5 * scale);
@@ -391,29 +395,29 @@ TEST(Certified, HitDistanceIsAsAccurateAsTheWatertightTest) {
     const Vec3d target = Vec3d(f.v[0][l]) * (1.0 - a - b) + Vec3d(f.v[1][l]) * a + Vec3d(f.v[2][l]) * b;
     const Vec3f org(target + random_unit(rng) * (scale * std::pow(10.0, 3.0 * u01(rng))));
     const Ray r{org, 0.0f, Vec3f(target) - org, std::numeric_limits<float>::infinity()};
-    const CertifiedKernel::Single kernel(r);
+    const WatertightKernel::Single kernel(r);
     TriHit8 raw;
     const LeafView lv(leaf);
-    const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), CertifiedKernel::Block(lv), raw);
+    const uint32_t slow = slow_lanes(kernel.r, float8(r.tfar), WatertightKernel::Block(lv), raw);
     const Intersection<float> w = woop(r, f, l);
     const Rayd rd{Vec3d(r.org), 0.0, Vec3d(r.dir), std::numeric_limits<double>::infinity()};
     const Intersection<double> ref =
         intersect_triangle_watertight(rd, Vec3d(f.v[0][l]), Vec3d(f.v[1][l]), Vec3d(f.v[2][l]));
     if ((slow >> l & 1u) || !w.hit || !ref.hit || !lane_of(raw, l).hit) continue;
-    err_certified.push_back(std::abs(double(lane_of(raw, l).t) - ref.t) / ref.t);
+    err_kernel.push_back(std::abs(double(lane_of(raw, l).t) - ref.t) / ref.t);
     err_woop.push_back(std::abs(double(w.t) - ref.t) / ref.t);
   }
-  ASSERT_GT(err_certified.size(), 3000u);
+  ASSERT_GT(err_kernel.size(), 3000u);
   const auto median = [](std::vector<double> v) {
     std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
-  const double max_c = *std::max_element(err_certified.begin(), err_certified.end());
+  const double max_c = *std::max_element(err_kernel.begin(), err_kernel.end());
   const double max_w = *std::max_element(err_woop.begin(), err_woop.end());
-  std::printf("[ t error  ] %zu hits: certified median %.3g max %.3g; watertight median %.3g max %.3g\n",
-              err_certified.size(), median(err_certified), max_c, median(err_woop), max_w);
+  std::printf("[ t error  ] %zu hits: kernel median %.3g max %.3g; Woop median %.3g max %.3g\n", err_kernel.size(),
+              median(err_kernel), max_c, median(err_woop), max_w);
   EXPECT_LE(max_c, 2.0 * max_w);
-  EXPECT_LE(median(err_certified), median(err_woop));
+  EXPECT_LE(median(err_kernel), median(err_woop));
 }
 
 /// Needles and near-degenerate triangles (as `raypack stability`'s needles family: length 2,
@@ -423,11 +427,11 @@ TEST(Certified, HitDistanceIsAsAccurateAsTheWatertightTest) {
 /// float watertight test's. Möller–Trumbore's t alone fails there far more often (its Ng is
 /// the cross product of nearly parallel edges); the guard that leaves hits with
 /// |den| < 2^-12 X^2 D to the exact test, which computes t in double, is what keeps these
-/// (certified.h).
-TEST(Certified, NeedleHitsAreAsAccurateAsTheWatertightTest) {
+/// (watertight.h).
+TEST(WatertightKernel, NeedleHitsAreAsAccurateAsWoopsWatertightTest) {
   std::mt19937 rng(29);
   std::uniform_real_distribution<double> u(-1.0, 1.0), u01(0.0, 1.0);
-  long hits = 0, wrong_certified = 0, wrong_woop = 0, wrong_mt = 0;
+  long hits = 0, wrong_kernel = 0, wrong_woop = 0, wrong_mt = 0;
   for (int iter = 0; iter < 20000; ++iter) {
     const Vec3d axis = normalize(Vec3d{u(rng), u(rng), u(rng)});
     const Vec3d side = normalize(cross(axis, Vec3d{u(rng), u(rng), u(rng)}));
@@ -443,7 +447,7 @@ TEST(Certified, NeedleHitsAreAsAccurateAsTheWatertightTest) {
     const Vec3f org(target + random_unit(rng) * (1.0 + 9.0 * u01(rng)));
     const Ray r{org, 0.0f, Vec3f(target) - org, std::numeric_limits<float>::infinity()};
     const Intersection<float> h =
-        lane_of(CertifiedKernel::Single(r).block(CertifiedKernel::Block(lv), float8(r.tfar)), 0);
+        lane_of(WatertightKernel::Single(r).block(WatertightKernel::Block(lv), float8(r.tfar)), 0);
     const Intersection<float> w = intersect_triangle_watertight(r, v[0][0], v[1][0], v[2][0]);
     ASSERT_EQ(h.hit, intersect_triangle_exact(r, v[0][0], v[1][0], v[2][0]).hit) << "iter " << iter;
     const Rayd rd{Vec3d(r.org), 0.0, Vec3d(r.dir), std::numeric_limits<double>::infinity()};
@@ -451,16 +455,16 @@ TEST(Certified, NeedleHitsAreAsAccurateAsTheWatertightTest) {
     if (!h.hit || !ref.hit) continue;
     ++hits;
     const auto wrong = [&](float t) { return std::abs(double(t) - ref.t) > 1e-4 * ref.t; };
-    wrong_certified += wrong(h.t);
+    wrong_kernel += wrong(h.t);
     wrong_woop += wrong(w.t);
     const Intersection<float> mt = intersect_triangle_mt_normal(r, v[0][0], v[1][0], v[2][0]);
     wrong_mt += mt.hit && wrong(mt.t);
   }
-  std::printf("[ needles  ] %ld hits; t beyond 1e-4: certified %ld, watertight %ld, Moller-Trumbore alone %ld\n", hits,
-              wrong_certified, wrong_woop, wrong_mt);
+  std::printf("[ needles  ] %ld hits; t beyond 1e-4: kernel %ld, Woop %ld, Moller-Trumbore alone %ld\n", hits,
+              wrong_kernel, wrong_woop, wrong_mt);
   EXPECT_GT(hits, 10000);
   EXPECT_GT(wrong_mt, wrong_woop);  // the rays do find Möller–Trumbore's weakness
-  EXPECT_LE(wrong_certified, wrong_woop);
+  EXPECT_LE(wrong_kernel, wrong_woop);
 }
 
 // --- the slow path's share on real models -----------------------------------------------------
@@ -473,12 +477,12 @@ Counts counts;
 
 /// The watertight variant's kernel, counting what its filter leaves to the slow path.
 struct CountingKernel {
-  using Block = CertifiedKernel::Block;
-  using Triangle = CertifiedKernel::Triangle;
-  using Packet = CertifiedKernel::Packet;
-  using Origins = CertifiedKernel::Origins;
+  using Block = WatertightKernel::Block;
+  using Triangle = WatertightKernel::Triangle;
+  using Packet = WatertightKernel::Packet;
+  using Origins = WatertightKernel::Origins;
   struct Single {
-    CertifiedKernel::Single k;
+    WatertightKernel::Single k;
     explicit Single(const Ray& r) : k(r) {}
     Single(const RayPacket& p, int lane, const Ray& r) : k(p, lane, r) {}
     TriHit8 block(const Block& b, const float8& tfar) const {
@@ -488,8 +492,8 @@ struct CountingKernel {
     }
     TriHit8 block(const Block& b, const float8& tfar, const Origins& og) const {
       TriHit8 raw;
-      count(b, og.shared ? certified_mt8(k.r.org, k.r.dir, k.r.tnear, k.r.d, tfar, b.v0, b.e1, b.e2, b.ng, og.h, og.g,
-                                         og.thin, raw)
+      count(b, og.shared ? watertight_mt8(k.r.org, k.r.dir, k.r.tnear, k.r.d, tfar, b.v0, b.e1, b.e2, b.ng, og.h, og.g,
+                                          og.thin, raw)
                          : slow_lanes(k.r, tfar, b, raw));
       return k.block(b, tfar, og);
     }

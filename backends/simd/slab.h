@@ -1,12 +1,13 @@
 #pragma once
-/// The 8-wide kernels of the simd backend: the slab test (one ray against a node's 8 child
-/// boxes, and 8 rays against one box) and Möller–Trumbore (one ray against 8 triangles, and
-/// 8 rays against one triangle, by the same function). AVX2+FMA translation units only.
+/// The slab tests of the simd backend (the lecture notes' slab method, 8 wide): one ray against
+/// a node's 8 child boxes (SingleRay, intersect_node; the stream's SlabRay, SlabRays8), 8 rays
+/// against one box (RayPacket, intersect_box), a beam of rays against 8 boxes (PacketBeam,
+/// PacketBeams8) and the near-first order of a node's children for a packet or a group.
+/// AVX2+FMA translation units only.
 
 #include <limits>
 
 #include "backends/simd/bvh8.h"
-#include "engine/geometry/triangle.h"
 #include "simd/float8.h"
 
 namespace rp::bvh8 {
@@ -106,12 +107,24 @@ struct SingleRay {
   explicit SingleRay(const Ray& r) : SingleRay(r, SlabRay(r)) {}
   /// From figures already worked out (by SlabRay(r)): no division.
   SingleRay(const Ray& r, const SlabRay& s)
-      : org_x(r.org.x), org_y(r.org.y), org_z(r.org.z),
-        inv_x(s.inv[0]), inv_y(s.inv[1]), inv_z(s.inv[2]),
-        oi_x(s.oi[0]), oi_y(s.oi[1]), oi_z(s.oi[2]),
-        abs_pad(s.pad), pad(s.pad), exact_slabs(s.exact),
-        near_x(s.near[0]), near_y(s.near[1]), near_z(s.near[2]),
-        far_x(24 - s.near[0]), far_y(40 - s.near[1]), far_z(56 - s.near[2]) {}
+      : org_x(r.org.x),
+        org_y(r.org.y),
+        org_z(r.org.z),
+        inv_x(s.inv[0]),
+        inv_y(s.inv[1]),
+        inv_z(s.inv[2]),
+        oi_x(s.oi[0]),
+        oi_y(s.oi[1]),
+        oi_z(s.oi[2]),
+        abs_pad(s.pad),
+        pad(s.pad),
+        exact_slabs(s.exact),
+        near_x(s.near[0]),
+        near_y(s.near[1]),
+        near_z(s.near[2]),
+        far_x(24 - s.near[0]),
+        far_y(40 - s.near[1]),
+        far_z(56 - s.near[2]) {}
 };
 
 /// The decision of intersect_node's one-FMA form from the slab distances of the near (tn) and
@@ -128,8 +141,9 @@ RP_SIMD_INLINE uint32_t slab_hits(const float8& tn_x, const float8& tn_y, const 
                                   float pad, float8& t_enter) {
   const float8 p(kSlabPad);
   t_enter = simd::max_bits(simd::max_bits(tn_x, tn_y), simd::max_bits(tn_z, float8(tnear + 0.0f)));
-  const float8 t_exit = simd::min_bits(simd::min_bits(xsimd::fma(tf_x, p, slack), xsimd::fma(tf_y, p, slack)),
-                                       simd::min_bits(xsimd::fma(tf_z, p, slack), float8(std::fma(tfar, kSlabPad, pad))));
+  const float8 t_exit =
+      simd::min_bits(simd::min_bits(xsimd::fma(tf_x, p, slack), xsimd::fma(tf_y, p, slack)),
+                     simd::min_bits(xsimd::fma(tf_z, p, slack), float8(std::fma(tfar, kSlabPad, pad))));
   return ~simd::greater_bits(t_enter, t_exit) & 0xffu;
 }
 
@@ -146,7 +160,8 @@ RP_SIMD_INLINE uint32_t slab_hits(const float8& tn_x, const float8& tn_y, const 
 /// the exact form (plane - org) * inv instead: its 0 * inf slab (origin on a face plane,
 /// parallel to it) is NaN and drops out of the max/min chains, so it imposes no constraint,
 /// as a closed box should. Empty children (lo = +inf, hi = -inf) never hit.
-RP_SIMD_INLINE uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar, float8& t_enter) {
+RP_SIMD_INLINE uint32_t intersect_node(const Bvh8Node& n, const SingleRay& r, float tnear, float tfar,
+                                       float8& t_enter) {
   using simd::max_b_on_nan;
   using simd::min_b_on_nan;
   const float* base = n.lo_x;
@@ -268,7 +283,8 @@ struct PacketBeam {
       if (n != 0 && n != active) return;  // mixed signs on this axis
       neg[a] = n != 0;
       const float8 o = neg[a] ? -org[a] : org[a], i = neg[a] ? -inv[a] : inv[a];
-      const float lo_i = simd::reduce_min(xsimd::select(on, i, inf)), hi_i = simd::reduce_max(xsimd::select(on, i, -inf));
+      const float lo_i = simd::reduce_min(xsimd::select(on, i, inf)),
+                  hi_i = simd::reduce_max(xsimd::select(on, i, -inf));
       if (!(lo_i > 0.0f) || !(hi_i < std::numeric_limits<float>::infinity())) return;  // a zero direction
       omin[a] = float8(simd::reduce_min(xsimd::select(on, o, inf)));
       omax[a] = float8(simd::reduce_max(xsimd::select(on, o, -inf)));
@@ -339,118 +355,12 @@ inline uint32_t intersect_box_octant(const RayPacket& p, const bool neg[3], cons
   return simd::movemask(t_enter <= xsimd::fma(t_exit, float8(kSlabPad), p.abs_pad));
 }
 
-/// Result of an 8-wide triangle test (moller_trumbore8, certified.h): lanes that hit, with t and
-/// the barycentrics (u, v).
-struct TriHit8 {
-  mask8 hit;
-  float8 t, u, v;
-};
-
-/// The terms moller_trumbore8 decides on, which the certified test (certified.h) also bounds.
-struct MtTerms {
-  Vec3x8 c;        ///< v0 - org
-  Vec3x8 r;        ///< c x dir
-  float8 den;      ///< Ng . dir
-  float8 sign;     ///< the sign bit of den, xored into U, V, T
-  float8 abs_den;  ///< |den|
-  float8 u, v;     ///< the unnormalised barycentrics, sign-corrected
-  float8 tn;       ///< Ng . c, sign-corrected: t times |den|
-};
-
-RP_SIMD_INLINE MtTerms mt_terms(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                                const Vec3x8& e2, const Vec3x8& ng) {
-  MtTerms m;
-  m.c = v0 - org;
-  m.r = simd::cross_fma(m.c, dir);
-  m.den = simd::dot_fma(ng, dir);
-  m.sign = m.den & float8(-0.0f);
-  m.abs_den = m.den ^ m.sign;
-  m.u = simd::dot_fma(m.r, e2) ^ m.sign;
-  m.v = simd::dot_fma(m.r, e1) ^ m.sign;
-  m.tn = simd::dot_fma(ng, m.c) ^ m.sign;
-  return m;
+/// The keys that order a node's children near-first along direction signs (sx, sy, sz): sum
+/// over axes of sign * (lo + hi), one 8-wide op; the nearest child has the smallest key.
+inline float8 near_first_keys(const Bvh8Node& n, const float8& sx, const float8& sy, const float8& sz) {
+  return sx * (float8::load_aligned(n.lo_x) + float8::load_aligned(n.hi_x)) +
+         sy * (float8::load_aligned(n.lo_y) + float8::load_aligned(n.hi_y)) +
+         sz * (float8::load_aligned(n.lo_z) + float8::load_aligned(n.hi_z));
 }
-
-/// The lanes whose ray passes inside the triangle (or on its border) by moller_trumbore8's
-/// edge tests.
-RP_SIMD_INLINE mask8 mt_edges(const MtTerms& m) {
-  const float8 zero(0.0f);
-  return (m.den != zero) & (m.u >= zero) & (m.v >= zero) & (m.u + m.v <= m.abs_den);
-}
-
-/// moller_trumbore8's answer from its terms and the lanes inside its edges (mt_edges, or a mask
-/// equal to it wherever den != 0: a lane with den = 0 has t = Tn / 0, infinite or NaN, which
-/// the t test rejects).
-RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const mask8& edges, const float8& tnear, const float8& tfar) {
-  const float8 inf(std::numeric_limits<float>::infinity());
-  const float8 inv = float8(1.0f) / m.abs_den;
-  const float8 t = m.tn * inv;
-  const mask8 hit = edges & (t >= tnear) & (t <= tfar) & (t < inf);
-  return {hit, t, m.u * inv, m.v * inv};
-}
-
-/// moller_trumbore8's answer from its terms.
-RP_SIMD_INLINE TriHit8 mt_answer(const MtTerms& m, const float8& tnear, const float8& tfar) {
-  return mt_answer(m, mt_edges(m), tnear, tfar);
-}
-
-/// Möller–Trumbore ×8 in the normal-first factoring of rp::intersect_triangle_mt_normal (Möller
-/// and Trumbore 1997; Kensler and Shirley 2006; Embree's default triangle intersector), lane
-/// by lane exactly as that scalar routine: the same FMAs in the same order, so each lane has
-/// its bits. Edge tests compare the unnormalised U, V against |D.Ng| before any division, so
-/// the decisions at shared edges are those of Embree's default intersector. Takes the
-/// triangle as v0, e1 = v0 - v1, e2 = v2 - v0 (LeafView::e1, e2). Serves one ray against 8
-/// triangles (ray broadcast) and 8 rays against one triangle (triangle broadcast). A lane hits
-/// when D.Ng != 0, U >= 0, V >= 0, U + V <= |D.Ng| and tnear <= t <= tfar, t finite. The
-/// first form takes Ng = e2 x e1 computed once per triangle (by cross_fma: the same bits).
-RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                                        const Vec3x8& e2, const Vec3x8& ng, const float8& tnear, const float8& tfar) {
-  return mt_answer(mt_terms(org, dir, v0, e1, e2, ng), tnear, tfar);
-}
-
-/// The same, with the normal Ng = e2 x e1 computed here (cross_fma, as the scalar routine).
-RP_SIMD_INLINE TriHit8 moller_trumbore8(const Vec3x8& org, const Vec3x8& dir, const Vec3x8& v0, const Vec3x8& e1,
-                                        const Vec3x8& e2, const float8& tnear, const float8& tfar) {
-  return moller_trumbore8(org, dir, v0, e1, e2, simd::cross_fma(e2, e1), tnear, tfar);
-}
-
-/// The triangles of a leaf as Vec3x8: corners v0, v1, v2, each coordinate one lookup in the
-/// leaf's vertex block (simd::lookup), straight-line code for each number of 8-vertex chunks.
-/// Lanes past the leaf's n read whatever index bytes follow the row; v0 and the x of v1 are
-/// then set to NaN, which makes every quantity of both triangle tests NaN for those lanes, so
-/// they never hit or go to the watertight test's fallback (callers mask them out as well).
-struct LeafView {
-  Vec3x8 v0, v1, v2;
-  /// The leaf read (Leaf(words) is it again). Not a copy of the Leaf: one built field by field
-  /// on the stack and copied whole was read back 16 bytes at a time from its 4- and 8-byte
-  /// stores, which no store can forward, at every leaf.
-  const float* words;
-  RP_SIMD_INLINE explicit LeafView(const Leaf& l) : words(l.words) {
-    const uint32_t chunks = (l.v + 7) / 8;
-    if (chunks == 1) read<1>(l);
-    else if (chunks == 2) read<2>(l);
-    else read<3>(l);
-    const float8 past = simd::nan_past(l.n);
-    v0 = {v0.x | past, v0.y | past, v0.z | past};
-    v1.x = v1.x | past;
-  }
-  /// Möller–Trumbore's edges, as rp::intersect_triangle_mt_normal computes them.
-  Vec3x8 e1() const { return v0 - v1; }
-  Vec3x8 e2() const { return v2 - v0; }
-
- private:
-  template <int Chunks>
-  RP_SIMD_INLINE void read(const Leaf& l) {
-    const float* x = l.vertices();
-    v0 = corner<Chunks>(l, x, 0);
-    v1 = corner<Chunks>(l, x, 1);
-    v2 = corner<Chunks>(l, x, 2);
-  }
-  template <int Chunks>
-  RP_SIMD_INLINE static Vec3x8 corner(const Leaf& l, const float* x, uint32_t j) {
-    const simd::index8<Chunks> i(l.corners(j));
-    return {simd::lookup(x, i), simd::lookup(x + l.v, i), simd::lookup(x + 2 * l.v, i)};
-  }
-};
 
 }  // namespace rp::bvh8

@@ -12,7 +12,7 @@
 /// is that of the exact E. A lane is certain of its edges when all three values exceed B (the
 /// three E have one sign: inside), or when one lies below -B and another above B (two E of
 /// opposite signs: outside). Every other lane, a ray within about B of an edge's line or
-/// nearly parallel to the triangle, is settled with the sign of each uncertain E taken
+/// nearly parallel to the triangle, is decided exactly with the sign of each uncertain E taken
 /// exactly. So every lane passes or fails its edges as the exact signs say: two
 /// triangles sharing an edge see one determinant for it (negated), the triangles around a
 /// shared vertex see the ray on consistent sides of their edges, and no ray that crosses a
@@ -31,10 +31,10 @@
 /// traversal met the leaves.
 ///
 /// One guard keeps a hit's t accurate where Möller–Trumbore's is not: a lane inside
-/// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) is settled too, whatever its t (so
+/// Möller–Trumbore's edges with |den| < 2^-12 X^2 D (kThin) is decided exactly too, whatever its t (so
 /// the guard need not wait for t's division), by rp::intersect_triangle_exact, which computes t
 /// in double. (Rays from one point take one threshold for the beam, at least each ray's; the
-/// settle then decides by the lane's own.)
+/// exact decision then decides by the lane's own.)
 /// Möller–Trumbore's t is Ng.c / Ng.d, and on a needle (or a ray nearly in the triangle's
 /// plane) Ng is the cross product of nearly parallel edges, relatively far less accurate than
 /// the edges. (Tested on needles and near-degenerate triangles against the double test:
@@ -59,38 +59,33 @@
 /// component of a cross product is at most twice the product of its factors' max-norms, so
 /// R' <= 2.0001 M D and W's bound is at most u X D (110.9 M + 53.2 X). The second, where M is
 /// shared, leaves about a third as many lanes uncertain on camera rays. Which one a path takes
-/// changes nothing in its answers (below), only how often it settles.
+/// changes nothing in its answers (below), only how often it decides exactly.
 ///
-/// The settle (Uncertain) makes the test's terms again for its lanes and decides each edge by
+/// The exact decision (Uncertain) makes the test's terms again for its lanes and decides each edge by
 /// Möller–Trumbore's value where that lies farther than the first form of B from 0, and by
 /// rp::edge_side, exactly, otherwise; inside the edges its t, u, v are Möller–Trumbore's (u, v
 /// clamped to the triangle), or, for a lane with |den| < 2^-12 X^2 D, rp::intersect_triangle_exact's
 /// (t in double). Those are the answers of a certain lane too, so every lane's answer, certain
-/// or settled, on whichever path, is the same function of the ray and the triangle: a packet,
+/// or decided exactly, on whichever path, is the same function of the ray and the triangle: a packet,
 /// a ray alone and rays from one point give the same bits.
 ///
 /// No term underflows, which could hide an error: valid rays have D >= 2^-26, and X >= 2^-32,
 /// so B >= 2^-108. Lanes past a leaf's end are NaN: every comparison is false, the lane
 /// counts as certain, and Möller–Trumbore's miss is the exact miss too.
 
-#include <cstdint>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdint>
+#include <span>
 
-#include "backends/simd/kernels.h"
+#include "backends/simd/moller_trumbore.h"
 #include "engine/geometry/exact_triangle.h"
 
 namespace rp::bvh8 {
 
-/// The |den| (in units of X^2 D) below which a lane inside the edges is settled, t in double.
+/// The |den| (in units of X^2 D) below which a lane inside the edges is decided exactly, t in double.
 inline constexpr float kThin = 0x1p-12f;
-
-/// Max-abs norm of each lane.
-RP_SIMD_INLINE float8 max_abs(const Vec3x8& a) {
-  return xsimd::max(xsimd::abs(a.x), xsimd::max(xsimd::abs(a.y), xsimd::abs(a.z)));
-}
 
 /// The edge bound X of each lane's triangle from its rounded edges e1, e2 (as the kernels
 /// compute them from the leaf's vertices): the largest |coordinate| times 1 + 2^-22, which
@@ -101,19 +96,20 @@ RP_SIMD_INLINE float8 edge_bound8(const Vec3x8& e1, const Vec3x8& e2) {
   return xsimd::max(float8(0x1p-32f), xsimd::max(max_abs(e1), max_abs(e2)) * float8(1.0f + 0x1p-22f));
 }
 
-/// One ray for the certified test, broadcast, with the per-ray factors of the bound.
-struct CertifiedRays {
+/// One ray for the watertight test, broadcast, with the per-ray factors of the bound.
+struct WatertightRays {
   Vec3x8 org, dir;
   float8 tnear;
   float8 d;  ///< D = |dir| (max-norm), the ray's factor in the bound
 
-  CertifiedRays() = default;
+  WatertightRays() = default;
   /// From SoA vectors (a packet's lane, broadcast).
-  RP_SIMD_INLINE CertifiedRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn)
+  RP_SIMD_INLINE WatertightRays(const Vec3x8& o, const Vec3x8& dir_, const float8& tn)
       : org(o), dir(dir_), tnear(tn), d(max_abs(dir_)) {}
   /// One ray in every lane (its factors computed on the broadcast direction: the same bits as
   /// from the scalar norm, in fewer instructions).
-  RP_SIMD_INLINE explicit CertifiedRays(const Ray& r) : CertifiedRays(Vec3x8(r.org), Vec3x8(r.dir), float8(r.tnear)) {}
+  RP_SIMD_INLINE explicit WatertightRays(const Ray& r)
+      : WatertightRays(Vec3x8(r.org), Vec3x8(r.dir), float8(r.tnear)) {}
 };
 
 /// A triangle's factors of the bound, from its edge bound X (edge_bound8): 116u X, 56u X^2 and
@@ -139,13 +135,13 @@ RP_SIMD_INLINE float8 bound_h(const float8& mc, const EdgeFactors& f) { return x
 /// Möller–Trumbore's third edge value, W = |den| - (U + V) (signed by den as U and V are).
 RP_SIMD_INLINE float8 third_edge(const MtTerms& m) { return m.abs_den - (m.u + m.v); }
 
-/// Möller–Trumbore's answer from its terms `m`, with the certified rule for the bound `b` on
-/// its values' errors (B) and rays of max-norms `d` (CertifiedRays): the answer in `hit` (the
+/// Möller–Trumbore's answer from its terms `m`, with the watertight rule for the bound `b` on
+/// its values' errors (B) and rays of max-norms `d` (WatertightRays): the answer in `hit` (the
 /// bits of moller_trumbore8 on every lane the rule leaves certain), and as the result the
 /// lanes whose edge decisions the bound leaves uncertain, and the lanes nearly in the
 /// triangle's plane inside its edges (see the top of this file).
-RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, const float8& thin_below,
-                                         const float8& tnear, const float8& tfar, TriHit8& hit) {
+RP_SIMD_INLINE uint32_t watertight_answer(const MtTerms& m, const float8& b, const float8& thin_below,
+                                          const float8& tnear, const float8& tfar, TriHit8& hit) {
   const float8 w = third_edge(m);
   const float8 lowest = xsimd::min(m.u, xsimd::min(m.v, w));
   const float8 highest = xsimd::max(m.u, xsimd::max(m.v, w));
@@ -161,37 +157,37 @@ RP_SIMD_INLINE uint32_t certified_answer(const MtTerms& m, const float8& b, cons
   // are exact). A NaN lane compares false: certain, Möller–Trumbore's miss.
   const float8 reach = xsimd::min(highest, xsimd::abs(lowest));
   // A lane inside the edges nearly in the triangle's plane or on a needle (|den| < 2^-12 X^2 D,
-  // or below a `thin_below` at least that) is settled too, whatever its t: see the top of this
+  // or below a `thin_below` at least that) is decided exactly too, whatever its t: see the top of this
   // file.
   const mask8 thin = inside & (m.abs_den < thin_below);
   return simd::movemask((reach <= b) | thin);
 }
 
-/// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (CertifiedRays) and triangles
+/// Möller–Trumbore on rays (org, dir, tnear) of max-norms `d` (WatertightRays) and triangles
 /// v0, e1 = v0 - v1, e2 = v2 - v0, Ng = e2 x e1 (cross_fma) with edge factors `f`: its answer
-/// in `hit` (the bits of moller_trumbore8); returns the lanes it leaves to the settle
-/// (certified_answer), M taken lane by lane.
-RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
-                                      const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                      const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
+/// in `hit` (the bits of moller_trumbore8); returns the lanes it leaves to the exact decision
+/// (watertight_answer), M taken lane by lane.
+RP_SIMD_INLINE uint32_t watertight_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
+                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
+                                       const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  return certified_answer(m, d * bound_h(max_abs(m.c), f), f.x_thin * d, tnear, tfar, hit);
+  return watertight_answer(m, d * bound_h(max_abs(m.c), f), f.x_thin * d, tnear, tfar, hit);
 }
 
 /// The same for rays from one point (SharedOrigin), with the bound B = D h + g that it
-/// gives, and the lanes whose |den| lies below `thin` (at least 2^-12 X^2 D) settled as thin.
-RP_SIMD_INLINE uint32_t certified_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
-                                      const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
-                                      const Vec3x8& ng, const float8& h, const float8& g, const float8& thin,
-                                      TriHit8& hit) {
+/// gives, and the lanes whose |den| lies below `thin` (at least 2^-12 X^2 D) decided exactly as thin.
+RP_SIMD_INLINE uint32_t watertight_mt8(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& d,
+                                       const float8& tfar, const Vec3x8& v0, const Vec3x8& e1, const Vec3x8& e2,
+                                       const Vec3x8& ng, const float8& h, const float8& g, const float8& thin,
+                                       TriHit8& hit) {
   const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
-  return certified_answer(m, xsimd::fma(d, h, g), thin, tnear, tfar, hit);
+  return watertight_answer(m, xsimd::fma(d, h, g), thin, tnear, tfar, hit);
 }
 
-/// The same for one ray broadcast (CertifiedRays).
-RP_SIMD_INLINE uint32_t certified_mt8(const CertifiedRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
-                                      const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
-  return certified_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, hit);
+/// The same for one ray broadcast (WatertightRays).
+RP_SIMD_INLINE uint32_t watertight_mt8(const WatertightRays& r, const float8& tfar, const Vec3x8& v0, const Vec3x8& e1,
+                                       const Vec3x8& e2, const Vec3x8& ng, const EdgeFactors& f, TriHit8& hit) {
+  return watertight_mt8(r.org, r.dir, r.tnear, r.d, tfar, v0, e1, e2, ng, f, hit);
 }
 
 /// What the bound for rays from one point needs of a beam (PacketBeam), worked out once per
@@ -268,7 +264,7 @@ struct SharedOrigin {
   }
 };
 
-/// A test's terms again, for the lanes it left uncertain: the cold settles below recompute
+/// A test's terms again, for the lanes it left uncertain: the cold exact decisions below recompute
 /// them from the leaf and the rays by the same operations on the same floats (so with the bits
 /// of the fast path) rather than have the traversal hand its vectors over. Holds, per lane,
 /// Möller–Trumbore's answer, its edge values U, V, W (signed by den), B, den's sign and whether
@@ -283,7 +279,7 @@ struct Uncertain {
     const MtTerms m = mt_terms(org, dir, v0, e1, e2, ng);
     const float8 bound = d * bound_h(max_abs(m.c), f);
     TriHit8 mt;
-    (void)certified_answer(m, bound, f.x_thin * d, tnear, tfar, mt);  // Möller–Trumbore's answer, as the fast path's
+    (void)watertight_answer(m, bound, f.x_thin * d, tnear, tfar, mt);  // Möller–Trumbore's answer, as the fast path's
     m.u.store_aligned(u);
     m.v.store_aligned(v);
     third_edge(m).store_aligned(w);
@@ -319,13 +315,13 @@ struct Uncertain {
   }
 };
 
-/// A test's answer with the lanes it left uncertain settled: an out-parameter of the cold
-/// settles, which make every lane's answer (where the test was certain, Möller–Trumbore's from
-/// Uncertain: the fast path's bits). So nothing of the fast path's answer need be kept across
-/// the settle's call, and the caller's answer stays in registers (passed to the settles by
-/// reference, it would live in memory through the traversal, and the watertight variant
-/// measured slower).
-struct Settled {
+/// A test's answer with the lanes it left uncertain decided exactly: an out-parameter of the
+/// cold exact decisions, which make every lane's answer (where the test was certain,
+/// Möller–Trumbore's from Uncertain: the fast path's bits). So nothing of the fast path's
+/// answer need be kept across their call, and the caller's answer stays in registers (passed
+/// to them by reference, it would live in memory through the traversal, and the watertight
+/// variant measured slower).
+struct ExactAnswers {
   TriHit8 w;
   /// Lane l, for each lane l of `unsure`, answer(l) (an Intersection<float>); `un`'s
   /// Möller–Trumbore answer in the others.
@@ -346,15 +342,15 @@ struct Settled {
 };
 
 /// The answers of one ray (with `tfar`) against the triangles of `leaf`, the lanes `unsure`
-/// settled (the leaf's edges, normals and factors made again as CertifiedKernel::Block makes
+/// decided exactly (the leaf's edges, normals and factors made again as WatertightKernel::Block makes
 /// them). Out of line and cold: inlined, it would make the traversal around the kernel keep
 /// its vectors in memory (diffuse rays measured much slower, though it runs for a small fraction
 /// of leaf tests; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
-[[gnu::noinline, gnu::cold]] inline void settle_single(const Leaf& leaf, const Ray& ray, float tfar, uint32_t unsure,
-                                                       Settled& out) {
+[[gnu::noinline, gnu::cold]] inline void exact_single(const Leaf& leaf, const Ray& ray, float tfar, uint32_t unsure,
+                                                      ExactAnswers& out) {
   const LeafView lv(leaf);
   const Vec3x8 e1 = lv.e1(), e2 = lv.e2();
-  const CertifiedRays cr(ray);
+  const WatertightRays cr(ray);
   const Uncertain un(cr.org, cr.dir, cr.tnear, cr.d, float8(tfar), lv.v0, e1, e2, simd::cross_fma(e2, e1),
                      EdgeFactors(edge_bound8(e1, e2)));
   Ray r = ray;
@@ -366,9 +362,9 @@ struct Settled {
 }
 
 /// The same for the rays of a packet (SoA, as loaded) against triangle k of `leaf`, the lanes
-/// `unsure` settled (made again as CertifiedKernel::Triangle makes it: lane k of the leaf's).
-[[gnu::noinline, gnu::cold]] inline void settle_packet(const RayPacket& p, const float8& tfar, const Leaf& leaf,
-                                                       uint32_t k, uint32_t unsure, Settled& out) {
+/// `unsure` decided exactly (made again as WatertightKernel::Triangle makes it: lane k of the leaf's).
+[[gnu::noinline, gnu::cold]] inline void exact_packet(const RayPacket& p, const float8& tfar, const Leaf& leaf,
+                                                      uint32_t k, uint32_t unsure, ExactAnswers& out) {
   const LeafView lv(leaf);
   const Vec3x8 e1 = lv.e1(), e2 = lv.e2(), ng = simd::cross_fma(e2, e1);
   const int i = int(k);
@@ -382,5 +378,103 @@ struct Settled {
     return un.lane(l, r, v0, v1, v2);
   });
 }
+
+/// The triangle test of the watertight variant as it runs: Möller–Trumbore with a bound on
+/// the error of each edge decision, decided exactly (rp::edge_side) for the lanes the bound
+/// leaves uncertain (watertight.h: why every lane's edge decisions are exact).
+struct WatertightKernel {
+  /// MtKernel's Block, with the triangles' factors of the bound and the leaf for the exact decision.
+  struct Block : MtKernel::Block {
+    EdgeFactors f;      ///< the triangles' factors of the bound (edge_bound8)
+    const float* leaf;  ///< the leaf's words, where the exact decision reads the corners (LeafView::words)
+    RP_SIMD_INLINE explicit Block(const LeafView& lv) : MtKernel::Block(lv), f(edge_bound8(e1, e2)), leaf(lv.words) {}
+  };
+  /// A beam's rays as the bound for rays from one point takes them (once per beam), and a
+  /// leaf's triangles against them (SharedOrigin).
+  using Beam = OnePoint;
+  struct Origins : SharedOrigin {
+    RP_SIMD_INLINE Origins(const Block& b, const Beam& beam) : SharedOrigin(b.v0, b.f, beam) {}
+  };
+  struct Single {
+    WatertightRays r;
+    const Ray* ray;  ///< for the exact decision (a pointer: the ray is copied nowhere on the fast path)
+    RP_SIMD_INLINE explicit Single(const Ray& ray_) : r(ray_), ray(&ray_) {}
+    Single(const RayPacket& p, int lane, const Ray& ray_)
+        : r(p.org.broadcast(lane), p.dir.broadcast(lane), simd::broadcast_lane(p.tnear, lane)), ray(&ray_) {}
+    RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar) const {
+      TriHit8 h;
+      decide_exactly(b, tfar, watertight_mt8(r, tfar, b.v0, b.e1, b.e2, b.ng, b.f, h), h);
+      return h;
+    }
+    /// The same for a ray of the beam `og` was made for, with its bound where the beam's rays
+    /// start at one point (the same answers).
+    RP_SIMD_INLINE TriHit8 block(const Block& b, const float8& tfar, const Origins& og) const {
+      if (!og.shared) return block(b, tfar);
+      TriHit8 h;
+      decide_exactly(
+          b, tfar, watertight_mt8(r.org, r.dir, r.tnear, r.d, tfar, b.v0, b.e1, b.e2, b.ng, og.h, og.g, og.thin, h), h);
+      return h;
+    }
+
+   private:
+    /// `h` replaced by the answer with the lanes `unsure` decided exactly, if there are any.
+    RP_SIMD_INLINE void decide_exactly(const Block& b, const float8& tfar, uint32_t unsure, TriHit8& h) const {
+      if (unsure) [[unlikely]] {
+        ExactAnswers s;
+        exact_single(Leaf(b.leaf), *ray, tfar.get(0), unsure, s);
+        h = s.w;
+      }
+    }
+  };
+  /// MtKernel's Triangle, with the factors of its bound in a, b and thin, and where the exact decision
+  /// reads it. For rays each with their own M: the edge factors xm, xx and x_thin (B =
+  /// D (M xm + xx), lanes with |den| < x_thin D thin); for rays from one point (SharedOrigin,
+  /// `shared`): its h, g and thin (B = D h + g, lanes with |den| < thin thin).
+  struct Triangle : MtKernel::Triangle {
+    float8 a, b, thin;
+    const float* leaf = nullptr;  ///< the leaf's words, where the exact decision reads the corners
+    uint32_t k = 0;
+    bool shared = false;
+    Triangle() = default;
+    /// Triangle k of a leaf's Block, in every lane, each ray with its own M.
+    RP_SIMD_INLINE Triangle(const Block& bl, uint32_t k_)
+        : MtKernel::Triangle(bl, k_),
+          a(simd::broadcast_lane(bl.f.xm, int(k_))),
+          b(simd::broadcast_lane(bl.f.xx, int(k_))),
+          thin(simd::broadcast_lane(bl.f.x_thin, int(k_))),
+          leaf(bl.leaf),
+          k(k_) {}
+    /// The same, with SharedOrigin's factors when the rays start at one point.
+    RP_SIMD_INLINE Triangle(const Block& bl, uint32_t k_, const SharedOrigin& o)
+        : MtKernel::Triangle(bl, k_), leaf(bl.leaf), k(k_), shared(o.shared) {
+      const int i = int(k_);
+      a = simd::broadcast_lane(shared ? o.h : bl.f.xm, i);
+      b = simd::broadcast_lane(shared ? o.g : bl.f.xx, i);
+      thin = simd::broadcast_lane(shared ? o.thin : bl.f.x_thin, i);
+    }
+  };
+  struct Packet {
+    const RayPacket* p = nullptr;
+    float8 d;  ///< the rays' max-norms D, their factor in the bound (WatertightRays)
+    Packet() = default;
+    Packet(const RayPacket& packet, std::span<const Ray>) : p(&packet), d(max_abs(packet.dir)) {}
+    /// The answers of the lanes `lanes` (the caller ignores the others, which therefore never
+    /// go to the exact decision).
+    RP_SIMD_INLINE TriHit8 test(const Triangle& t, const float8& tfar, uint32_t lanes) const {
+      TriHit8 h;
+      const uint32_t unsure =
+          (t.shared ? watertight_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng, t.a, t.b, t.thin, h)
+                    : watertight_mt8(p->org, p->dir, p->tnear, d, tfar, t.v0, t.e1, t.e2, t.ng,
+                                     EdgeFactors(t.a, t.b, t.thin), h)) &
+          lanes;
+      if (unsure) [[unlikely]] {
+        ExactAnswers s;
+        exact_packet(*p, tfar, Leaf(t.leaf), t.k, unsure, s);
+        h = s.w;
+      }
+      return h;
+    }
+  };
+};
 
 }  // namespace rp::bvh8
