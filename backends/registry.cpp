@@ -1,5 +1,7 @@
 #include "backends/registry.h"
 
+#include <algorithm>
+
 #include "backends/embree/embree_backend.h"
 #include "backends/simd/simd_backend.h"
 #include "engine/error.h"
@@ -56,6 +58,30 @@ std::vector<std::string> available_backends() {
   for (const BackendEntry& e : list_backends())
     if (e.available) names.push_back(e.name);
   return names;
+}
+
+BackendOptions TraceMethod::options() const {
+  const bool coherent = coherence == Coherence::coherent;
+  return {.variant = variant,
+          .device_config = {},
+          .coherent_method = coherent ? method : "",
+          .incoherent_method = coherent ? "" : method};
+}
+
+std::vector<TraceMethod> list_methods() {
+  std::vector<TraceMethod> out;
+  for (const BackendEntry& e : list_backends()) {
+    if (!e.available) continue;
+    for (const std::string& v : e.variants) {
+      for (const std::string& m : e.coherent_methods)
+        out.push_back({cat(e.name, "/", v, ":", m), e.name, v, m, Coherence::coherent});
+      for (const std::string& m : e.incoherent_methods) {
+        const bool both = std::ranges::count(e.coherent_methods, m) > 0;
+        out.push_back({cat(e.name, "/", v, ":", m, both ? "-incoherent" : ""), e.name, v, m, Coherence::incoherent});
+      }
+    }
+  }
+  return out;
 }
 
 std::optional<MethodProblem> check_method(std::string_view name, std::string_view variant) {

@@ -31,6 +31,22 @@ std::vector<BackendEntry> list_backends();
 /// Names of the backends available on this machine.
 std::vector<std::string> available_backends();
 
+/// One way of tracing, named "backend/variant:method" everywhere a method is named (bench,
+/// rp_bench, stability, charts): a backend variant and the method it traces with under one
+/// coherence hint, e.g. "simd/watertight:large", "embree/default:packet16". A method listed
+/// for both hints keeps its name when coherent and is "<method>-incoherent" otherwise
+/// ("embree/default:stream", "embree/default:stream-incoherent").
+struct TraceMethod {
+  std::string name, backend, variant, method;
+  Coherence coherence;
+  /// The options that build `variant` tracing with `method` under `coherence`.
+  BackendOptions options() const;
+};
+
+/// The methods of the available backends: each variant with each coherent method, then each
+/// incoherent one, in the registry's order.
+std::vector<TraceMethod> list_methods();
+
 /// The backend used when none is asked for.
 inline constexpr std::string_view kDefaultBackend = "embree";
 

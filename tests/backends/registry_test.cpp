@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -51,6 +53,26 @@ TEST(Registry, ASharedSceneLivesAsLongAsTheBackend) {
     backend.reset();
     EXPECT_TRUE(watch.expired()) << name;  // the last owner was the backend
   }
+}
+
+TEST(Registry, EveryMethodIsNamedOnceAsBackendVariantColonMethod) {
+  std::vector<std::string> names;
+  for (const TraceMethod& m : list_methods()) {
+    const std::string suffix =
+        m.coherence == Coherence::incoherent && m.name.ends_with("-incoherent") ? "-incoherent" : "";
+    EXPECT_EQ(m.name, m.backend + "/" + m.variant + ":" + m.method + suffix);
+    EXPECT_EQ(std::ranges::count(names, m.name), 0) << m.name << " twice";
+    names.push_back(m.name);
+  }
+  // Every variant with every method of each available backend, nothing else.
+  size_t expected = 0;
+  for (const BackendEntry& e : list_backends())
+    if (e.available) expected += e.variants.size() * (e.coherent_methods.size() + e.incoherent_methods.size());
+  EXPECT_EQ(names.size(), expected);
+  // Embree's stream is both a coherent and an incoherent method: the incoherent one says so.
+  EXPECT_EQ(std::ranges::count(names, "embree/default:stream"), 1);
+  EXPECT_EQ(std::ranges::count(names, "embree/default:stream-incoherent"), 1);
+  EXPECT_EQ(std::ranges::count(names, "embree/robust:single"), 1);
 }
 
 TEST(Registry, ASharedSceneMustNotBeNull) {
