@@ -1,13 +1,15 @@
-// BM_Trace/<method>/<scene>/<primary|shadow|diffuse> and BM_Build/<method>/<scene>: every
-// available backend and its coherent methods (see methods()), plus Embree limited to AVX2
-// ("embree-avx2": equal SIMD width with the simd backend), on identical rays, traced by all
-// threads (TBB; --threads=N or the core count); primary and shadow rays as coherent spans,
-// diffuse rays as single rays. Scenes: the embedded default and, when ../shared/scenes is
-// present, bunny.obj, dragon.ply, Sponza from inside (bench/scenes/sponza-inside.json) and 16
-// bunnies placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json).
-// Rays from engine/analysis/raygen.h. BM_Pair/simd-watertight:simd/<scene>/<kind>: the
-// watertight variant against the default one on the same rays, as the median ratio of
-// alternated traces (see BM_Pair).
+// BM_Trace/<method>/<scene>/<primary|shadow|diffuse> and BM_Build/<backend/variant>/<scene>:
+// every method of the available backends, named backend/variant:method as everywhere
+// (e.g. BM_Trace/simd/watertight:large/bunny/primary; see methods()), plus Embree's default
+// methods limited to AVX2 ("embree/default:packet8@avx2": equal SIMD width with the simd
+// backend), on identical rays, traced by all threads (TBB; --threads=N or the core count);
+// primary and shadow rays as coherent spans by the coherent methods, diffuse rays by the
+// incoherent ones. Scenes: the embedded default and, when ../shared/scenes is present,
+// bunny.obj, dragon.ply, Sponza from inside (bench/scenes/sponza-inside.json) and 16 bunnies
+// placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json). Rays
+// from engine/analysis/raygen.h. BM_Pair/simd/watertight:large-vs-simd/default:large/<scene>/
+// <kind> (stream for diffuse rays): the watertight variant against the default one on the same
+// rays, as the median ratio of alternated traces (see BM_Pair).
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -55,58 +57,53 @@ RaySets make_rays(const Scene& scene, const Backend& backend) {
   return {primary.rays, shadow_rays(scene, primary, hits).rays, diffuse_rays(scene, primary, hits, 2024).rays};
 }
 
-/// Which rays a method is timed on: every kind (primary and shadow as coherent spans, diffuse
-/// as an incoherent batch), the coherent kinds or the incoherent one only, or every kind as an
-/// incoherent batch. A second method over a structure already measured is timed only on the
-/// rays that method traces, and its build is not timed.
-enum class Rays { all, coherent, incoherent, all_incoherent };
-
-/// The backends measured: registry name, options, the label in benchmark names, and the rays
-/// it is timed on (its build is timed with Rays::all).
+/// A method timed here: one of the registry's (backend/variant:method, backends/registry.h),
+/// or Embree's default methods on a device limited to AVX2 (the simd backend's SIMD width),
+/// named with the suffix "@avx2".
 struct Method {
-  std::string label, name;
-  BackendOptions options;
-  Rays rays = Rays::all;
+  TraceMethod trace;
+  std::string device_config;
+  const std::string& name() const { return trace.name; }
+  BackendOptions options() const {
+    BackendOptions o = trace.options();
+    o.device_config = device_config;
+    return o;
+  }
 };
 
-/// Every backend with its default options; simd's 8-ray packets beside its large packets, and
-/// its single rays beside its ray streams;
-/// Embree's stream mode and, where its AVX-512 kernels run, 16-wide packets, beside its 8-wide
-/// default; Embree's compact mode (its smallest structure); both backends' trees with
-/// spatial splits (simd's spatial variant, Embree's high-quality build); and Embree limited
-/// to AVX2 (the simd backend's SIMD width).
+/// Every method of the registry's available backends (variants × methods), but Embree's
+/// 16-wide packets only where its AVX-512 kernels run; then Embree limited to AVX2.
 std::vector<Method> methods() {
   std::vector<Method> m;
-  const auto with = [](const std::string& variant, const std::string& config, const std::string& coherent,
-                       const std::string& incoherent = "") {
-    return BackendOptions{.variant = variant, .device_config = config, .coherent_method = coherent,
-                          .incoherent_method = incoherent};
-  };
-  for (const BackendEntry& e : list_backends()) {
-    if (!e.available) continue;
-    m.push_back({e.name, e.name, {}});
-    if (e.name == "simd") {
-      m.push_back({"simd-packet8", "simd", with("default", "", "packet8"), Rays::coherent});
-      m.push_back({"simd-single", "simd", with("default", "", "", "single"), Rays::incoherent});
-      m.push_back({"simd-watertight", "simd", with("watertight", "", "")});
-      m.push_back({"simd-spatial", "simd", with("spatial", "", "")});
-    } else if (e.name == "embree") {
-      m.push_back({"embree-stream", "embree", with("default", "", "stream"), Rays::coherent});
-      m.push_back({"embree-stream-incoherent", "embree", with("default", "", "", "stream"), Rays::all_incoherent});
-      for (const auto& [key, value] : e.facts)
-        if (key == "native_ray16" && value == "yes")
-          m.push_back({"embree-packet16", "embree", with("default", "", "packet16"), Rays::coherent});
-      m.push_back({"embree-compact", "embree", with("compact", "", "")});
-      m.push_back({"embree-high", "embree", with("high", "", "")});
-    }
-  }
-  m.push_back({"embree-avx2", "embree", with("default", "max_isa=avx2", "")});
+  bool native16 = false;
+  for (const BackendEntry& e : list_backends())
+    for (const auto& [key, value] : e.facts)
+      if (e.name == "embree" && key == "native_ray16") native16 = value == "yes";
+  for (const TraceMethod& t : list_methods())
+    if (!(t.backend == "embree" && t.method == "packet16" && !native16)) m.push_back({t, ""});
+  for (const TraceMethod& t : list_methods())
+    if (t.backend == "embree" && t.variant == "default" && (t.method == "packet8" || t.method == "single"))
+      m.push_back({{t.name + "@avx2", t.backend, t.variant, t.method, t.coherence}, "max_isa=avx2"});
   return m;
+}
+
+/// The backend variants whose builds are timed: backend/variant, or with "@avx2" Embree's
+/// default variant on a device limited to AVX2.
+std::vector<Method> builds() {
+  std::vector<Method> out;
+  for (const Method& m : methods()) {
+    Method b = m;
+    b.trace.name = m.trace.backend + "/" + m.trace.variant + (m.device_config.empty() ? "" : "@avx2");
+    b.trace.method.clear();
+    if (std::ranges::count(out, b.trace.name, [](const Method& x) { return x.trace.name; }) == 0) out.push_back(b);
+  }
+  return out;
 }
 
 struct SceneFixture {
   Scene scene;
-  std::map<std::string, std::unique_ptr<Backend>> backends;
+  std::unique_ptr<Backend> embree;  ///< Embree's default variant: the rays' hits, the hits compared against
+  std::map<std::string, std::unique_ptr<Backend>> backends;  ///< by method name: the current benchmark's
   RaySets rays;
   std::unique_ptr<Reference> reference;
   std::map<std::string, std::vector<ReferenceHit>> reference_hits;  ///< by ray kind
@@ -123,8 +120,8 @@ SceneFixture& fixture(const std::string& scene_name) {
   if (!f) {
     f = std::make_unique<SceneFixture>();
     f->scene = load_scene(scene_files().at(scene_name));
-    for (const Method& m : methods()) f->backends[m.label] = make_backend(m.name, f->scene, m.options);
-    f->rays = make_rays(f->scene, *f->backends.at("embree"));
+    f->embree = make_backend("embree", f->scene);
+    f->rays = make_rays(f->scene, *f->embree);
     f->reference = std::make_unique<Reference>(f->scene);
     for (const auto& [kind, rays] : {std::pair{"primary", &f->rays.primary}, std::pair{"shadow", &f->rays.shadow},
                                      std::pair{"diffuse", &f->rays.diffuse}}) {
@@ -136,6 +133,22 @@ SceneFixture& fixture(const std::string& scene_name) {
   return *f;
 }
 
+/// The backends of `wanted` over the fixture's scene, built when missing; those of earlier
+/// benchmarks are let go (every method's structure at once would not fit beside the large
+/// scenes). Builds are not timed here.
+std::vector<const Backend*> backends(SceneFixture& f, std::initializer_list<const Method*> wanted) {
+  std::erase_if(f.backends, [&](const auto& entry) {
+    return std::ranges::none_of(wanted, [&](const Method* m) { return m->name() == entry.first; });
+  });
+  std::vector<const Backend*> out;
+  for (const Method* m : wanted) {
+    std::unique_ptr<Backend>& b = f.backends[m->name()];
+    if (!b) b = make_backend(m->trace.backend, f.scene, m->options());
+    out.push_back(b.get());
+  }
+  return out;
+}
+
 /// Traces `rays` with all threads.
 void trace(const Backend& b, const std::vector<Ray>& rays, std::vector<Hit>& hits, std::vector<uint8_t>& occ,
            bool shadow, Coherence coh) {
@@ -143,11 +156,11 @@ void trace(const Backend& b, const std::vector<Ray>& rays, std::vector<Hit>& hit
   else intersect_parallel(b, rays, hits, coh);
 }
 
-void BM_Trace(benchmark::State& state, const std::string& label, const std::string& scene_name, const std::string& kind,
-              Coherence coh) {
+void BM_Trace(benchmark::State& state, const Method& m, const std::string& scene_name, const std::string& kind) {
   SceneFixture& f = fixture(scene_name);
-  const Backend& b = *f.backends.at(label);
-  const Backend& ref = *f.backends.at("embree");
+  const Backend& b = *backends(f, {&m})[0];
+  const Backend& ref = *f.embree;
+  const Coherence coh = m.trace.coherence;
   const std::vector<Ray>& rays = kind == "primary" ? f.rays.primary : kind == "shadow" ? f.rays.shadow : f.rays.diffuse;
   const bool shadow = kind == "shadow";
   std::vector<Hit> hits(rays.size()), ref_hits(rays.size());
@@ -194,16 +207,17 @@ void BM_Trace(benchmark::State& state, const std::string& label, const std::stri
   state.counters["Rays/s"] = benchmark::Counter(double(rays.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-/// BM_Pair/<a>:<b>/<scene>/<kind>: methods a and b on the same rays, each iteration one trace
+/// BM_Pair/<a>-vs-<b>/<scene>/<kind>: methods a and b on the same rays, each iteration one trace
 /// of each (their order alternating), and as the counter `speed_ratio` the median over the
 /// iterations of a's speed over b's. A shared machine slows both traces of one iteration
 /// alike, so their ratio holds where the rates of separately timed benchmarks drift (measured
 /// here: BM_Trace's rates move between repetitions of one run several times as much as this
 /// ratio; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
-void BM_Pair(benchmark::State& state, const std::string& a, const std::string& b, const std::string& scene_name,
-             const std::string& kind, Coherence coh) {
+void BM_Pair(benchmark::State& state, const Method& a, const Method& b, const std::string& scene_name,
+             const std::string& kind) {
   SceneFixture& f = fixture(scene_name);
-  const Backend* methods[2] = {f.backends.at(a).get(), f.backends.at(b).get()};
+  const std::vector<const Backend*> methods = backends(f, {&a, &b});
+  const Coherence coh = a.trace.coherence;
   const std::vector<Ray>& rays = kind == "primary" ? f.rays.primary : kind == "shadow" ? f.rays.shadow : f.rays.diffuse;
   const bool shadow = kind == "shadow";
   std::vector<Hit> hits(rays.size());
@@ -231,7 +245,7 @@ void BM_Build(benchmark::State& state, const Method& m, const std::string& scene
   SceneFixture& f = fixture(scene_name);
   size_t bytes = 0;
   for (auto _ : state) {
-    auto b = make_backend(m.name, f.scene, m.options);
+    auto b = make_backend(m.trace.backend, f.scene, m.options());
     bytes = b->info().bytes;
     benchmark::DoNotOptimize(b.get());
   }
@@ -288,33 +302,34 @@ int main(int argc, char** argv) {
     scene_files()["bunnies-instanced"] = RP_SOURCE_DIR "/bench/scenes/bunnies-instanced.json";
     scene_files()["bunnies-flat"] = RP_SOURCE_DIR "/bench/scenes/bunnies-flat.json";
   }
+  const auto timed = [](benchmark::internal::Benchmark* b) { b->Unit(benchmark::kMillisecond)->UseRealTime(); };
+  const std::vector<Method> all = methods();
   for (const auto& [scene, path] : scene_files()) {
     (void)path;
-    for (const Method& m : methods()) {
-      for (const char* kind : {"primary", "shadow", "diffuse"}) {
-        // Primary rays and shadow rays (towards one light, in the primary rays' tile order)
-        // are coherent spans; diffuse bounces are not.
-        const bool diffuse = std::string_view(kind) == "diffuse";
-        const Coherence coh = diffuse || m.rays == Rays::all_incoherent ? Coherence::incoherent : Coherence::coherent;
-        if (m.rays == Rays::all || m.rays == Rays::all_incoherent || (m.rays == Rays::incoherent) == diffuse)
-          benchmark::RegisterBenchmark(("BM_Trace/" + m.label + "/" + scene + "/" + kind).c_str(), BM_Trace, m.label,
-                                       scene, std::string(kind), coh)
-              ->Unit(benchmark::kMillisecond)
-              ->UseRealTime();
-      }
-      if (m.label == "simd-watertight")  // issue 19's measure: against the default variant
-        for (const char* kind : {"primary", "shadow", "diffuse"})
-          benchmark::RegisterBenchmark(
-              ("BM_Pair/simd-watertight:simd/" + scene + "/" + kind).c_str(), BM_Pair, m.label, std::string("simd"),
-              scene, std::string(kind),
-              std::string_view(kind) == "diffuse" ? Coherence::incoherent : Coherence::coherent)
-              ->Unit(benchmark::kMillisecond)
-              ->UseRealTime();
-      if (m.rays == Rays::all)
-        benchmark::RegisterBenchmark(("BM_Build/" + m.label + "/" + scene).c_str(), BM_Build, m, scene)
-            ->Unit(benchmark::kMillisecond)
-            ->UseRealTime();
+    // Primary rays and shadow rays (towards one light, in the primary rays' tile order) are
+    // coherent spans, timed with the coherent methods; diffuse bounces are not.
+    for (const Method& m : all)
+      for (const char* kind : {"primary", "shadow", "diffuse"})
+        if ((std::string_view(kind) == "diffuse") == (m.trace.coherence == Coherence::incoherent))
+          timed(benchmark::RegisterBenchmark(("BM_Trace/" + m.name() + "/" + scene + "/" + kind).c_str(), BM_Trace, m,
+                                             scene, std::string(kind)));
+    // Issue 19's measure: the watertight variant against the default one, each with its
+    // default method for the kind's coherence.
+    for (const char* kind : {"primary", "shadow", "diffuse"}) {
+      const Coherence coh = std::string_view(kind) == "diffuse" ? Coherence::incoherent : Coherence::coherent;
+      const auto first = [&](const char* variant) {
+        return std::ranges::find_if(all, [&](const Method& m) {
+          return m.trace.backend == "simd" && m.trace.variant == variant && m.trace.coherence == coh;
+        });
+      };
+      const auto a = first("watertight"), b = first("default");
+      if (a != all.end() && b != all.end())
+        timed(benchmark::RegisterBenchmark(
+            ("BM_Pair/" + a->name() + "-vs-" + b->name() + "/" + scene + "/" + kind).c_str(), BM_Pair, *a, *b, scene,
+            std::string(kind)));
     }
+    for (const Method& m : builds())
+      timed(benchmark::RegisterBenchmark(("BM_Build/" + m.name() + "/" + scene).c_str(), BM_Build, m, scene));
   }
   // The kernel benchmarks run AVX2+FMA code: only where the simd backend is offered.
   for (const BackendEntry& e : list_backends())

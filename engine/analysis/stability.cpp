@@ -55,7 +55,7 @@ std::vector<Result> run(const Scene& base, const Options& o) {
                          const std::function<std::string(const FamilySpec&)>& param_of, int exponent,
                          bool has_exponent, std::mt19937_64* own_rng) {
     const Context context{geom, topology, reference};
-    std::map<std::string, std::unique_ptr<Backend>> backends;
+    std::map<std::string, MethodBackend> backends;
     for (const FamilySpec* spec : specs) {
       const std::string param = param_of(*spec);
       Family f;

@@ -4,8 +4,8 @@
 ///
 /// Every family is a scene and a seeded set of float rays; the double-precision reference
 /// (engine/analysis/reference.h), exact for those float rays and float vertices, is the oracle. A
-/// method is a backend variant (every family) or a scalar routine of engine/geometry (the
-/// families whose rays name the primitives they aim at: its "fan"). Each ray is classified
+/// method is a backend method ("simd/watertight:stream", every family) or a scalar routine of
+/// engine/geometry (the families whose rays name the primitives they aim at: its "fan"). Each ray is classified
 /// against the reference; see Counts for the failure kinds and classify() in stability.cpp
 /// for the rules.
 
@@ -48,18 +48,26 @@ struct Result {
   std::string param;        ///< e.g. "1e5" for the translated and scaled families, else ""
   int exponent = 0;         ///< k of 10^k for translated/scaled families
   bool has_exponent = false;
-  std::string method;       ///< e.g. "simd/watertight", "sphere/naive"
+  std::string method;  ///< e.g. "simd/watertight:stream", "sphere/naive"
   Counts counts;
 };
 
-/// Builds a backend ("name/variant") over a scene; the CLI passes the registry's make_backend.
-using BackendFactory = std::function<std::unique_ptr<Backend>(const std::string& method, const Scene& scene)>;
+/// A backend built for one method, and the coherence hint that selects the method.
+struct MethodBackend {
+  std::unique_ptr<Backend> backend;
+  Coherence coherence = Coherence::incoherent;
+};
+
+/// Builds the backend of a method ("backend/variant:method", backends/registry.h) over a
+/// scene; the CLI passes one over the registry's make_backend.
+using BackendFactory = std::function<MethodBackend(const std::string& method, const Scene& scene)>;
 
 struct Options {
   uint32_t rays = 4096;  ///< rays per family
   uint64_t seed = 1;
   double t_tolerance = 1e-4;  ///< relative t difference beyond which a hit is wrong
-  std::vector<std::string> backends{"embree/default", "embree/robust", "simd/default", "simd/watertight"};
+  std::vector<std::string> backends{"embree/default:single", "embree/robust:single", "simd/default:stream",
+                                    "simd/watertight:stream"};
   BackendFactory make_backend;
   /// Family names to run (empty: all); see family_names().
   std::vector<std::string> families;

@@ -40,56 +40,24 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-/// One way of tracing: a backend variant, a coherence hint and the backend's method for that
-/// hint (a coherent method: packets of some kind; an incoherent one: single rays or streams;
-/// empty: the backend's default).
-struct Method {
-  std::string label, backend, variant, method;
-  Coherence coherence;
-  BackendOptions options() const {
-    const bool coherent = coherence == Coherence::coherent;
-    return {.variant = variant, .device_config = {}, .coherent_method = coherent ? method : "",
-            .incoherent_method = coherent ? "" : method};
-  }
-};
-
 std::string fact(const BackendEntry& e, const std::string& key) {
   for (const auto& [k, v] : e.facts)
     if (k == key) return v;
   return {};
 }
 
-/// Every method of the available backends; `skipped` gets those this machine would only emulate.
-std::vector<Method> methods(std::vector<std::pair<std::string, std::string>>& skipped) {
-  std::vector<Method> m;
-  for (const BackendEntry& e : list_backends()) {
-    if (!e.available) continue;
-    if (e.name == "simd") {
-      m.push_back({"simd large", "simd", "default", "large", Coherence::coherent});
-      m.push_back({"simd packet8", "simd", "default", "packet8", Coherence::coherent});
-      m.push_back({"simd stream", "simd", "default", "stream", Coherence::incoherent});
-      m.push_back({"simd single", "simd", "default", "single", Coherence::incoherent});
-      m.push_back({"simd watertight large", "simd", "watertight", "large", Coherence::coherent});
-      m.push_back({"simd watertight stream", "simd", "watertight", "stream", Coherence::incoherent});
-      m.push_back({"simd spatial large", "simd", "spatial", "large", Coherence::coherent});
-      m.push_back({"simd spatial stream", "simd", "spatial", "stream", Coherence::incoherent});
-    } else if (e.name == "embree") {
-      m.push_back({"embree stream", "embree", "default", "stream", Coherence::coherent});
-      if (fact(e, "native_ray16") == "yes")
-        m.push_back({"embree rtcIntersect16", "embree", "default", "packet16", Coherence::coherent});
-      else
-        skipped.push_back({"embree rtcIntersect16", cat("Embree runs its ", fact(e, "isa"),
-                                                        " kernels here: 16-wide packets would be emulated")});
-      m.push_back({"embree rtcIntersect8", "embree", "default", "packet8", Coherence::coherent});
-      m.push_back({"embree rtcIntersect1", "embree", "default", "single", Coherence::incoherent});
-      m.push_back({"embree stream incoherent", "embree", "default", "stream", Coherence::incoherent});
-      m.push_back({"embree robust 8", "embree", "robust", "packet8", Coherence::coherent});
-      m.push_back({"embree robust 1", "embree", "robust", "single", Coherence::incoherent});
-      m.push_back({"embree compact 8", "embree", "compact", "packet8", Coherence::coherent});
-      m.push_back({"embree compact 1", "embree", "compact", "single", Coherence::incoherent});
-      m.push_back({"embree high 8", "embree", "high", "packet8", Coherence::coherent});
-      m.push_back({"embree high 1", "embree", "high", "single", Coherence::incoherent});
-    }
+/// Every method of the registry (variants × methods); `skipped` gets those this machine would
+/// only emulate (Embree's 16-wide packets where its AVX-512 kernels do not run).
+std::vector<TraceMethod> methods(std::vector<std::pair<std::string, std::string>>& skipped) {
+  std::vector<TraceMethod> m;
+  const std::vector<BackendEntry> backends = list_backends();
+  for (TraceMethod& t : list_methods()) {
+    const BackendEntry& e = *std::ranges::find(backends, t.backend, &BackendEntry::name);
+    if (t.backend == "embree" && t.method == "packet16" && fact(e, "native_ray16") != "yes")
+      skipped.push_back(
+          {t.name, cat("Embree runs its ", fact(e, "isa"), " kernels here: 16-wide packets would be emulated")});
+    else
+      m.push_back(std::move(t));
   }
   return m;
 }
@@ -216,7 +184,7 @@ std::vector<Kind> ray_kinds(const Scene& scene, const Reference& reference, cons
 struct BuildTiming {
   double median, spread;
 };
-BuildTiming time_builds(const Method& m, const Scene& scene, double first, int runs) {
+BuildTiming time_builds(const TraceMethod& m, const Scene& scene, double first, int runs) {
   if (runs == 0) return {first, 0.0};
   std::vector<double> secs;
   for (int i = 0; i < runs; ++i) secs.push_back(make_backend(m.backend, scene, m.options())->info().build_seconds);
@@ -252,11 +220,12 @@ void print_best(std::FILE* out, const Json& js, const std::vector<Kind>& kinds) 
     }
     if (!best[0] || !best[1]) continue;
     if (!header)
-      say(out, "\n%-8s %-24s %10s   %-24s %10s %8s\n", "rays", "best simd", "Mrays/s", "best embree", "Mrays/s", "ratio");
+      say(out, "\n%-8s %-32s %10s   %-32s %10s %8s\n", "rays", "best simd", "Mrays/s", "best embree", "Mrays/s",
+          "ratio");
     header = true;
     const double s = (*best[0])["mrays_per_s"].get<double>(), e = (*best[1])["mrays_per_s"].get<double>();
-    say(out, "%-8s %-24s %10.2f   %-24s %10.2f %7.2fx\n", k.name.c_str(), (*best[0])["method"].get<std::string>().c_str(),
-                s, (*best[1])["method"].get<std::string>().c_str(), e, s / e);
+    say(out, "%-8s %-32s %10.2f   %-32s %10.2f %7.2fx\n", k.name.c_str(),
+        (*best[0])["method"].get<std::string>().c_str(), s, (*best[1])["method"].get<std::string>().c_str(), e, s / e);
   }
 }
 
@@ -275,7 +244,8 @@ CLI::App* BenchArgs::add_to(CLI::App& app) {
                 "Builds timed per backend variant after the first (median reported; 0: the first build only)")
       ->check(CLI::Range(0, 100))
       ->capture_default_str();
-  c->add_option("--method", method_filter, "Only the methods whose label matches this regular expression");
+  c->add_option("--method", method_filter,
+                "Only the methods whose name (backend/variant:method) matches this regular expression");
   c->add_option("--kind", kinds, "Only these ray kinds: primary, shadow, diffuse (repeatable)");
   c->add_option("--rays", ray_file, "Time the rays of this ray file (one --scene) instead of the generated kinds");
   c->add_flag("--any-hit", occlusion, "With --rays: time any-hit (occlusion) queries, not closest hits");
@@ -355,7 +325,7 @@ int run_bench(const BenchArgs& a) {
   const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
 
   std::vector<std::pair<std::string, std::string>> skipped;
-  std::vector<Method> chosen;
+  std::vector<TraceMethod> chosen;
   {
     std::regex filter;
     try {
@@ -363,18 +333,18 @@ int run_bench(const BenchArgs& a) {
     } catch (const std::regex_error& e) {
       throw UsageError(cat("bench: --method '", one_line(a.method_filter), "' is not a regular expression: ", e.what()));
     }
-    std::string labels;
-    for (const Method& m : methods(skipped)) {
-      labels += (labels.empty() ? "" : ", ") + m.label;
-      if (std::regex_search(m.label, filter)) chosen.push_back(m);
+    std::string names;
+    for (const TraceMethod& m : methods(skipped)) {
+      names += (names.empty() ? "" : ", ") + m.name;
+      if (std::regex_search(m.name, filter)) chosen.push_back(m);
     }
     std::erase_if(skipped, [&](const auto& sk) { return !std::regex_search(sk.first, filter); });
-    usage(!chosen.empty(), "bench: --method '", one_line(a.method_filter), "' matches none of: ", labels);
+    usage(!chosen.empty(), "bench: --method '", one_line(a.method_filter), "' matches none of: ", names);
   }
 
   Json out = provenance(threads);
   out["skipped_methods"] = Json::array();
-  for (const auto& [label, why] : skipped) out["skipped_methods"].push_back({{"method", label}, {"reason", why}});
+  for (const auto& [name, why] : skipped) out["skipped_methods"].push_back({{"method", name}, {"reason", why}});
   const std::vector<Ray> file_rays = a.ray_file.empty() ? std::vector<Ray>{} : read_rays(a.ray_file);
   out["scenes"] = Json::array();
   for (const std::string& path : a.scenes) {
@@ -394,10 +364,10 @@ int run_bench(const BenchArgs& a) {
     say(table, "\n%s: %u triangles, %u primitives;", name.c_str(), scene.triangle_count(), scene.prim_count());
     for (const Kind& k : kinds) say(table, " %zu %s", k.rays.size(), k.name.c_str());
     say(table, " rays; %zu threads\n", threads);
-    say(table, "%-24s %-8s %10s %8s %5s %12s   %s\n", "method", "rays", "Mrays/s", "spread", "runs", "mismatch",
-                "hit/miss wrong-prim t-error");
+    say(table, "%-32s %-8s %10s %8s %5s %12s   %s\n", "method", "rays", "Mrays/s", "spread", "runs", "mismatch",
+        "hit/miss wrong-prim t-error");
     std::vector<std::string> recorded;
-    for (const Method& m : chosen) {
+    for (const TraceMethod& m : chosen) {
       const std::string backend_key = m.backend + "/" + m.variant;
       const std::unique_ptr<Backend> b =
           make_backend(m.backend, scene, m.options());
@@ -433,10 +403,10 @@ int run_bench(const BenchArgs& a) {
         }
         const double n = std::max<double>(1.0, double(rays.size()));
         const double mismatch = double(count[2] + count[3] + count[4]) / n;
-        say(table, "%-24s %-8s %10.2f %7.1f%% %5d %12.3g   %zu %zu %zu\n", m.label.c_str(), k.name.c_str(),
-                    t.median_mrays, 100.0 * t.spread, t.runs, mismatch, count[2], count[3], count[4]);
+        say(table, "%-32s %-8s %10.2f %7.1f%% %5d %12.3g   %zu %zu %zu\n", m.name.c_str(), k.name.c_str(),
+            t.median_mrays, 100.0 * t.spread, t.runs, mismatch, count[2], count[3], count[4]);
         if (table) std::fflush(table);
-        js["results"].push_back({{"method", m.label},
+        js["results"].push_back({{"method", m.name},
                                  {"backend", backend_key},
                                  {"coherence", m.coherence == Coherence::coherent ? "coherent" : "incoherent"},
                                  {"coherent_method", m.coherence == Coherence::coherent ? m.method : ""},
@@ -462,7 +432,7 @@ int run_bench(const BenchArgs& a) {
     print_build_ratio(table, js);
     out["scenes"].push_back(js);
   }
-  for (const auto& [label, why] : skipped) say(table, "\n%s: not run: %s\n", label.c_str(), why.c_str());
+  for (const auto& [name, why] : skipped) say(table, "\n%s: not run: %s\n", name.c_str(), why.c_str());
   if (!a.json.empty()) write_file(a.json, out.dump(2) + "\n");
   if (!a.chart.empty()) draw_charts(out, a.chart, a.stability);
   return 0;

@@ -36,7 +36,8 @@ std::map<std::string, HardFailures> read_hard_failures(const std::string& path) 
       throw Error(cat(path, ": not a raypack stability file (no \"results\")"));
     for (const Json& r : j["results"]) {
       if (!is_hard(r.at("family").get<std::string>(), r.at("param").get<std::string>())) continue;
-      HardFailures& f = out[r.at("method").get<std::string>()];
+      const std::string method = r.at("method").get<std::string>();
+      HardFailures& f = out[method.substr(0, method.find(':'))];
       f.failed += r.at("failed").get<double>();
       f.rays += r.at("rays").get<double>();
     }
@@ -75,8 +76,9 @@ std::string draw_pareto(const Json& bench, const std::string& stability_path, co
       }
   }
   if (methods.empty())
-    throw Error(cat(stability_path, ": no method in common with the bench results (the bench's \"backend\" keys, e.g. "
-                                    "simd/watertight, against the stability file's methods)"));
+    throw Error(cat(stability_path,
+                    ": no method in common with the bench results (the bench's \"backend\" keys, e.g. "
+                    "simd/watertight, against the stability file's methods' backend/variant)"));
 
   std::string scenes_text;
   for (const std::string& s : scene_names) scenes_text += (scenes_text.empty() ? "" : ", ") + fs::path(s).filename().string();

@@ -1,20 +1,21 @@
 #include "engine/cli/stability_cmd.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <set>
 #include <sstream>
 
 #include "backends/registry.h"
+#include "engine/analysis/stability.h"
 #include "engine/cli/args.h"
 #include "engine/cli/plot.h"
 #include "engine/error.h"
 #include "engine/loaders/load.h"
 #include "engine/output_file.h"
-#include "engine/analysis/stability.h"
+#include "engine/text.h"
 
 namespace rp::cli {
 
@@ -73,8 +74,8 @@ CLI::App* StabilityArgs::add_to(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--method", methods,
-                "Backend method backend/variant (repeatable; default embree/default, embree/robust, "
-                "simd/default, simd/watertight)");
+                "Backend method backend/variant:method (repeatable; default embree/default:single, "
+                "embree/robust:single, simd/default:stream, simd/watertight:stream)");
   c->add_option("--family", families, "Run only this family (repeatable; see --list)");
   c->add_flag("--list", list, "List the families and scalar methods");
   c->add_option("--json", json, "Write the results as JSON");
@@ -111,28 +112,34 @@ int run_stability(const StabilityArgs& a) {
   o.seed = a.seed;
   o.t_tolerance = a.t_tolerance;
   o.families = a.families;
-  // Methods: the ones asked for, else every backend variant whose triangle test differs.
-  std::set<std::string> available;
-  for (const BackendEntry& e : list_backends())
-    if (e.available)
-      for (const std::string& v : e.variants) available.insert(e.name + "/" + v);
+  // Methods: the ones asked for, else every backend variant whose triangle test differs, each
+  // with its default incoherent method (the families' rays are not coherent).
+  const std::vector<TraceMethod> available = list_methods();
+  const auto find = [&](const std::string& name) { return std::ranges::find(available, name, &TraceMethod::name); };
   if (!a.methods.empty()) {
     o.backends = a.methods;
     for (const std::string& m : o.backends)
-      if (!available.count(m)) {
-        const size_t slash = m.find('/');
-        if (slash == std::string::npos) throw UsageError(cat("--method: '", m, "' is not backend/variant"));
-        check_method("--method", m.substr(0, slash), "--method", m.substr(slash + 1));
+      if (find(m) == available.end()) {
+        for (const BackendEntry& e : list_backends())
+          if (!e.available && m.starts_with(e.name + "/"))
+            throw UsageError(
+                cat("--method: backend '", e.name, "' is not available on this machine: ", e.unavailable_reason));
+        std::string names;
+        for (const TraceMethod& t : available) names += (names.empty() ? "" : ", ") + t.name;
+        throw UsageError(cat("--method: unknown method '", one_line(m), "' (", names, ")"));
       }
   } else {
+    const std::vector<std::string> defaults = o.backends;
     o.backends.clear();
-    for (const char* m : {"embree/default", "embree/robust", "simd/default", "simd/watertight"})
-      if (available.count(m)) o.backends.push_back(m);
-      else say(a.quiet ? nullptr : stderr, "raypack: stability: %s is not available here, skipped\n", m);
+    for (const std::string& m : defaults)
+      if (find(m) != available.end())
+        o.backends.push_back(m);
+      else
+        say(a.quiet ? nullptr : stderr, "raypack: stability: %s is not available here, skipped\n", m.c_str());
   }
-  o.make_backend = [](const std::string& method, const Scene& scene) {
-    const size_t slash = method.find('/');
-    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
+  o.make_backend = [find](const std::string& method, const Scene& scene) {
+    const TraceMethod& m = *find(method);
+    return stability::MethodBackend{make_backend(m.backend, scene, m.options()), m.coherence};
   };
   if (!a.quiet)
     o.progress = [](const std::string& family) { std::fprintf(stderr, "raypack: stability: %s\n", family.c_str()); };

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
@@ -48,15 +49,13 @@ stability::Options options(std::vector<std::string> backends, std::vector<std::s
   stability::Options o;
   o.rays = rays;
   o.backends.clear();
-  for (const std::string& b : backends) {
-    const std::string name = b.substr(0, b.find('/'));
-    for (const BackendEntry& e : list_backends())
-      if (e.name == name && e.available) o.backends.push_back(b);
-  }
+  const std::vector<TraceMethod> available = list_methods();  // those of the available backends
+  for (const std::string& b : backends)
+    if (std::ranges::count(available, b, &TraceMethod::name) > 0) o.backends.push_back(b);
   o.families = std::move(families);
-  o.make_backend = [](const std::string& method, const Scene& scene) {
-    const size_t slash = method.find('/');
-    return make_backend(method.substr(0, slash), scene, {.variant = method.substr(slash + 1), .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
+  o.make_backend = [available](const std::string& method, const Scene& scene) {
+    const TraceMethod& m = *std::ranges::find(available, method, &TraceMethod::name);
+    return stability::MethodBackend{make_backend(m.backend, scene, m.options()), m.coherence};
   };
   return o;
 }
@@ -70,13 +69,13 @@ bool simd_available() {
 TEST(Stability, WatertightNeverLeaksThroughAClosedMeshAtAnyTranslationOrScale) {
   if (!simd_available()) GTEST_SKIP() << "simd backend unavailable on this CPU (needs AVX2 and FMA)";
   const Scene torus = closed_torus();
-  const auto results = stability::run(
-      torus, options({"simd/watertight", "simd/default"}, {"edges", "vertices", "translated", "scaled"}, 1500));
+  const auto results = stability::run(torus, options({"simd/watertight:stream", "simd/default:stream"},
+                                                     {"edges", "vertices", "translated", "scaled"}, 1500));
   std::set<std::string> seen;
   uint64_t default_leaks = 0;
   for (const Result& r : results) {
-    if (r.method == "simd/default") default_leaks += r.counts.leaks;
-    if (r.method != "simd/watertight" && r.method != "triangle/watertight") continue;
+    if (r.method == "simd/default:stream") default_leaks += r.counts.leaks;
+    if (r.method != "simd/watertight:stream" && r.method != "triangle/watertight") continue;
     seen.insert(r.family + " " + r.param);
     EXPECT_GT(r.counts.rays, 0u) << r.family << " " << r.param;
     EXPECT_EQ(r.counts.leaks, 0u) << r.method << " leaks on " << r.family << " " << r.param;
@@ -90,8 +89,9 @@ TEST(Stability, WatertightNeverLeaksThroughAClosedMeshAtAnyTranslationOrScale) {
 
 TEST(Stability, NoMethodHitsANaNRayOrOutsideTheRayInterval) {
   const Scene scene = load_scene("default");
-  const auto results =
-      stability::run(scene, options({"embree/default", "embree/robust", "simd/default", "simd/watertight"}, {}, 256));
+  const auto results = stability::run(
+      scene, options({"embree/default:single", "embree/robust:single", "simd/default:stream", "simd/watertight:stream"},
+                     {}, 256));
   std::set<std::string> families;
   for (const Result& r : results) {
     families.insert(r.family);
@@ -105,7 +105,8 @@ TEST(Stability, NoMethodHitsANaNRayOrOutsideTheRayInterval) {
 
 TEST(Stability, OffsetRaysNeverHitTheSurfaceTheyLeaveAtAnyScale) {
   const Scene scene = load_scene("default");
-  const auto results = stability::run(scene, options({"embree/default", "simd/default"}, {"leaving_raw", "leaving_offset"}, 1000));
+  const auto results = stability::run(
+      scene, options({"embree/default:single", "simd/default:stream"}, {"leaving_raw", "leaving_offset"}, 1000));
   uint64_t raw_self = 0, offset_rows = 0;
   for (const Result& r : results) {
     if (r.family == "leaving_raw") raw_self += r.counts.self_hits;
@@ -120,14 +121,14 @@ TEST(Stability, OffsetRaysNeverHitTheSurfaceTheyLeaveAtAnyScale) {
 
 TEST(Stability, FamiliesAreSeededAndSizedAsAsked) {
   const Scene torus = closed_torus(16, 8);
-  const auto o = options({"embree/default"}, {"edges", "vertices", "nan_inf", "far_spheres"}, 300);
+  const auto o = options({"embree/default:single"}, {"edges", "vertices", "nan_inf", "far_spheres"}, 300);
   const auto a = stability::run(torus, o), b = stability::run(torus, o);
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].method, b[i].method);
     EXPECT_EQ(a[i].counts.rays, b[i].counts.rays);
     EXPECT_EQ(a[i].counts.failed, b[i].counts.failed);
-    if (a[i].method == "embree/default") {
+    if (a[i].method == "embree/default:single") {
       EXPECT_EQ(a[i].counts.rays, 300u) << a[i].family;
     }
   }

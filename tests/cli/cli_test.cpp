@@ -95,9 +95,10 @@ TEST_F(Cli, ABadBackendOrVariantNamesTheFlagGivenInEverySubcommand) {
       {"trace --rays r.csv -o h.csv --backend nope", "--backend: unknown backend 'nope' (available: embree, simd)"},
       {"diff -b nope", "-b: unknown backend 'nope' (available: embree, simd)"},
       {"diff --variant-a watertight", "--variant-a: 'watertight' is not a variant of embree"},
-      {"diff --variant-b robust", "--variant-b: 'robust' is not a variant of simd (default, median, watertight, spatial)"},
-      {"stability --method simd/fast", "--method: 'fast' is not a variant of simd (default, median, watertight, spatial)"},
-      {"stability --method simd", "--method: 'simd' is not backend/variant"},
+      {"diff --variant-b robust",
+       "--variant-b: 'robust' is not a variant of simd (default, median, watertight, spatial)"},
+      {"stability --method simd/fast:stream", "--method: unknown method 'simd/fast:stream' (embree/default:packet8, "},
+      {"stability --method simd/watertight", "--method: unknown method 'simd/watertight' ("},
       {"stability --family edgs", "--family: unknown family 'edgs' ("}};
   for (const auto& [args, message] : bad) {
     const Result r = run(args);
@@ -130,7 +131,7 @@ TEST_F(Cli, QuietPrintsNothingOnSuccessInEverySubcommand) {
        {"render --resolution 8x8 -o " + (dir_ / "x.png").string(),
         "trace --rays " + rays.string() + " -o " + (dir_ / "hits.csv").string(), std::string("diff --count 64"),
         "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --json " + json.string(),
-        std::string("stability --count 8 --family edges --method embree/default")}) {
+        std::string("stability --count 8 --family edges --method embree/default:single")}) {
     const Result r = run(args + " -q");
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_EQ(r.output, "") << args;
@@ -312,10 +313,26 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   const fs::path json = dir_ / "b.json", chart = dir_ / "c.png", again = dir_ / "again.png";
   Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
-  for (const char* word : {"simd large", "simd packet8", "simd single", "embree stream", "embree rtcIntersect8",
-                           "embree rtcIntersect1", "embree robust 1", "simd stream", "simd spatial stream", "embree high 1",
-                           "bytes/prim", "primary", "shadow", "diffuse",
-                           "best simd", "best embree", "build: simd/default", "fastest Embree"})
+  for (const char* word : {"simd/default:large",
+                           "simd/default:packet8",
+                           "simd/default:single",
+                           "embree/default:stream ",
+                           "embree/default:packet8",
+                           "embree/default:single",
+                           "embree/robust:single",
+                           "embree/default:stream-incoherent",
+                           "simd/default:stream",
+                           "simd/spatial:stream",
+                           "simd/median:large",
+                           "embree/high:single",
+                           "bytes/prim",
+                           "primary",
+                           "shadow",
+                           "diffuse",
+                           "best simd",
+                           "best embree",
+                           "build: simd/default",
+                           "fastest Embree"})
     EXPECT_NE(r.output.find(word), std::string::npos) << word << "\n" << r.output;
   const std::string text = file_bytes(json);
   for (const char* key : {"\"machine\"", "\"mrays_per_s\"", "\"mismatch_rate\"", "\"spread\"", "\"bytes_per_prim\"",
@@ -349,7 +366,8 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n5,10,5,0,1,0,0,inf\n";
   for (const std::string& args : {std::string("--kind primary"), "--rays " + rays.string()}) {
     fs::remove(chart);
-    r = run("bench --size 8 --min-runs 1 --max-runs 1 --method 'simd large' " + args + " --chart " + chart.string());
+    r = run("bench --size 8 --min-runs 1 --max-runs 1 --method 'simd/default:large' " + args + " --chart " +
+            chart.string());
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_TRUE(fs::exists(chart)) << args;
   }
@@ -357,11 +375,11 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
 
 TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
   // --method and --kind choose the rows; every other method and kind is left out.
-  Result r = run("bench --size 16 --min-runs 1 --max-runs 1 --method '^embree (stream|rtcIntersect1)$' --kind shadow");
+  Result r = run("bench --size 16 --min-runs 1 --max-runs 1 --method '^embree/default:(stream|single)$' --kind shadow");
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NE(r.output.find("embree stream            shadow"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("embree rtcIntersect1     shadow"), std::string::npos) << r.output;
-  for (const char* absent : {"simd", "rtcIntersect8", "primary ", "diffuse "})
+  EXPECT_NE(r.output.find("embree/default:stream            shadow"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("embree/default:single            shadow"), std::string::npos) << r.output;
+  for (const char* absent : {"simd", "packet8", "stream-incoherent", "robust", "primary ", "diffuse "})
     EXPECT_EQ(r.output.find(absent), std::string::npos) << absent << "\n" << r.output;
   // --rays times the file's rays, closest or any hit, and checks them against the reference.
   const fs::path rays = dir_ / "rays.csv";
@@ -371,10 +389,12 @@ TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
     for (int i = 0; i < 64; ++i) out << (i % 8) * 0.1 - 0.4 << "," << (i / 8) * 0.1 - 0.4 << ",5,0,0,-1,0,inf\n";
   }
   for (const std::string& flag : {std::string(), std::string(" --any-hit")}) {
-    r = run("bench --min-runs 1 --max-runs 1 --method 'simd large' --rays " + rays.string() + flag);
+    r = run("bench --min-runs 1 --max-runs 1 --method 'simd/default:large' --rays " + rays.string() + flag);
     ASSERT_EQ(r.status, 0) << r.output;
-    EXPECT_NE(r.output.find(flag.empty() ? "simd large               file " : "simd large               file-any"),
-              std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(flag.empty() ? "simd/default:large               file "
+                                         : "simd/default:large               file-any"),
+              std::string::npos)
+        << r.output;
     EXPECT_NE(r.output.find("64 file"), std::string::npos) << r.output;
   }
   // Bad flags: one line naming the value, status 2 (a bad flag value or combination); a file
@@ -521,17 +541,20 @@ TEST_F(Cli, SpecialInputFilesAreRefusedAtOnce) {
 
 TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
   const fs::path bench = dir_ / "b.json", stability = dir_ / "s.json", chart = dir_ / "c.svg";
-  Result r = run("stability --count 64 --family edges --family vertices --family translated --method simd/default "
-                 "--method simd/watertight --method embree/robust -q --json " + stability.string());
+  Result r =
+      run("stability --count 64 --family edges --family vertices --family translated --method simd/default:stream "
+          "--method simd/watertight:stream --method embree/robust:single -q --json " +
+          stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
-  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --kind diffuse --method 'simd large|simd watertight "
-          "large|robust 8|rtcIntersect8' -q --json " + bench.string() + " --chart " + chart.string() +
-          " --stability " + stability.string());
+  r =
+      run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --kind diffuse --method "
+          "'simd/(default|watertight):large|embree/(robust|default):packet8' -q --json " +
+          bench.string() + " --chart " + chart.string() + " --stability " + stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string svg = file_bytes(dir_ / "c-pareto.svg");
   ASSERT_EQ(svg.rfind("<?xml", 0), 0u);
   // A point and a legend entry for each method in both files; embree/default is in the bench
-  // only (rtcIntersect8), so it has neither.
+  // only (embree/default:packet8), so it has neither.
   for (const char* method : {"simd/default", "simd/watertight", "embree/robust"})
     EXPECT_NE(svg.find(method), std::string::npos) << method;
   EXPECT_EQ(svg.find("embree/default"), std::string::npos);
@@ -555,7 +578,7 @@ TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
     EXPECT_FALSE(fs::exists(dir_ / "bad-pareto.svg"));
   }
   // A stability file whose methods the bench did not time.
-  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --method 'embree stream' -q --json " +
+  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --method 'embree/default:stream' -q --json " +
           (dir_ / "e.json").string());
   ASSERT_EQ(r.status, 0) << r.output;
   r = run("chart " + (dir_ / "e.json").string() + " -o " + (dir_ / "e.svg").string() + " --stability " + stability.string());

@@ -116,7 +116,7 @@ std::vector<std::string> scalar_method_names() {
 }
 
 void evaluate(const Family& f, const Reference& reference, const Options& o,
-              std::map<std::string, std::unique_ptr<Backend>>& backends, std::vector<Result>& out) {
+              std::map<std::string, MethodBackend>& backends, std::vector<Result>& out) {
   if (f.rays.empty()) return;
   std::vector<ReferenceHit> ref(f.rays.size());
   reference.intersect(f.rays, ref);
@@ -125,9 +125,9 @@ void evaluate(const Family& f, const Reference& reference, const Options& o,
   };
   for (const std::string& name : o.backends) {
     auto& b = backends[name];
-    if (!b) b = o.make_backend(name, *f.scene);
+    if (!b.backend) b = o.make_backend(name, *f.scene);
     std::vector<Hit> hits(f.rays.size());
-    b->intersect(f.rays, hits, Coherence::incoherent);
+    b.backend->intersect(f.rays, hits, b.coherence);
     Counts c;
     for (size_t i = 0; i < f.rays.size(); ++i)
       classify(f, i, ref[i], {hits[i].hit(), hits[i].hit() ? double(hits[i].t) : kInf, hits[i].prim_id, 0},

@@ -16,7 +16,7 @@ namespace rp::stability {
 /// `backends`), every scalar method whose primitive kind the rays' fans hold; appends a Result
 /// per method to `out`.
 void evaluate(const Family& f, const Reference& reference, const Options& o,
-              std::map<std::string, std::unique_ptr<Backend>>& backends, std::vector<Result>& out);
+              std::map<std::string, MethodBackend>& backends, std::vector<Result>& out);
 
 /// Names of the scalar methods, in the order evaluate() runs them.
 std::vector<std::string> scalar_method_names();

@@ -8,16 +8,16 @@
 namespace rp::stability {
 
 void print_table(std::FILE* out, const std::vector<Result>& results) {
-  std::fprintf(out, "%-15s %-14s %-20s %7s %9s %7s %7s %7s %7s %7s %7s %7s\n", "family", "param", "method", "rays",
+  std::fprintf(out, "%-15s %-14s %-24s %7s %9s %7s %7s %7s %7s %7s %7s %7s\n", "family", "param", "method", "rays",
                "fail %", "leaks", "false", "t err", "double", "self", "nan", "out");
   for (const Result& r : results) {
     const Counts& c = r.counts;
     const std::string dbl = c.double_measured ? std::to_string(c.double_hits) : "-";
-    std::fprintf(out, "%-15s %-14s %-20s %7llu %9.4f %7llu %7llu %7llu %7s %7llu %7llu %7llu\n", r.family.c_str(),
-                 r.param.empty() ? "-" : r.param.c_str(), r.method.c_str(), (unsigned long long)c.rays, 100.0 * c.rate(),
-                 (unsigned long long)c.leaks, (unsigned long long)c.false_hits, (unsigned long long)c.t_errors,
-                 dbl.c_str(), (unsigned long long)c.self_hits, (unsigned long long)c.nan_hits,
-                 (unsigned long long)c.out_of_interval);
+    std::fprintf(out, "%-15s %-14s %-24s %7llu %9.4f %7llu %7llu %7llu %7s %7llu %7llu %7llu\n", r.family.c_str(),
+                 r.param.empty() ? "-" : r.param.c_str(), r.method.c_str(), (unsigned long long)c.rays,
+                 100.0 * c.rate(), (unsigned long long)c.leaks, (unsigned long long)c.false_hits,
+                 (unsigned long long)c.t_errors, dbl.c_str(), (unsigned long long)c.self_hits,
+                 (unsigned long long)c.nan_hits, (unsigned long long)c.out_of_interval);
   }
 }
 
