@@ -78,6 +78,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -750,10 +751,7 @@ void load_gltf(const std::string& path, Scene& scene) {
     throw Error(cat(path, ": ", file.size(), " bytes, more than the ", kMaxGltfBytes, " a glTF file may have"));
   if (file.size() == 0) throw Error(cat(path, ": empty file"));
   const std::string_view bytes(file.data(), file.size());
-  std::string extension = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  const bool binary = bytes.substr(0, 4) == "glTF" || extension == ".glb";
+  const bool binary = bytes.substr(0, 4) == "glTF" || lower_extension(path) == ".glb";
   const GlbChunks glb = binary ? glb_chunks(path, bytes) : GlbChunks{bytes, std::nullopt};
   check_json_depth(path, glb.json);  // nlohmann's parser and tinygltf's recurse
   // Outlives both JSON documents (this one and tinygltf's): see engine/memory_reserve.h.
@@ -768,11 +766,9 @@ void load_gltf(const std::string& path, Scene& scene) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(cat(path, ": ", json_reason(e.what())));  // a number too large for a double
   }
-  const size_t slash = path.find_last_of('/');
   // tinygltf joins a URI to the base folder with a '/', so "" would read "/x.bin": use ".".
-  const std::string base = slash == std::string::npos ? std::string(".")
-                           : slash == 0               ? std::string("/")
-                                                      : path.substr(0, slash);
+  const std::string parent = std::filesystem::path(path).parent_path().string();
+  const std::string base = parent.empty() ? std::string(".") : parent;
   FileAccess access;
   access.buffers = check_gltf_json({path, base, binary, glb.bin_bytes, bytes.size(), glb.json.size()}, doc);
 

@@ -17,6 +17,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <span>
@@ -163,22 +164,11 @@ std::array<Vec3d, 3> rotation_matrix(const Vec3d& k, double degrees) {
           Vec3d(t * k.x * k.z - s * k.y, t * k.y * k.z + s * k.x, c + t * k.z * k.z)};
 }
 
-/// Lower-case extension of the file name in `path` (after the last '.' of the last component).
-std::string extension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
-  std::string ext = path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
-  return ext;
-}
-
 /// Reads one parsed document into a Scene; every check names file_ and the JSON path.
 class SceneReader {
  public:
   SceneReader(const std::string& file, Scene& scene) : file_(file), scene_(scene) {
-    const size_t slash = file.find_last_of('/');
-    dir_ = slash == std::string::npos ? std::string() : file.substr(0, slash + 1);
+    dir_ = std::filesystem::path(file).parent_path();
   }
 
   void read(const Json& root) {
@@ -557,12 +547,12 @@ class SceneReader {
     f.file_path = member(path, "file");
     const Json& file_value = require(v, path, "file");
     const std::string file = string(file_value, f.file_path);
-    f.ext = extension(file);
+    f.ext = lower_extension(file);
     if (f.ext != ".obj" && f.ext != ".ply")
       fail(f.file_path, cat(show(file_value), " is not a mesh file (expected .obj or .ply)"));
     f.override_material = find(v, "material") != nullptr;
     f.material = material(v, path);
-    f.resolved = !file.empty() && file[0] == '/' ? file : dir_ + file;
+    f.resolved = (dir_ / file).string();  // an absolute `file` as it is
     return f;
   }
 
@@ -671,7 +661,8 @@ class SceneReader {
     }
   }
 
-  std::string file_, dir_;
+  std::string file_;
+  std::filesystem::path dir_;  ///< the folder of file_, which mesh files are relative to
   Scene& scene_;
   std::vector<std::pair<std::string, uint32_t>> materials_;  ///< name, id; in file order
   std::unordered_map<std::string, uint32_t> material_ids_;   ///< name -> id, for look-ups

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "engine/error.h"
 #include "engine/text.h"
@@ -30,17 +31,16 @@ static void add_default_lights(Scene& scene) {
   scene.add_light(DirectionalLight{.direction = normalize(f.right - f.up - f.front), .irradiance = Vec3f(0.3f)});
 }
 
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+  return ext;
+}
+
 Scene load_scene(const std::string& path, std::optional<int> up_axis) {
   if (path == "default") return make_default_scene();
 
-  // The extension is what follows the last '.' of the file name (not of a directory).
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  const std::string ext = dot != std::string::npos && (slash == std::string::npos || dot > slash)
-                              ? path.substr(dot)
-                              : std::string();
-  std::string lower = ext;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+  const std::string lower = lower_extension(path);
 
   Scene scene;
   if (lower == ".json") {
@@ -53,7 +53,8 @@ Scene load_scene(const std::string& path, std::optional<int> up_axis) {
     else if (lower == ".gltf" || lower == ".glb")
       load_gltf(path, scene);
     else
-      throw Error(cat(path, ": unknown scene format '", ext, "' (.obj, .ply, .json, .gltf, .glb)"));
+      throw Error(cat(path, ": unknown scene format '", std::filesystem::path(path).extension().string(),
+                      "' (.obj, .ply, .json, .gltf, .glb)"));
     RP_CHECK(scene.triangle_count() > 0, path, ": the file has no triangles");
   }
   if (up_axis) scene.set_up_axis(*up_axis);

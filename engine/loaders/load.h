@@ -18,6 +18,10 @@ namespace rp {
 /// path) of the first problem.
 Scene load_scene(const std::string& path, std::optional<int> up_axis = std::nullopt);
 
+/// The extension of the file name in `path` (std::filesystem's: from its last '.', none for a
+/// name that only starts with one), lower-cased: "a/Bunny.OBJ" -> ".obj", "a.b/c" -> "".
+std::string lower_extension(const std::string& path);
+
 /// Appends the triangles of an OBJ file (and its MTL materials, when found) to `scene`.
 void load_obj(const std::string& path, Scene& scene);
 

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <istream>
 #include <limits>
 #include <map>
@@ -200,14 +201,6 @@ std::string one_line_warning(const std::string& text) {
   return first;
 }
 
-/// File name without directory and extension, the name of an unnamed shape.
-std::string stem(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  const size_t dot = name.find_last_of('.');
-  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
-}
-
 /// MTL → Material: Kd, Ks, Ns, Ke, Ni and d map one to one. mirror is the mean of Ks for
 /// illum 3 (ray-traced reflection) and 5 (Fresnel reflection), clamped to [0, 1], else 0;
 /// illum 7 (refraction) is left to d and Ni. Ni below 1 (exporters write 0 for "not set") reads
@@ -357,8 +350,7 @@ void load_obj(const std::string& path, Scene& scene) {
   check_obj_numbers(path, text);
   MemoryStreambuf buffer(text.data(), text.size());
   std::istream in(&buffer);
-  const size_t slash = path.find_last_of('/');
-  RegularMtlReader mtl_reader(slash == std::string::npos ? std::string() : path.substr(0, slash + 1));
+  RegularMtlReader mtl_reader(std::filesystem::path(path).remove_filename().string());
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
@@ -395,7 +387,7 @@ void load_obj(const std::string& path, Scene& scene) {
       corners += count;
       triangles += count >= 3 ? count - 2u : 0u;
     }
-    const std::string name = shape.name.empty() ? stem(path) : shape.name;
+    const std::string name = shape.name.empty() ? std::filesystem::path(path).stem().string() : shape.name;
     RP_CHECK(corners == m.indices.size(), path, ": mesh '", name,
              "' has a face of more than 255 corners, which tinyobjloader 2.0.0rc10 cannot represent");
 

@@ -18,10 +18,11 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <type_traits>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "engine/error.h"
@@ -561,20 +562,13 @@ class PlyReader {
   TriangleMesh mesh_;
 };
 
-std::string stem(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  const size_t dot = name.find_last_of('.');
-  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
-}
-
 }  // namespace
 
 void load_ply(const std::string& path, Scene& scene) {
   const MappedFile file(path);
   TriangleMesh mesh = PlyReader(path, file.data(), file.size()).read();
   if (mesh.indices.empty()) return;
-  mesh.name = stem(path);
+  mesh.name = std::filesystem::path(path).stem().string();
   try {
     scene.add_mesh(std::move(mesh));
   } catch (const Error& e) {
