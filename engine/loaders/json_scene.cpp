@@ -6,10 +6,7 @@
 ///
 /// The format, key by key, with every default, range and error message, is specified in
 /// docs/scene-formats.md ("The JSON scene format, key by key"); this reader enforces it rule
-/// by rule, and a change to either goes with a change to the other. In short: an object of
-/// "camera", "materials" (by name), "meshes" (mesh files declared once, placed by "instance"
-/// objects), "lights" and "objects" (required: spheres, planes, polygons, quadrics, meshes,
-/// instances); unknown keys are errors everywhere; numbers must fit a 32-bit float.
+/// by rule, and a change to either goes with a change to the other.
 
 #include <algorithm>
 #include <array>
@@ -640,7 +637,7 @@ class SceneReader {
   }
 
   /// Each declared mesh: baked where one object places it, stored once and instanced where
-  /// several do (see "meshes" at the top of this file).
+  /// several do (see "meshes" in docs/scene-formats.md).
   void place_declared_meshes() {
     for (DeclaredMesh& d : declared_) {
       if (d.placements.empty()) {
