@@ -3,233 +3,19 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <map>
 #include <mutex>
 
+#include "backends/embree/embree_callbacks.h"
+#include "backends/embree/embree_device.h"
 #include "engine/error.h"
-#include "engine/geometry/triangle.h"
 #include "simd/flush_denormals.h"
 
 namespace rp::embree {
 
 namespace {
 
-/// One Embree device per configuration string, alive for the whole process. Embree reports
-/// errors through a callback (it cannot throw through C); the message is kept per thread and
-/// turned into rp::Error by check() after each API call that can fail.
-struct Device {
-  RTCDevice handle = nullptr;
-  std::atomic<int64_t> bytes{0};  ///< live bytes allocated by this device (memory monitor)
-};
-
-thread_local std::string t_last_error;
-
-/// Embree's name of an error code.
-const char* error_name(RTCError code) {
-  switch (code) {
-    case RTC_ERROR_NONE: return "RTC_ERROR_NONE";
-    case RTC_ERROR_UNKNOWN: return "RTC_ERROR_UNKNOWN";
-    case RTC_ERROR_INVALID_ARGUMENT: return "RTC_ERROR_INVALID_ARGUMENT";
-    case RTC_ERROR_INVALID_OPERATION: return "RTC_ERROR_INVALID_OPERATION";
-    case RTC_ERROR_OUT_OF_MEMORY: return "RTC_ERROR_OUT_OF_MEMORY";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "RTC_ERROR_UNSUPPORTED_CPU";
-    case RTC_ERROR_CANCELLED: return "RTC_ERROR_CANCELLED";
-  }
-  return "an unknown error code";
-}
-
-void on_error(void*, RTCError code, const char* message) {
-  t_last_error = cat(message ? message : "(no message)", " (", error_name(code), ")");
-}
-
-bool on_memory(void* user, ssize_t bytes, bool) {
-  static_cast<Device*>(user)->bytes.fetch_add(bytes, std::memory_order_relaxed);
-  return true;
-}
-
-void check(RTCDevice device, const char* what) {
-  const RTCError code = rtcGetDeviceError(device);
-  if (code != RTC_ERROR_NONE) {
-    std::string msg = t_last_error.empty() ? std::string(error_name(code)) : t_last_error;
-    t_last_error.clear();
-    throw Error(cat(what, ": ", msg));
-  }
-}
-
-Device& device_for(const std::string& config) {
-  static std::mutex mutex;
-  // Never destroyed: a backend held in a static (a benchmark fixture, say) may release its
-  // scene during exit, after function-local statics built later than it are gone.
-  static auto* devices = new std::map<std::string, std::unique_ptr<Device>>;
-  std::lock_guard lock(mutex);
-  std::unique_ptr<Device>& d = (*devices)[config];
-  if (!d) {
-    auto created = std::make_unique<Device>();
-    created->handle = rtcNewDevice(config.empty() ? nullptr : config.c_str());
-    if (!created->handle) {
-      RTCError code = rtcGetDeviceError(nullptr);
-      throw Error(cat("embree: cannot create a device with config '", config, "' (", error_name(code), ")"));
-    }
-    rtcSetDeviceErrorFunction(created->handle, on_error, nullptr);
-    rtcSetDeviceMemoryMonitorFunction(created->handle, on_memory, created.get());
-    d = std::move(created);
-  }
-  return *d;
-}
-
-/// What the user-geometry callbacks see: the scene and the kind's first prim_id.
-struct UserData {
-  const Scene* scene;
-};
-
-/// The analytic kinds Embree sees as user geometry: the kind's prim_id range in the scene.
-struct SphereKind {
-  static uint32_t base(const Scene& s) { return s.sphere_base(); }
-  static uint32_t count(const Scene& s) { return uint32_t(s.spheres().size()); }
-};
-struct QuadricKind {
-  static uint32_t base(const Scene& s) { return s.quadric_base(); }
-  static uint32_t count(const Scene& s) { return uint32_t(s.quadrics().size()); }
-};
-struct PolygonKind {
-  static uint32_t base(const Scene& s) { return s.polygon_base(); }
-  static uint32_t count(const Scene& s) { return uint32_t(s.polygons().size()); }
-};
-
-template <typename Kind>
-void user_bounds(const RTCBoundsFunctionArguments* a) {
-  const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
-  const Box3f b = s.prim_bounds(Kind::base(s) + a->primID);
-  *a->bounds_o = {b.lo.x, b.lo.y, b.lo.z, 0.0f, b.hi.x, b.hi.y, b.hi.z, 0.0f};
-}
-
-/// Embree's depth test is `absDen * tnear < T <= absDen * tfar` with rounded products, and its
-/// t is T * rcp(absDen) with an approximate reciprocal: t is a float or two off, and a surface
-/// exactly at either end of the interval can land on the wrong side (seen on the AVX2 kernels,
-/// default and robust). Embree therefore searches a slightly wider interval, [tnear * (1 -
-/// 2^-20), tfar * (1 + 2^-20)], and every triangle hit within kBand of either end of the
-/// caller's interval is decided by the scalar Möller–Trumbore of engine/geometry (the simd
-/// backend's default test, closed at both ends), which also gives its t, u, v: in
-/// occlusion_band_filter for any-hit queries, in EmbreeBackend::settle for closest hits. The
-/// callbacks find the caller's exact ray through QueryContext and the ray's `id` (its index).
-constexpr float kBand = 0x1p-20f;
-
-/// Embree's intersection context extended with the caller's rays (Embree passes the context
-/// it was given to every callback; `embree` must stay the first member).
-struct QueryContext {
-  RTCIntersectContext embree;
-  const Ray* rays;  ///< the caller's rays; an Embree ray's `id` is its index here
-};
-
-inline const Ray& caller_ray(const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i) {
-  return reinterpret_cast<const QueryContext*>(ctx)->rays[RTCRayN_id(rays, n, i)];
-}
-
-/// True when t lies within kBand of an end of the caller's interval [tnear, tfar].
-inline bool in_band(const Ray& r, float t) { return t <= r.tnear * (1.0f + kBand) || t >= r.tfar * (1.0f - kBand); }
-
-/// Triangle `prim_id` against `r` by the scalar Möller–Trumbore; a miss for other kinds.
-inline Intersection<float> scalar_triangle(const Scene& s, uint32_t prim_id, const Ray& r) {
-  const PrimLocation ref = s.locate(prim_id);
-  if (ref.kind != PrimKind::triangle) return {};
-  const TriangleMesh& m = s.meshes()[ref.shape];
-  return intersect_triangle_mt_normal(r, m.vertex(ref.local, 0), m.vertex(ref.local, 1), m.vertex(ref.local, 2));
-}
-
-/// The caller's ray of lane i, its far end cut at Embree's current tfar (the closest hit so far).
-inline Ray query_ray(const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i) {
-  Ray r = caller_ray(ctx, rays, n, i);
-  r.tfar = std::min(r.tfar, RTCRayN_tfar(rays, n, i));
-  return r;
-}
-
-template <typename Kind>
-void user_intersect(const RTCIntersectFunctionNArguments* a) {
-  const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
-  RTCRayN* rays = RTCRayHitN_RayN(a->rayhit, a->N);
-  RTCHitN* hits = RTCRayHitN_HitN(a->rayhit, a->N);
-  for (unsigned i = 0; i < a->N; ++i) {
-    if (a->valid[i] == 0) continue;
-    const Intersection<float> h = s.intersect_analytic(Kind::base(s) + a->primID, query_ray(a->context, rays, a->N, i));
-    if (!h.hit) continue;
-    RTCRayN_tfar(rays, a->N, i) = h.t;
-    RTCHitN_u(hits, a->N, i) = h.u;
-    RTCHitN_v(hits, a->N, i) = h.v;
-    RTCHitN_Ng_x(hits, a->N, i) = 0.0f;
-    RTCHitN_Ng_y(hits, a->N, i) = 0.0f;
-    RTCHitN_Ng_z(hits, a->N, i) = 0.0f;
-    RTCHitN_primID(hits, a->N, i) = a->primID;
-    RTCHitN_geomID(hits, a->N, i) = a->geomID;
-    RTCHitN_instID(hits, a->N, i, 0) = a->context->instID[0];
-  }
-}
-
-/// What a triangle geometry's filters need: the scene, the mesh's first prim_id, and, for an
-/// instanced mesh's geometry, the top scene's geometry id of instance 0 (instances are
-/// attached at consecutive ids from there; kNoInstance for a world mesh's geometry).
-struct TriangleData {
-  const Scene* scene;
-  uint32_t prim_base;
-  uint32_t first_instance_geom = kNoInstance;
-};
-
-/// The instance whose child scene Embree is in (instID[0] of the context), or kNoInstance.
-inline uint32_t current_instance(const TriangleData& d, const RTCIntersectContext* ctx) {
-  return d.first_instance_geom == kNoInstance ? kNoInstance : ctx->instID[0] - d.first_instance_geom;
-}
-
-/// The caller's ray i as the triangle test sees it: the world ray, or its object-space image
-/// (rp::object_ray, the simd backend's bits) in an instance's child scene; false when that
-/// image is outside the valid-ray rule, where no instance is traced (README, Hit convention).
-inline bool test_ray(const TriangleData& d, const RTCIntersectContext* ctx, RTCRayN* rays, unsigned n, unsigned i,
-                     Ray& out) {
-  const Ray& r = caller_ray(ctx, rays, n, i);
-  const uint32_t inst = current_instance(d, ctx);
-  if (inst == kNoInstance) {
-    out = r;
-    return true;
-  }
-  out = object_ray(r, d.scene->instances()[inst].world_to_object);
-  return valid_ray(out);
-}
-
-/// Occlusion filter on triangle geometry: a candidate within kBand of an end of the caller's
-/// interval counts only when the scalar test hits it too (see kBand); in an instance, only for
-/// a ray whose object-space image is valid. Embree sets the ray's tfar to the candidate's
-/// distance before calling a filter.
-void occlusion_band_filter(const RTCFilterFunctionNArguments* a) {
-  const TriangleData& d = *static_cast<const TriangleData*>(a->geometryUserPtr);
-  for (unsigned i = 0; i < a->N; ++i) {
-    if (a->valid[i] == 0) continue;
-    Ray r;
-    if (!test_ray(d, a->context, a->ray, a->N, i, r) ||
-        (in_band(r, RTCRayN_tfar(a->ray, a->N, i)) &&
-         !scalar_triangle(*d.scene, d.prim_base + RTCHitN_primID(a->hit, a->N, i), r).hit))
-      a->valid[i] = 0;
-  }
-}
-
-/// Intersection filter on an instanced mesh's triangle geometry: a candidate counts only for a
-/// ray whose object-space image is valid (test_ray); EmbreeBackend::settle decides the band.
-void instance_valid_filter(const RTCFilterFunctionNArguments* a) {
-  const TriangleData& d = *static_cast<const TriangleData*>(a->geometryUserPtr);
-  for (unsigned i = 0; i < a->N; ++i) {
-    Ray r;
-    if (a->valid[i] != 0 && !test_ray(d, a->context, a->ray, a->N, i, r)) a->valid[i] = 0;
-  }
-}
-
-template <typename Kind>
-void user_occluded(const RTCOccludedFunctionNArguments* a) {
-  const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
-  for (unsigned i = 0; i < a->N; ++i) {
-    if (a->valid[i] == 0) continue;
-    if (s.intersect_analytic(Kind::base(s) + a->primID, caller_ray(a->context, a->ray, a->N, i)).hit)
-      RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
-  }
-}
+using namespace detail;
 
 class EmbreeBackend final : public Backend {
  public:
@@ -656,25 +442,6 @@ std::vector<std::string> variants() { return {"default", "robust", "compact", "h
 std::vector<std::string> coherent_methods() { return {"packet8", "packet16", "stream"}; }
 
 std::vector<std::string> incoherent_methods() { return {"single", "stream"}; }
-
-DeviceFacts device_facts() {
-  const RTCDevice dev = device_for("").handle;
-  DeviceFacts f;
-  f.version = cat(rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MAJOR), ".",
-                  rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_MINOR), ".",
-                  rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_VERSION_PATCH));
-  f.native_ray4 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) != 0;
-  f.native_ray8 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0;
-  f.native_ray16 = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
-  f.stream = rtcGetDeviceProperty(dev, RTC_DEVICE_PROPERTY_RAY_STREAM_SUPPORTED) != 0;
-  // Embree 3 does not report the ISA it dispatches to; it takes the widest one it was built
-  // for that the CPU has, and only its AVX-512 kernels trace 16-wide packets natively.
-  __builtin_cpu_init();
-  f.isa = f.native_ray16 ? "avx512"
-          : f.native_ray8 ? (__builtin_cpu_supports("avx2") ? "avx2" : "avx")
-                          : (__builtin_cpu_supports("sse4.2") ? "sse4.2" : "sse2");
-  return f;
-}
 
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options) {
   return std::make_unique<EmbreeBackend>(scene, options);

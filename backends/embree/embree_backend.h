@@ -1,5 +1,5 @@
 #pragma once
-/// The Embree 3 adapter. Only embree_backend.cpp includes <embree3/rtcore.h>.
+/// The Embree 3 adapter. Only its files (backends/embree/) include <embree3/rtcore.h>.
 
 #include <memory>
 #include <string>
