@@ -57,6 +57,7 @@ int bin_of(float c, float lo, float scale, int nbins) { return std::clamp(int((c
 }  // namespace
 
 float overlap(const BinnedSplit& o) {
+  if (o.axis < 0) return 0.0f;  // no object split (every centroid at one point): no sides, and no boxes set
   const float4 lo = simd::max4(o.cut.left_lo, o.cut.right_lo), hi = simd::min4(o.cut.left_hi, o.cut.right_hi);
   alignas(16) float l[4], h[4];
   simd::store4(l, lo);

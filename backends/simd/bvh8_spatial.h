@@ -15,7 +15,7 @@ namespace rp::bvh8::build_detail {
 /// references (figures: docs/notes/2026-11-29-figures-from-code-comments.md).
 constexpr float kMinOverlap = 1e-3f;
 
-/// Area where the two sides of an object split overlap.
+/// Area where the two sides of an object split overlap (0 when there is none: o.axis < 0).
 float overlap(const BinnedSplit& o);
 
 /// The best spatial split of the triangle refs `v` under `box`: per axis, bins between
