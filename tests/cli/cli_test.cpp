@@ -23,6 +23,7 @@
 #include "tests/support/gltf_files.h"
 #include "tests/support/sanitized.h"
 #include "tests/support/shell.h"
+#include "tests/support/temp_dir.h"
 
 namespace {
 
@@ -35,16 +36,12 @@ Result run(const std::string& args, const std::string& prefix = "") {
   return rp::test::run_shell(prefix + std::string(rp::test::kRaypackExe) + " " + args);
 }
 
+/// Each test in a fresh folder of its own (mkdtemp), so that two runs of the suite on one
+/// machine (two clones, CI beside a developer) never share one.
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("raypack-cli-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  rp::test::TempDir tmp_;
+  fs::path dir_ = tmp_.dir;
 };
 
 TEST_F(Cli, RenderWritesAnImageOfTheRequestedSizeThatIsNotBlank) {

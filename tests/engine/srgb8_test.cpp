@@ -18,6 +18,7 @@
 
 #include "engine/render/image_io.h"
 #include "engine/render/srgb8.h"
+#include "tests/support/temp_dir.h"
 
 namespace rp {
 namespace {
@@ -69,8 +70,8 @@ TEST(Srgb8, TableEqualsTheDirectPath) {
 /// with an odd width (rows that end off the converter's vector path), NaN, negative and
 /// over-range channels.
 TEST(Srgb8, PngBytesEqualTheFloatPath) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "raypack-srgb8-test";
-  std::filesystem::create_directories(dir);
+  const rp::test::TempDir tmp;
+  const std::filesystem::path& dir = tmp.dir;
   Image img;
   img.width = 37;
   img.height = 23;
@@ -98,7 +99,6 @@ TEST(Srgb8, PngBytesEqualTheFloatPath) {
   };
   EXPECT_EQ(bytes(table_png), bytes(float_png));
   EXPECT_GT(bytes(table_png).size(), 100u);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
