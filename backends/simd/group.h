@@ -89,7 +89,7 @@ inline std::span<const Ray> packet_rays(std::span<const Ray> rays, int i) {
 
 /// The packet's 8-ray traversal set-up, built on first use.
 template <class Kernel>
-const PacketSetup<Kernel>& setup(GroupWork<Kernel>& w, int i, std::span<const Ray> rays) {
+RP_SIMD_INLINE const PacketSetup<Kernel>& setup(GroupWork<Kernel>& w, int i, std::span<const Ray> rays) {
   GroupPacket<Kernel>& q = w.packets[size_t(i)];
   if (!q.has_setup) {
     w.setups[size_t(i)] = PacketSetup<Kernel>(q.p, rays, q.active);
@@ -228,7 +228,7 @@ void group_beam(const GroupWork<Kernel>& w, const uint8_t* members, int n, int o
 
 /// Members in [first, last] whose beam may reach box [lo, hi], as bits.
 template <class Kernel>
-uint64_t beam_hits(const GroupBeam<Kernel>& gb, const Vec3f& lo, const Vec3f& hi, int first, int last) {
+RP_SIMD_INLINE uint64_t beam_hits(const GroupBeam<Kernel>& gb, const Vec3f& lo, const Vec3f& hi, int first, int last) {
   uint64_t maybe = 0;
   for (int blk = first / 8; blk <= last / 8; ++blk)
     maybe |= uint64_t(gb.members[blk].cull(gb.beam.neg, lo, hi)) << (8 * blk);
@@ -240,8 +240,8 @@ uint64_t beam_hits(const GroupBeam<Kernel>& gb, const Vec3f& lo, const Vec3f& hi
 /// (an 8-ray slab test each, only for members whose beam may reach the box); first > last
 /// when none does.
 template <class Kernel>
-void bound_range(const GroupWork<Kernel>& w, const uint8_t* members, const GroupBeam<Kernel>& gb, const Vec3f& lo,
-                 const Vec3f& hi, int& first, int& last) {
+RP_SIMD_INLINE void bound_range(const GroupWork<Kernel>& w, const uint8_t* members, const GroupBeam<Kernel>& gb,
+                                const Vec3f& lo, const Vec3f& hi, int& first, int& last) {
   uint64_t maybe = beam_hits(gb, lo, hi, first, last);
   auto hits = [&](int k) {
     const GroupPacket<Kernel>& q = w.packets[members[k]];
@@ -308,8 +308,8 @@ void push_children(const GroupWork<Kernel>& w, const uint8_t* members, const Gro
 
 /// The members of entry `e` (a leaf) whose live lanes hit its box, and those lanes.
 template <class Kernel>
-int leaf_packets(const GroupWork<Kernel>& w, const uint8_t* members, const GroupBeam<Kernel>& gb, const RangeEntry& e,
-                 uint8_t* which, uint32_t* lanes) {
+RP_SIMD_INLINE int leaf_packets(const GroupWork<Kernel>& w, const uint8_t* members, const GroupBeam<Kernel>& gb,
+                                const RangeEntry& e, uint8_t* which, uint32_t* lanes) {
   int m = 0;
   for (uint64_t maybe = beam_hits(gb, e.lo, e.hi, e.first, e.last); maybe; maybe &= maybe - 1) {
     const int k = std::countr_zero(maybe);
@@ -328,7 +328,7 @@ int leaf_packets(const GroupWork<Kernel>& w, const uint8_t* members, const Group
 /// them a lane at a time, and keeps the others for the triangle-at-a-time test; returns
 /// how many it kept.
 template <class F>
-int split_by_rays(uint8_t* which, uint32_t* lanes, int m, uint32_t count, F&& f) {
+RP_SIMD_INLINE int split_by_rays(uint8_t* which, uint32_t* lanes, int m, uint32_t count, F&& f) {
   int kept = 0;
   for (int j = 0; j < m; ++j) {
     if (by_rays(lanes[j], count)) {

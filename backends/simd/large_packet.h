@@ -154,7 +154,7 @@ class LargePacketTraversal {
   }
 
   /// The live lanes of packet `q` (of the octant `gb`) that hit box [lo, hi].
-  static uint32_t lanes_in(const Packet& q, const GroupBeam& gb, const Vec3f& lo, const Vec3f& hi) {
+  RP_SIMD_INLINE static uint32_t lanes_in(const Packet& q, const GroupBeam& gb, const Vec3f& lo, const Vec3f& hi) {
     return q.live ? intersect_box_octant(q.p, gb.beam.neg, lo, hi, q.h.tfar) & q.live : 0u;
   }
 
@@ -230,8 +230,8 @@ class LargePacketTraversal {
   /// A leaf of a mesh's tree: the members whose rays reach it, its primitives set up once
   /// for all of them.
   template <class Q>
-  void group_leaf(const MeshLevel<Kernel>& lv, std::span<const Ray>, Work& w, const uint8_t* members,
-                  const GroupBeam& gb, const RangeEntry& e, Q& q) const noexcept {
+  RP_SIMD_INLINE void group_leaf(const MeshLevel<Kernel>& lv, std::span<const Ray>, Work& w, const uint8_t* members,
+                                 const GroupBeam& gb, const RangeEntry& e, Q& q) const noexcept {
     uint8_t which[kMaxPackets];
     uint32_t lanes[kMaxPackets];
     const int m = leaf_packets(w, members, gb, e, which, lanes);
@@ -307,8 +307,8 @@ class LargePacketTraversal {
       closest_analytic(scene, id, packet_rays(rays, i), lanes, w.packets[size_t(i)].h);
     }
     /// The triangles of `leaf` against the m packets `which` (lanes `lanes` there).
-    void triangles(const Leaf& leaf, const typename Kernel::Beam& kbeam, uint8_t* which, uint32_t* lanes, int m,
-                   uint32_t inst) {
+    RP_SIMD_INLINE void triangles(const Leaf& leaf, const typename Kernel::Beam& kbeam, uint8_t* which, uint32_t* lanes,
+                                  int m, uint32_t inst) {
       const typename Kernel::Block kb{LeafView(leaf)};  // the leaf read once
       const typename Kernel::Origins og(kb, kbeam);     // the group's origins against the leaf
       m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
@@ -347,7 +347,7 @@ class LargePacketTraversal {
       for (int k = 0; k < n; ++k) live_packets += w.packets[members[k]].live != 0;
     }
     bool alive() const { return live_packets > 0; }
-    void occlude(int i, uint32_t found) {
+    RP_SIMD_INLINE void occlude(int i, uint32_t found) {
       if (!found) return;
       Packet& q = w.packets[size_t(i)];
       done[i] |= found;
@@ -366,8 +366,8 @@ class LargePacketTraversal {
     void analytic(const Scene& scene, uint32_t id, int i, uint32_t lanes) {
       occlude(i, any_analytic(scene, id, packet_rays(rays, i), lanes));
     }
-    void triangles(const Leaf& leaf, const typename Kernel::Beam&, uint8_t* which, uint32_t* lanes, int m,
-                   uint32_t /*inst*/) {
+    RP_SIMD_INLINE void triangles(const Leaf& leaf, const typename Kernel::Beam&, uint8_t* which, uint32_t* lanes,
+                                  int m, uint32_t /*inst*/) {
       const typename Kernel::Block kb{LeafView(leaf)};  // the leaf read once
       m = split_by_rays(which, lanes, m, leaf.n, [&](int i, uint32_t here) {
         const Packet& q = w.packets[size_t(i)];
