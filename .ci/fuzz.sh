@@ -3,7 +3,7 @@
 # and its runtime libraries when missing (as .ci/setup.sh does), builds the five targets of
 # tests/fuzz/ in ./build-fuzz (clang, RAYPACK_FUZZ=ON, RelWithDebInfo with line tables only
 # (-g1, as .ci/sanitize.sh), sanitizers on every
-# file so the readers in rp_engine are checked too), then runs each for a bounded time on a
+# file so the readers in rp_io are checked too), then runs each for a bounded time on a
 # copy of its seed corpus (tests/fuzz/corpus/<target>/ plus tests/fuzz/regression/<target>/),
 # so the repository is never modified.
 #

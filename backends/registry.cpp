@@ -4,7 +4,7 @@
 
 #include "backends/embree/embree_backend.h"
 #include "backends/simd/simd_backend.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp {
 

@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/backend.h"
-#include "engine/scene.h"
+#include "core/backend.h"
+#include "core/scene.h"
 
 namespace rp {
 

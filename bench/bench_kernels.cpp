@@ -8,7 +8,7 @@
 
 #include "backends/simd/packet.h"
 #include "backends/simd/watertight.h"
-#include "engine/geometry/sphere.h"
+#include "core/geometry/sphere.h"
 
 namespace rp::bvh8 {
 

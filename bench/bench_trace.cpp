@@ -7,7 +7,7 @@
 // incoherent ones. Scenes: the embedded default and, when ../shared/scenes is present,
 // bunny.obj, dragon.ply, Sponza from inside (bench/scenes/sponza-inside.json) and 16 bunnies
 // placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json). Rays
-// from engine/analysis/raygen.h. BM_Pair/simd/watertight:large-vs-simd/default:large/<scene>/
+// from analysis/raygen.h. BM_Pair/simd/watertight:large-vs-simd/default:large/<scene>/
 // <kind> (stream for diffuse rays): the watertight variant against the default one on the same
 // rays, as the median ratio of alternated traces (see BM_Pair).
 //
@@ -28,11 +28,11 @@
 #include <memory>
 #include <thread>
 
+#include "analysis/raygen.h"
+#include "analysis/reference.h"
 #include "backends/registry.h"
-#include "engine/loaders/load.h"
-#include "engine/analysis/raygen.h"
-#include "engine/analysis/reference.h"
-#include "engine/scene.h"
+#include "core/scene.h"
+#include "io/loaders/load.h"
 
 #ifndef RP_SOURCE_DIR
 #define RP_SOURCE_DIR "."
@@ -49,7 +49,7 @@ struct RaySets {
 };
 
 /// 1024x1024 primary rays in 4x2 packets, then shadow and diffuse rays from their hits
-/// (engine/analysis/raygen.h), the hits taken from `backend`.
+/// (analysis/raygen.h), the hits taken from `backend`.
 RaySets make_rays(const Scene& scene, const Backend& backend) {
   const RaySet primary = primary_rays(scene, 1024, 1024);
   std::vector<Hit> hits(primary.rays.size());

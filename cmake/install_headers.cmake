@@ -1,9 +1,9 @@
 # Installs raypack's public headers, run by `cmake --install` (lib/CMakeLists.txt): the
 # umbrella include/raypack/raypack.h and every repository header it includes, directly or not,
-# go to <prefix>/<RP_INCLUDE_DIR>/raypack/ under their repository paths (engine/scene.h ->
-# raypack/engine/scene.h), each `#include "path"` of a repository header rewritten to
+# go to <prefix>/<RP_INCLUDE_DIR>/raypack/ under their repository paths (core/scene.h ->
+# raypack/core/scene.h), each `#include "path"` of a repository header rewritten to
 # `#include "raypack/path"`. Consumers then need only <prefix>/include on their include path,
-# and a header of theirs named like one of raypack's (engine/math.h) is never picked up in its
+# and a header of theirs named like one of raypack's (base/math.h) is never picked up in its
 # place. The set is worked out at install time from the includes themselves, so a header
 # added to the API is installed without a list to keep.
 #

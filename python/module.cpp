@@ -19,19 +19,19 @@
 #include <string>
 #include <variant>
 
+#include "analysis/diff.h"
+#include "analysis/raygen.h"
+#include "analysis/reference.h"
 #include "backends/registry.h"
-#include "engine/analysis/diff.h"
-#include "engine/analysis/raygen.h"
-#include "engine/analysis/reference.h"
-#include "engine/error.h"
-#include "engine/invalid_rays.h"
-#include "engine/loaders/load.h"
-#include "engine/rayfile.h"
-#include "engine/render/camera.h"
-#include "engine/render/image_io.h"
-#include "engine/render/render.h"
+#include "base/error.h"
+#include "core/invalid_rays.h"
+#include "io/loaders/load.h"
+#include "io/rayfile.h"
 #include "python/interrupt.h"
 #include "python/ray_arrays.h"
+#include "render/camera.h"
+#include "render/image_io.h"
+#include "render/render.h"
 
 namespace rp::python {
 namespace {

@@ -6,7 +6,7 @@
 #include <atomic>
 #include <cstring>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "python/interrupt.h"
 
 namespace rp::python {

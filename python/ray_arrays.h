@@ -5,7 +5,7 @@
 /// What is copied. An input that is already float32 (any strides, C-contiguous or not) is
 /// read in place; any other dtype (float64, integers, a Python list or scalar) is converted
 /// once, by numpy, to a float32 array the call holds until it returns. The backend interface
-/// takes Ray records (engine/backend.h), so each chunk of kParallelChunk rays is gathered into
+/// takes Ray records (core/backend.h), so each chunk of kParallelChunk rays is gathered into
 /// a per-thread buffer of records (32 bytes a ray, 128 KiB a thread, reused from call to call)
 /// just before it is traced: no copy of the whole batch is ever made. Hits go from a per-thread
 /// buffer of Hit records into the output arrays, which numpy owns from the start.
@@ -19,9 +19,9 @@
 #include <span>
 #include <string>
 
-#include "engine/backend.h"
-#include "engine/ray.h"
-#include "engine/scene.h"
+#include "core/backend.h"
+#include "core/ray.h"
+#include "core/scene.h"
 
 namespace rp::python {
 

@@ -13,7 +13,7 @@
 #include <limits>
 #include <xsimd/xsimd.hpp>
 
-#include "engine/math.h"
+#include "base/math.h"
 #include "simd/prefetch.h"
 
 /// For the small 8-wide routines of a hot loop that GCC would otherwise call out of line once

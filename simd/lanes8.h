@@ -1,5 +1,5 @@
 #pragma once
-/// Lanes<float8>: the operations of engine/lanes.h spelled for eight lanes, each giving every
+/// Lanes<float8>: the operations of base/lanes.h spelled for eight lanes, each giving every
 /// lane the bits of the one-lane spelling (tested in tests/simd/). AVX2+FMA translation units
 /// only.
 
@@ -7,8 +7,8 @@
 
 #include <limits>
 
-#include "engine/lanes.h"
-#include "engine/offset.h"
+#include "base/lanes.h"
+#include "base/offset.h"
 #include "simd/float8.h"
 #include "simd/pow8.h"
 

@@ -1,5 +1,5 @@
 #pragma once
-/// pow_nonneg (engine/pow.h) on 8 lanes: the same operations in the same order, in two
+/// pow_nonneg (base/pow.h) on 8 lanes: the same operations in the same order, in two
 /// halves of 4 doubles, so that every lane has the scalar routine's bits. AVX2+FMA translation
 /// units only.
 
@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "engine/pow.h"
+#include "base/pow.h"
 #include "simd/float8.h"
 
 namespace rp::simd {

@@ -8,7 +8,7 @@
 
 #include "backends/embree/embree_callbacks.h"
 #include "backends/embree/embree_device.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "simd/flush_denormals.h"
 
 namespace rp::embree {

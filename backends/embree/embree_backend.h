@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/backend.h"
-#include "engine/scene.h"
+#include "core/backend.h"
+#include "core/scene.h"
 
 namespace rp::embree {
 
@@ -38,7 +38,7 @@ struct DeviceFacts {
 DeviceFacts device_facts();
 
 /// Builds an Embree scene over `scene`: one triangle geometry per world mesh; spheres, quadrics
-/// and polygons as user geometry whose callbacks call engine/geometry (world space only);
+/// and polygons as user geometry whose callbacks call core/geometry/ (world space only);
 /// each instanced mesh a child scene of its own, built once, and each instance an
 /// RTC_GEOMETRY_TYPE_INSTANCE geometry over it with the instance's object_to_world (Embree
 /// inverts it itself, in float, to the bits of Instance::world_to_object: rp::float_inverse)

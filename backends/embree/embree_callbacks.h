@@ -7,9 +7,9 @@
 
 #include <cstdint>
 
-#include "engine/geometry/triangle.h"
-#include "engine/ray.h"
-#include "engine/scene.h"
+#include "core/geometry/triangle.h"
+#include "core/ray.h"
+#include "core/scene.h"
 
 namespace rp::embree::detail {
 
@@ -37,7 +37,7 @@ struct PolygonKind {
 /// exactly at either end of the interval can land on the wrong side (seen on the AVX2 kernels,
 /// default and robust). Embree therefore searches a slightly wider interval, [tnear * (1 -
 /// 2^-20), tfar * (1 + 2^-20)], and every triangle hit within kBand of either end of the
-/// caller's interval is decided by the scalar Möller–Trumbore of engine/geometry (the simd
+/// caller's interval is decided by the scalar Möller–Trumbore of core/geometry/ (the simd
 /// backend's default test, closed at both ends), which also gives its t, u, v: in
 /// occlusion_band_filter for any-hit queries, in EmbreeBackend::settle for closest hits. The
 /// callbacks find the caller's exact ray through QueryContext and the ray's `id` (its index).

@@ -5,7 +5,7 @@
 #include <mutex>
 
 #include "backends/embree/embree_backend.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::embree::detail {
 

@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/bbox.h"
-#include "engine/scene.h"
+#include "base/bbox.h"
+#include "core/scene.h"
 
 namespace rp::bvh8 {
 

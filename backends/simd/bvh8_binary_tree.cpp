@@ -9,7 +9,7 @@
 #include "backends/simd/bvh8_collapse.h"
 #include "backends/simd/bvh8_costs.h"
 #include "backends/simd/bvh8_spatial.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::bvh8::build_detail {
 

@@ -10,7 +10,7 @@
 #include "backends/simd/bvh8_costs.h"
 #include "backends/simd/bvh8_leaves.h"
 #include "backends/simd/bvh8_refs.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::bvh8 {
 

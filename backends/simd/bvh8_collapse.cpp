@@ -6,7 +6,7 @@
 #include <limits>
 
 #include "backends/simd/bvh8_costs.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::bvh8::build_detail {
 

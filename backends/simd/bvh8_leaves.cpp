@@ -9,7 +9,7 @@
 #include <cstring>
 #include <span>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::bvh8::build_detail {
 

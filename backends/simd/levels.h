@@ -9,11 +9,11 @@
 ///   (build_mesh) as instance `inst` places it. A leaf is tested by the query.
 /// - InstanceLevel: the tree over the instances' world boxes (InstanceTree), whose leaf ~i is
 ///   instance i. A leaf takes the rays into the instance's object space by rp::object_ray
-///   (engine/affine.h: the direction not renormalised, so t stays the world t) and runs the
+///   (core/affine.h: the direction not renormalised, so t stays the world t) and runs the
 ///   same loop and query at the MeshLevel of the instance's mesh, with the instance's id: the
 ///   hits of every instance and of the world's tree meet under one closest-hit rule.
 /// A ray is traced into an instance only when its object-space image obeys the valid-ray rule
-/// (engine/ray.h); any other ray misses that instance, on every backend and in the reference.
+/// (core/ray.h); any other ray misses that instance, on every backend and in the reference.
 ///
 /// The closest hit is the least (t, prim_id, instance_id): among primitives hit at exactly the
 /// same t (a ray through a shared edge or vertex), the lowest prim_id, and among placements of
@@ -33,9 +33,9 @@
 #include "backends/simd/bvh8.h"
 #include "backends/simd/packet.h"
 #include "backends/simd/slab.h"
-#include "engine/affine.h"
-#include "engine/error.h"
-#include "engine/scene.h"
+#include "base/error.h"
+#include "core/affine.h"
+#include "core/scene.h"
 #include "simd/prefetch.h"
 
 namespace rp::bvh8 {

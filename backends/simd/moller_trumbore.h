@@ -8,8 +8,8 @@
 #include <span>
 
 #include "backends/simd/slab.h"
-#include "engine/geometry/triangle.h"
-#include "engine/ray.h"
+#include "core/geometry/triangle.h"
+#include "core/ray.h"
 
 namespace rp::bvh8 {
 

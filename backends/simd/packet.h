@@ -10,11 +10,11 @@
 #include <span>
 
 #include "backends/simd/slab.h"
-#include "engine/ray.h"
+#include "core/ray.h"
 
 namespace rp::bvh8 {
 
-/// The lanes of 8 rays in SoA that pass rp::valid_ray (engine/ray.h), decided exactly as it
+/// The lanes of 8 rays in SoA that pass rp::valid_ray (core/ray.h), decided exactly as it
 /// decides: every comparison is false for a NaN.
 inline uint32_t valid_lanes(const Vec3x8& org, const Vec3x8& dir, const float8& tnear, const float8& tfar) {
   const float8 range(kMaxCoordinate), lo(kMinDirection), hi(kMaxDirection), zero(0.0f);

@@ -10,7 +10,7 @@
 #include "backends/simd/stream.h"
 #include "backends/simd/traversal.h"
 #include "backends/simd/watertight.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::bvh8 {
 

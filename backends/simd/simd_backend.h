@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/backend.h"
-#include "engine/scene.h"
+#include "core/backend.h"
+#include "core/scene.h"
 
 namespace rp::bvh8 {
 

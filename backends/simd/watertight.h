@@ -1,7 +1,7 @@
 #pragma once
 /// The triangle test of the watertight variant: Möller–Trumbore ×8 (the default variant's
 /// kernel) with a forward error bound on each of its edge decisions, and exact edge decisions
-/// (rp::edge_side, engine/geometry/exact_triangle.h) for the lanes the bound leaves uncertain.
+/// (rp::edge_side, core/geometry/exact_triangle.h) for the lanes the bound leaves uncertain.
 /// AVX2+FMA translation units only.
 ///
 /// Why the combination is watertight. For an edge p-q and a ray (o, d), let E be the exact
@@ -80,7 +80,7 @@
 #include <span>
 
 #include "backends/simd/moller_trumbore.h"
-#include "engine/geometry/exact_triangle.h"
+#include "core/geometry/exact_triangle.h"
 
 namespace rp::bvh8 {
 

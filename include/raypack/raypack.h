@@ -5,21 +5,21 @@
 ///
 /// What it offers, and the header that documents each part (installed beside this one):
 /// - scenes: rp::load_scene(path) for .obj, .ply and .json files or "default"
-///   (engine/loaders/load.h); rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
+///   (io/loaders/load.h); rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
 ///   .positions, .indices}), add_sphere, add_quadric, add_polygon, add_plane, lights,
-///   materials and a camera (engine/scene.h);
+///   materials and a camera (core/scene.h);
 /// - backends: rp::list_backends() (names, variants, coherent and incoherent methods, whether
 ///   this machine runs them), rp::check_method, rp::make_backend(name, scene, options)
 ///   (backends/registry.h);
 /// - tracing: Backend::intersect (closest hit) and Backend::occluded (any hit) over spans of
 ///   rp::Ray with an rp::Coherence hint, rp::intersect_parallel / occluded_parallel over all
-///   cores (engine/backend.h); rays, hits, the valid-ray rule and the hit convention
-///   (engine/ray.h); ray and hit files (engine/rayfile.h);
-/// - judging: the double-precision rp::Reference (engine/analysis/reference.h), rp::diff_hits
+///   cores (core/backend.h); rays, hits, the valid-ray rule and the hit convention
+///   (core/ray.h); ray and hit files (io/rayfile.h);
+/// - judging: the double-precision rp::Reference (analysis/reference.h), rp::diff_hits
 ///   and its summary as a table or as the JSON of `raypack diff --json`
-///   (engine/analysis/diff.h), ray sets (engine/analysis/raygen.h);
-/// - images: rp::render with a Camera (engine/render/render.h, engine/render/camera.h),
-///   rp::write_image (engine/render/image_io.h);
+///   (analysis/diff.h), ray sets (analysis/raygen.h);
+/// - images: rp::render with a Camera (render/render.h, render/camera.h),
+///   rp::write_image (render/image_io.h);
 /// - rp::version() (raypack/version.h).
 ///
 /// Hit convention: a hit counts only for tnear <= t <= tfar (both ends closed); directions
@@ -46,17 +46,17 @@
 /// threads at once; the *_parallel functions, render and Reference::intersect over spans use
 /// TBB's threads (limit them with a tbb::task_arena or tbb::global_control).
 
+#include "analysis/diff.h"
+#include "analysis/raygen.h"
+#include "analysis/reference.h"
 #include "backends/registry.h"
-#include "engine/analysis/diff.h"
-#include "engine/analysis/raygen.h"
-#include "engine/analysis/reference.h"
-#include "engine/backend.h"
-#include "engine/error.h"
-#include "engine/loaders/load.h"
-#include "engine/ray.h"
-#include "engine/rayfile.h"
-#include "engine/render/camera.h"
-#include "engine/render/image_io.h"
-#include "engine/render/render.h"
-#include "engine/scene.h"
+#include "base/error.h"
+#include "core/backend.h"
+#include "core/ray.h"
+#include "core/scene.h"
+#include "io/loaders/load.h"
+#include "io/rayfile.h"
 #include "raypack/version.h"
+#include "render/camera.h"
+#include "render/image_io.h"
+#include "render/render.h"

@@ -1,5 +1,5 @@
 // The simd backend's 8-wide BVH and kernels: structure invariants, determinism across thread
-// counts, and the 8-wide kernels against the scalar routines of engine/geometry.
+// counts, and the 8-wide kernels against the scalar routines of core/geometry.
 // Built for AVX2+FMA with -ffp-contract=off (CMake links rp::avx2 and rp::fp_strict).
 
 #include <gtest/gtest.h>
@@ -16,8 +16,8 @@
 #include "backends/simd/bvh8.h"
 #include "backends/simd/moller_trumbore.h"
 #include "backends/simd/packet.h"
-#include "engine/geometry/slab.h"
-#include "engine/geometry/triangle.h"
+#include "core/geometry/slab.h"
+#include "core/geometry/triangle.h"
 #include "tests/backends/kernel_support.h"
 #include "tests/support/scenes.h"
 
@@ -454,7 +454,7 @@ TEST(Kernels, MollerTrumbore8MatchesScalarBitForBit) {
   EXPECT_GT(hits, 1000);
 }
 
-/// Slab ×8 is conservative against the scalar slab test of engine/geometry/slab.h: it never
+/// Slab ×8 is conservative against the scalar slab test of core/geometry/slab.h: it never
 /// misses a box the scalar test hits, and extra hits are within its padding.
 TEST(Kernels, SlabTestsAreConservativeAgainstTheScalarSlab) {
   std::mt19937 rng(6);

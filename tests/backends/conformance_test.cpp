@@ -13,10 +13,10 @@
 #include <tuple>
 
 #include "backends/registry.h"
-#include "engine/render/camera.h"
-#include "engine/error.h"
-#include "engine/render/render.h"
+#include "base/error.h"
 #include "oracle.h"
+#include "render/camera.h"
+#include "render/render.h"
 #include "tests/support/scenes.h"
 
 namespace rp {
@@ -256,7 +256,7 @@ TEST_P(Conformance, HitCountsOnlyWithinClosedInterval) {
 
 TEST_P(Conformance, InvalidRaysMissAndAreNotOccluded) {
   // NaN and infinite components, a zero direction, tnear outside [0, tfar], and finite rays
-  // beyond the range of engine/ray.h (Embree aborts from 1.844e18 up): misses everywhere,
+  // beyond the range of core/ray.h (Embree aborts from 1.844e18 up): misses everywhere,
   // never passed to an engine, however squarely they aim at the geometry.
   const Scene scene = analytic_scene();
   auto backend = make_param_backend(GetParam(), scene);

@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "analysis/diff.h"
+#include "analysis/raygen.h"
+#include "analysis/reference.h"
 #include "backends/registry.h"
-#include "engine/analysis/diff.h"
-#include "engine/analysis/raygen.h"
-#include "engine/analysis/reference.h"
 #include "tests/support/scenes.h"
 
 namespace rp {

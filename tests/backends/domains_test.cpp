@@ -1,4 +1,4 @@
-// The data-parallel simulation (engine/analysis/domains.h): disjoint cells covering the scene
+// The data-parallel simulation (analysis/domains.h): disjoint cells covering the scene
 // with the triangles that reach into each, rays forwarded along the cells with the counts
 // worked out by hand, and the domains' answers those of one backend over the whole scene.
 
@@ -9,10 +9,10 @@
 #include <memory>
 #include <vector>
 
+#include "analysis/domains.h"
+#include "analysis/raygen.h"
 #include "backends/registry.h"
-#include "engine/analysis/domains.h"
-#include "engine/analysis/raygen.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "tests/support/scenes.h"
 
 namespace rp {

@@ -17,10 +17,10 @@
 #include <vector>
 
 #include "backends/registry.h"
-#include "engine/loaders/load.h"
-#include "engine/render/camera.h"
-#include "engine/render/render.h"
+#include "io/loaders/load.h"
 #include "oracle.h"
+#include "render/camera.h"
+#include "render/render.h"
 #include "tests/support/gltf_files.h"
 #include "tests/support/temp_dir.h"
 

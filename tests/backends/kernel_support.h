@@ -10,7 +10,7 @@
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/moller_trumbore.h"
-#include "engine/geometry/triangle.h"
+#include "core/geometry/triangle.h"
 
 namespace rp::bvh8 {
 

@@ -1,20 +1,20 @@
 #pragma once
 // Brute-force double-precision closest hit over every primitive of a Scene: the independent
 // answer the conformance suite holds each backend to. Triangles use the watertight test in
-// double, analytic primitives the double instantiation of engine/geometry.
+// double, analytic primitives the double instantiation of core/geometry.
 
 #include <cstdint>
 #include <limits>
 #include <utility>
 #include <vector>
 
-#include "engine/backend.h"
-#include "engine/geometry/plane.h"
-#include "engine/geometry/polygon.h"
-#include "engine/geometry/quadric.h"
-#include "engine/geometry/sphere.h"
-#include "engine/geometry/triangle.h"
-#include "engine/scene.h"
+#include "core/backend.h"
+#include "core/geometry/plane.h"
+#include "core/geometry/polygon.h"
+#include "core/geometry/quadric.h"
+#include "core/geometry/sphere.h"
+#include "core/geometry/triangle.h"
+#include "core/scene.h"
 
 namespace rp::test {
 

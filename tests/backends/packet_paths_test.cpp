@@ -24,11 +24,11 @@
 #include <string>
 #include <vector>
 
+#include "analysis/raygen.h"
 #include "backends/registry.h"
-#include "engine/affine.h"
-#include "engine/geometry/triangle.h"
-#include "engine/analysis/raygen.h"
-#include "engine/scene.h"
+#include "core/affine.h"
+#include "core/geometry/triangle.h"
+#include "core/scene.h"
 #include "tests/support/scenes.h"
 
 namespace rp {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "backends/registry.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "tests/support/error_of.h"
 #include "tests/support/scenes.h"
 

@@ -7,8 +7,8 @@
 #include <cstdio>
 
 #include "backends/registry.h"
-#include "engine/render/camera.h"
-#include "engine/render/render.h"
+#include "render/camera.h"
+#include "render/render.h"
 #include "tests/support/scenes.h"
 
 namespace rp {

@@ -10,14 +10,14 @@
 #include <random>
 #include <set>
 
+#include "analysis/reference.h"
+#include "analysis/stability.h"
 #include "backends/registry.h"
-#include "engine/error.h"
-#include "engine/geometry/quadric.h"
-#include "engine/geometry/triangle.h"
-#include "engine/loaders/load.h"
-#include "engine/analysis/reference.h"
-#include "engine/analysis/stability.h"
-#include "engine/scene_transform.h"
+#include "base/error.h"
+#include "core/geometry/quadric.h"
+#include "core/geometry/triangle.h"
+#include "core/scene_transform.h"
+#include "io/loaders/load.h"
 
 namespace rp {
 namespace {

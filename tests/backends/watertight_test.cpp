@@ -21,13 +21,13 @@
 #include <tuple>
 #include <vector>
 
+#include "analysis/raygen.h"
 #include "backends/simd/packet.h"
 #include "backends/simd/traversal.h"
 #include "backends/simd/watertight.h"
-#include "engine/analysis/raygen.h"
-#include "engine/geometry/exact_triangle.h"
-#include "engine/loaders/load.h"
-#include "engine/offset.h"
+#include "base/offset.h"
+#include "core/geometry/exact_triangle.h"
+#include "io/loaders/load.h"
 #include "tests/backends/kernel_support.h"
 #include "tests/support/build_paths.h"
 #include "tests/support/sanitized.h"

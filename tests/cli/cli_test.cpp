@@ -16,9 +16,9 @@
 #include <string>
 #include <tuple>
 
-#include "engine/rayfile.h"
-#include "engine/render/image_io.h"
-#include "engine/text.h"
+#include "base/text.h"
+#include "io/rayfile.h"
+#include "render/image_io.h"
 #include "tests/support/build_paths.h"
 #include "tests/support/gltf_files.h"
 #include "tests/support/sanitized.h"

@@ -7,7 +7,7 @@ if(NOT status EQUAL 0)
   message(FATAL_ERROR "cmake --install failed (${status})")
 endif()
 foreach(file ${BINDIR}/raypack ${LIBDIR}/libraypack.so ${INCLUDEDIR}/raypack/raypack.h
-        ${INCLUDEDIR}/raypack/engine/scene.h ${INCLUDEDIR}/raypack/backends/registry.h
+        ${INCLUDEDIR}/raypack/core/scene.h ${INCLUDEDIR}/raypack/backends/registry.h
         ${LIBDIR}/cmake/raypack/raypackConfig.cmake ${LIBDIR}/cmake/raypack/raypackConfigVersion.cmake
         ${LIBDIR}/cmake/raypack/raypackTargets.cmake ${LIBDIR}/pkgconfig/raypack.pc)
   if(NOT EXISTS "${PREFIX}/${file}")
@@ -17,7 +17,7 @@ endforeach()
 # Only the public headers: nothing of the backends' internals or of the SIMD vocabulary.
 file(GLOB_RECURSE headers RELATIVE "${PREFIX}/${INCLUDEDIR}" "${PREFIX}/${INCLUDEDIR}/*")
 foreach(header IN LISTS headers)
-  if(header MATCHES "^raypack/(simd|backends/simd|backends/embree|engine/cli)/")
+  if(header MATCHES "^raypack/(simd|backends/simd|backends/embree|cli|mpi)/")
     message(FATAL_ERROR "a private header was installed: ${header}")
   endif()
 endforeach()

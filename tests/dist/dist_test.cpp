@@ -1,4 +1,4 @@
-// The distributed work of engine/dist over one process (SoloComm): the code that every rank of
+// The distributed work of mpi/ over one process (SoloComm): the code that every rank of
 // an MPI run executes gives what the one-process commands give. The runs across real MPI
 // ranks are in tests/mpi/.
 
@@ -15,14 +15,14 @@
 #include <vector>
 
 #include "backends/registry.h"
-#include "engine/dist/diff_ranks.h"
-#include "engine/dist/ray_parts.h"
-#include "engine/dist/render_ranks.h"
-#include "engine/dist/select.h"
-#include "engine/dist/solo_comm.h"
-#include "engine/error.h"
-#include "engine/render/camera.h"
-#include "engine/scene.h"
+#include "base/error.h"
+#include "core/scene.h"
+#include "mpi/diff_ranks.h"
+#include "mpi/ray_parts.h"
+#include "mpi/render_ranks.h"
+#include "mpi/select.h"
+#include "mpi/solo_comm.h"
+#include "render/camera.h"
 #include "tests/support/temp_dir.h"
 
 namespace rp::dist {

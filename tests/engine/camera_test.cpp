@@ -7,9 +7,9 @@
 #include <random>
 #include <set>
 
-#include "engine/render/camera.h"
-#include "engine/error.h"
-#include "engine/render/render.h"
+#include "base/error.h"
+#include "render/camera.h"
+#include "render/render.h"
 
 namespace rp {
 namespace {

@@ -1,5 +1,5 @@
-// The input and output rules every reader and writer shares (engine/input_file.h,
-// engine/output_file.h): what is refused, what is never replaced, what is left behind.
+// The input and output rules every reader and writer shares (io/input_file.h,
+// io/output_file.h): what is refused, what is never replaced, what is left behind.
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -15,10 +15,10 @@
 #include <string>
 #include <thread>
 
-#include "engine/error.h"
-#include "engine/input_file.h"
-#include "engine/output_file.h"
-#include "engine/text.h"
+#include "base/error.h"
+#include "base/text.h"
+#include "io/input_file.h"
+#include "io/output_file.h"
 #include "tests/support/error_of.h"
 #include "tests/support/temp_dir.h"
 

@@ -23,8 +23,8 @@
 #include <thread>
 #include <vector>
 
-#include "engine/error.h"
-#include "engine/rayfile.h"
+#include "base/error.h"
+#include "io/rayfile.h"
 #include "tests/support/error_of.h"
 #include "tests/support/temp_dir.h"
 

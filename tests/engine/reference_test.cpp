@@ -1,7 +1,7 @@
-// The double-precision reference (engine/analysis/reference.h): closed-form answers, watertightness,
+// The double-precision reference (analysis/reference.h): closed-form answers, watertightness,
 // exact agreement with a brute-force double loop, invalid rays, the tie rule, determinism.
 
-#include "engine/analysis/reference.h"
+#include "analysis/reference.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -14,15 +14,15 @@
 #include <random>
 #include <vector>
 
-#include "engine/backend.h"
-#include "engine/error.h"
-#include "engine/geometry/plane.h"
-#include "engine/geometry/polygon.h"
-#include "engine/geometry/quadric.h"
-#include "engine/geometry/sphere.h"
-#include "engine/geometry/triangle.h"
-#include "engine/scene.h"
-#include "engine/scene_transform.h"
+#include "base/error.h"
+#include "core/backend.h"
+#include "core/geometry/plane.h"
+#include "core/geometry/polygon.h"
+#include "core/geometry/quadric.h"
+#include "core/geometry/sphere.h"
+#include "core/geometry/triangle.h"
+#include "core/scene.h"
+#include "core/scene_transform.h"
 #include "tests/backends/oracle.h"
 #include "tests/support/scenes.h"
 

@@ -8,8 +8,8 @@
 #include <optional>
 #include <random>
 
-#include "engine/error.h"
-#include "engine/scene.h"
+#include "base/error.h"
+#include "core/scene.h"
 #include "tests/support/error_of.h"
 #include "tests/support/scenes.h"
 
@@ -75,7 +75,7 @@ TEST(SceneValidation, BadMeshesAreRejectedWithTheReason) {
 }
 
 TEST(SceneValidation, GeometryOutsideTheCoordinateRangeIsRefused) {
-  // engine/ray.h: every scene coordinate within 2^30; one float past it is refused.
+  // core/ray.h: every scene coordinate within 2^30; one float past it is refused.
   const float edge = kMaxCoordinate, past = std::nextafter(kMaxCoordinate, 2 * kMaxCoordinate);
   const std::string range = " is outside the supported coordinate range |x| <= 1073741824 (2^30)";
   Scene s;

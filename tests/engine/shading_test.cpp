@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/render/camera.h"
-#include "engine/render/shade_group.h"
+#include "render/camera.h"
+#include "render/shade_group.h"
 #include "tests/support/scenes.h"
 
 namespace rp {

@@ -1,4 +1,4 @@
-// The 8-bit sRGB table (engine/render/srgb8.h) against the straightforward path it replaces:
+// The 8-bit sRGB table (render/srgb8.h) against the straightforward path it replaces:
 // the sRGB curve with powf, then OpenImageIO's float-to-uint8 conversion.
 
 #include <gtest/gtest.h>
@@ -16,8 +16,8 @@
 #include <sstream>
 #include <vector>
 
-#include "engine/render/image_io.h"
-#include "engine/render/srgb8.h"
+#include "render/image_io.h"
+#include "render/srgb8.h"
 #include "tests/support/temp_dir.h"
 
 namespace rp {

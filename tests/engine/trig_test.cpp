@@ -1,4 +1,4 @@
-// The cameras' sin, cos and atan2 (engine/trig.h) against the exact values (double precision),
+// The cameras' sin, cos and atan2 (base/trig.h) against the exact values (double precision),
 // over their whole domain and densely near the points where the reduction changes quadrant:
 // the largest error in units in the last place of the float result stays within a stated bound.
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <random>
 
-#include "engine/trig.h"
+#include "base/trig.h"
 
 namespace rp {
 namespace {

@@ -23,9 +23,9 @@
 #include <string_view>
 #include <system_error>
 
-#include "engine/error.h"
-#include "engine/rayfile.h"
-#include "engine/scene.h"
+#include "base/error.h"
+#include "core/scene.h"
+#include "io/rayfile.h"
 
 namespace rp::fuzz {
 

@@ -1,5 +1,5 @@
 /// libFuzzer target: rp::load_gltf (tinygltf 2.7's JSON and GLB parsers, then every check of
-/// engine/loaders/gltf.cpp: accessors against their buffers, indices, the node hierarchy,
+/// io/loaders/gltf.cpp: accessors against their buffers, indices, the node hierarchy,
 /// cameras, lights, materials, external buffers by raypack's input rule).
 ///
 /// The input is written as input.glb when it starts with "glTF", else as input.gltf. Beside it
@@ -14,7 +14,7 @@
 #include <filesystem>
 #include <string>
 
-#include "engine/loaders/load.h"
+#include "io/loaders/load.h"
 #include "tests/fuzz/fuzz_file.h"
 #include "tests/support/gltf_files.h"
 

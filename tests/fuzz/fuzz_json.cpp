@@ -1,5 +1,5 @@
 /// libFuzzer target: rp::load_json_scene (nlohmann-json's parser, then every key, range and
-/// shape check of engine/loaders/json_scene.cpp, and the mesh path with its transforms).
+/// shape check of io/loaders/json_scene.cpp, and the mesh path with its transforms).
 ///
 /// Beside the input (input.json) the scratch folder holds three fixed files a scene can name
 /// as a mesh: "cube.obj" (with "cube.mtl", two materials) and "cube.ply", so that
@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <string>
 
-#include "engine/loaders/load.h"
+#include "io/loaders/load.h"
 #include "tests/fuzz/fuzz_file.h"
 
 namespace {

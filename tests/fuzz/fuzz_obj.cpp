@@ -11,7 +11,7 @@
 #include <span>
 #include <string>
 
-#include "engine/loaders/load.h"
+#include "io/loaders/load.h"
 #include "tests/fuzz/fuzz_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

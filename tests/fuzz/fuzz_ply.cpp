@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "engine/loaders/load.h"
+#include "io/loaders/load.h"
 #include "tests/fuzz/fuzz_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,4 +1,4 @@
-/// libFuzzer target: rp::read_rays and rp::read_hits, binary and CSV (engine/rayfile.h).
+/// libFuzzer target: rp::read_rays and rp::read_hits, binary and CSV (io/rayfile.h).
 ///
 /// Byte 0 of the input chooses the reader and the format, the rest is the file:
 ///   bit 0: 0 = binary (input.bin), 1 = CSV (input.csv)
@@ -23,9 +23,9 @@
 #include <string>
 #include <vector>
 
+#include "analysis/reference.h"
 #include "backends/registry.h"
-#include "engine/rayfile.h"
-#include "engine/analysis/reference.h"
+#include "io/rayfile.h"
 #include "tests/fuzz/fuzz_file.h"
 
 namespace {

@@ -1,4 +1,4 @@
-/// The glTF 2.0 loader (engine/loaders/gltf.cpp) on files the tests write with tinygltf's
+/// The glTF 2.0 loader (io/loaders/gltf.cpp) on files the tests write with tinygltf's
 /// writer (tests/support/gltf_files.h): the node hierarchy composed in glTF's order (against
 /// the tests' own composition), a mesh placed by several nodes stored once with an instance
 /// each, every index type, strips and fans, normals, materials, cameras and lights, the three
@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
-#include "engine/loaders/load.h"
+#include "base/error.h"
+#include "io/loaders/load.h"
 #include "scratch.h"
 #include "tests/support/gltf_files.h"
 

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
-#include "engine/loaders/load.h"
-#include "engine/ordered_json.h"
-#include "engine/text.h"
+#include "base/error.h"
+#include "base/text.h"
+#include "io/loaders/load.h"
+#include "io/ordered_json.h"
 #include "scratch.h"
 #include "tests/support/build_paths.h"
 

@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/error.h"
-#include "engine/loaders/load.h"
+#include "base/error.h"
+#include "io/loaders/load.h"
 #include "ply_files.h"
 #include "scratch.h"
 #include "tests/support/build_paths.h"

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <string>
 
-#include "engine/loaders/load.h"
-#include "engine/scene.h"
+#include "core/scene.h"
+#include "io/loaders/load.h"
 #include "tests/support/error_of.h"
 
 namespace rp::test {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/rayfile.h"
+#include "io/rayfile.h"
 #include "tests/support/build_paths.h"
 #include "tests/support/sanitized.h"
 #include "tests/support/shell.h"

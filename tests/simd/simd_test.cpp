@@ -24,8 +24,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/math.h"
-#include "engine/pow.h"
+#include "base/math.h"
+#include "base/pow.h"
 #include "simd/float4.h"
 #include "simd/float8.h"
 #include "simd/pow8.h"
@@ -419,7 +419,7 @@ TEST(Pow8, EveryLaneHasTheScalarRoutinesBits) {
 }
 
 TEST(PowNonneg, WithinOneUlpOfLibmsPowf) {
-  // The bound engine/pow.h states: both are within an ulp of the exact power, and they agree
+  // The bound base/pow.h states: both are within an ulp of the exact power, and they agree
   // bit for bit on most arguments.
   std::mt19937 rng(kSeed + 12);
   int differ = 0, n = 0;

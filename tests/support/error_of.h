@@ -4,7 +4,7 @@
 #include <functional>
 #include <string>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace rp::test {
 

@@ -1,5 +1,5 @@
 #pragma once
-// What the engine/geometry tests share (tests/engine/geometry/): rays in any precision, closeness,
+// What the core/geometry/ tests share (tests/engine/geometry/): rays in any precision, closeness,
 // seeded random vectors, and the tables of triangle and sphere routines that property tests
 // run side by side.
 
@@ -15,16 +15,16 @@
 #include <string>
 #include <vector>
 
-#include "engine/bbox.h"
-#include "engine/geometry/intersection.h"
-#include "engine/geometry/plane.h"
-#include "engine/geometry/polygon.h"
-#include "engine/geometry/quadric.h"
-#include "engine/geometry/slab.h"
-#include "engine/geometry/sphere.h"
-#include "engine/geometry/triangle.h"
-#include "engine/math.h"
-#include "engine/ray.h"
+#include "base/bbox.h"
+#include "base/math.h"
+#include "core/geometry/intersection.h"
+#include "core/geometry/plane.h"
+#include "core/geometry/polygon.h"
+#include "core/geometry/quadric.h"
+#include "core/geometry/slab.h"
+#include "core/geometry/sphere.h"
+#include "core/geometry/triangle.h"
+#include "core/ray.h"
 
 namespace rp::test {
 
@@ -83,7 +83,7 @@ T uniform(std::mt19937& rng, T lo, T hi) {
   return std::uniform_real_distribution<T>(lo, hi)(rng);
 }
 
-/// The triangle and sphere routines of engine/geometry, named, for tests that run them all.
+/// The triangle and sphere routines of core/geometry, named, for tests that run them all.
 
 template <typename T>
 using TriangleFn = Intersection<T> (*)(const RayT<T>&, const Vec3<T>&, const Vec3<T>&,

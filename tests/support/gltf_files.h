@@ -21,9 +21,9 @@
 #include <utility>
 #include <vector>
 
-#include "engine/affine.h"
-#include "engine/loaders/tinygltf_config.h"
-#include "engine/math.h"
+#include "base/math.h"
+#include "core/affine.h"
+#include "io/loaders/tinygltf_config.h"
 
 namespace rp::test {
 

@@ -7,11 +7,11 @@
 #include <random>
 #include <vector>
 
-#include "engine/affine.h"
-#include "engine/math.h"
-#include "engine/geometry/quadric.h"
-#include "engine/ray.h"
-#include "engine/scene.h"
+#include "base/math.h"
+#include "core/affine.h"
+#include "core/geometry/quadric.h"
+#include "core/ray.h"
+#include "core/scene.h"
 
 namespace rp::test {
 

@@ -256,7 +256,7 @@ TEST(QuadricProperty, HitsLieOnTheSurfaceInsideClipAndMatchOracle) {
 
 TEST(QuadricProperty, ScalingTheDirectionByAPowerOfTwoScalesTExactly) {
   // intersect_quadric traces a power-of-two-scaled direction internally: t must scale by the
-  // inverse power exactly, and extreme valid directions (engine/ray.h) must not overflow.
+  // inverse power exactly, and extreme valid directions (core/ray.h) must not overflow.
   std::mt19937 rng(99);
   const Quadricf q = Quadricf::ellipsoid({0.5f, -0.25f, 0.0f}, {1.0f, 2.0f, 0.75f}).normalized();
   int hits = 0;

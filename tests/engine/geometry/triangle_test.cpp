@@ -8,7 +8,7 @@
 #include <numbers>
 #include <optional>
 
-#include "engine/geometry/exact_triangle.h"
+#include "core/geometry/exact_triangle.h"
 #include "tests/support/geometry.h"
 
 namespace rp {
@@ -263,7 +263,7 @@ TEST(TriangleProperty, WatertightNeverLeaksThroughSharedEdgesFloat) {
   RecordProperty("moller_trumbore_leaks", mt_leaks);
 }
 
-// --- the exact test (engine/geometry/exact_triangle.h) -------------------------------------
+// --- the exact test (core/geometry/exact_triangle.h) -------------------------------------
 
 /// The sign of ((p - o) x (q - o)) . d in 128-bit integers, for integer coordinates small
 /// enough (|p - o|, |q - o| < 2^42, |d| < 2^21: every term below 2^106).

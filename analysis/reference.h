@@ -1,0 +1,191 @@
+#pragma once
+/// The double-precision reference intersector: the arbiter `raypack diff` consults when two
+/// backends disagree. It gives the answer of a brute-force loop over every primitive in double
+/// (tests/backends/oracle.h), fast enough for millions of rays.
+///
+/// What it computes. The ray is converted exactly to double; each primitive is tested by the
+/// double instantiation of its core/geometry/ routine on its float data converted exactly to
+/// double, against the ray's whole closed interval [tnear, tfar]:
+/// - triangles: intersect_triangle_watertight<double> (Woop, Benthin & Wald 2013);
+/// - spheres: intersect_sphere_algebraic<double>;
+/// - quadrics: intersect_quadric<double> on the converted coefficients, center and clip;
+/// - polygons: intersect_polygon<double> with polygon_plane<double> of the converted vertices;
+/// - planes: intersect_plane<double>.
+/// A hit of a bounded primitive counts only when it is plausible (Reference::plausible): its
+/// t lies in the ray's interval through the primitive's box grown by a tiny guard. This
+/// drops phantom hits, which are rounding artefacts: e.g. for a ray lying exactly in a
+/// triangle's plane the watertight test's determinant is rounding noise, and it may report
+/// a "hit" far outside the triangle (seen on rays between points of a 0.25 grid). The guard
+/// is 2^21 unit roundoffs, so every well-conditioned hit is plausible and the answer differs
+/// from the brute-force loop of tests/backends/oracle.h only where that loop returns a
+/// phantom (or, at exactly equal t, picks the other primitive of a tie).
+/// The answer is the plausible hit of smallest t; among hits at exactly the same t the
+/// LARGEST (prim_id, instance_id) wins. Because every primitive is tested against the full
+/// interval (not one shortened by earlier hits), this rule does not depend on the order
+/// primitives are visited in: the result is a function of the scene and the ray alone,
+/// whatever the BVH or the thread count. It is also what an ascending-id scan that replaces
+/// at `t <= best` gives (oracle.h; Scene::intersect_planes, where a plane takes a tie).
+///
+/// Instances (Scene::instances): the ray is taken into the instance's object space in double
+/// by the double inverse of the instance's float object_to_world (not by its float
+/// world_to_object, which the backends use), and tested against the instanced mesh there,
+/// plausibility included, in the mesh's own tree; the instance is traced only for rays whose
+/// float object-space image (rp::object_ray with Instance::world_to_object) obeys the
+/// valid-ray rule, the rule every backend follows.
+///
+/// How. A binary BVH over the bounded primitives (median split on the longest axis of the
+/// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
+/// bound the float geometry exactly (triangles, quadric clip boxes) or outward-rounded and
+/// padded (spheres, polygons, instances), traversed near-first in double with a conservative
+/// slab test (see Reference::intersect). An instance is an entry of that tree whose box is
+/// its mesh's box mapped into the world; each instanced mesh has a tree of its own, in its
+/// object space, built once. Unbounded planes are tested beside it.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "base/bbox.h"
+#include "base/math.h"
+#include "core/affine.h"
+#include "core/geometry/polygon.h"
+#include "core/geometry/quadric.h"
+#include "core/ray.h"
+
+namespace rp {
+
+class Scene;
+
+/// Closest hit in double precision; t is in units of the ray direction's length.
+/// On a miss: prim_id == kInvalidId, t == +inf, u == v == 0. (u, v) as rp::Hit documents:
+/// Embree's barycentrics for triangles, the primitive's surface parameters otherwise.
+struct ReferenceHit {
+  double t = std::numeric_limits<double>::infinity();
+  uint32_t prim_id = kInvalidId;
+  double u = 0, v = 0;
+  uint32_t instance_id = kNoInstance;  ///< as rp::Hit
+
+  constexpr bool hit() const { return prim_id != kInvalidId; }
+};
+
+/// `h` as a float Hit (t, u, v rounded to float; a miss stays Hit{}).
+inline Hit to_hit(const ReferenceHit& h) {
+  return h.hit() ? Hit{float(h.t), h.prim_id, float(h.u), float(h.v), h.instance_id} : Hit{};
+}
+
+/// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
+/// immutable and safe to query from many threads at once.
+class Reference {
+ public:
+  /// Builds the BVH over every triangle, sphere, quadric and polygon of `scene` (planes are
+  /// kept beside it), in parallel over TBB; the structure is the same for any thread count.
+  explicit Reference(const Scene& scene);
+
+  /// Closest plausible hit of `ray` (converted exactly to double) within [tnear, tfar], both
+  /// ends closed; invalid rays (valid_ray() false) miss. See the file comment for the rules.
+  ///
+  /// Traversal never changes the answer (Ize 2013, "Robust BVH Ray Traversal", JCGT 2(2),
+  /// made exact): slab distances are computed in double against every box grown by a
+  /// per-ray guard s = 2^-32 (|org|_inf + M), M the scene's largest |coordinate|, and a
+  /// primitive's hit is plausible exactly when its t lies in the interval computed the same
+  /// way for the primitive's own box. Node boxes contain their primitives' boxes and the
+  /// computed distances are monotone in the face coordinates, so every node on the way to a
+  /// plausible hit is entered: faces, edges and vertices of boxes, origins on faces,
+  /// zero-thickness boxes and hits at exactly tnear, tfar or the closest t so far (ties) are
+  /// never culled. The guard, 2^21 unit roundoffs of the ray's coordinates, exceeds Ize's
+  /// 2 gamma_3 widening and the rounding of every well-conditioned primitive t, so only
+  /// phantoms fail plausibility. A +-0 direction component gets the finite reciprocal
+  /// +-2^1020 instead of +-inf, so no product is 0 * inf: slab distances are never NaN and
+  /// plain min/max suffice.
+  ReferenceHit intersect(const Ray& ray) const noexcept;
+
+  /// hits[i] = intersect(rays[i]) for every i, in parallel over TBB (each ray independent,
+  /// so the result does not depend on scheduling). Throws rp::Error when the sizes differ.
+  void intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const;
+
+  /// True when a hit of primitive prim_id (placed by instance `instance`, or by none) at t is
+  /// plausible for ray: prim_id is a plane, or t lies in the ray's guarded slab interval
+  /// through the primitive's box (see intersect), in the instance's object space for an
+  /// instanced triangle. False for an invalid ray, a prim_id or instance out of range, or a
+  /// primitive the instance does not place. For diagnostics and for tests that mirror the
+  /// reference by brute force.
+  bool plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance = kNoInstance) const noexcept;
+
+  /// Wall-clock seconds the constructor took.
+  double build_seconds() const { return build_seconds_; }
+  /// Bytes of the acceleration structure and the converted primitive data (capacity excluded).
+  size_t bytes() const;
+  /// BVH nodes of the world's tree (0 when the scene has no bounded primitive).
+  size_t node_count() const { return world_.nodes.size(); }
+
+ private:
+  /// Binary BVH node in depth-first order; the left child of an interior node follows it.
+  /// 32 bytes.
+  struct Node {
+    float bounds[6];  ///< lo.x, lo.y, lo.z, hi.x, hi.y, hi.z (closed box)
+    uint32_t index;   ///< interior: right child; leaf: first entry of prims_
+    uint32_t count;   ///< 0 for an interior node, else primitives in the leaf (1..4)
+  };
+  /// One primitive of a leaf: the float vertices of a triangle (unused for other kinds, whose
+  /// converted data are looked up by prim_id). 40 bytes.
+  struct LeafPrim {
+    Vec3f v[3];
+    uint32_t prim_id;
+  };
+  struct SphereD {
+    Vec3d center;
+    double radius;
+  };
+  struct PolygonD {
+    uint32_t first, count;  ///< range of polygon_vertices_
+    PolygonPlane<double> plane;
+    bool convex;
+  };
+  struct PlaneD {
+    Vec3d normal;
+    double d;
+  };
+  /// A tree over some bounded primitives: the world's, or an instanced mesh's in its object
+  /// space. An entry of the world's tree with prim_id >= instance_base_ is instance
+  /// prim_id - instance_base_.
+  struct Tree {
+    std::vector<Node> nodes;
+    std::vector<LeafPrim> prims;
+    double scale = 0;  ///< M: largest |coordinate| of the root box, capped to FLT_MAX
+  };
+  struct InstanceD {
+    uint32_t mesh;
+    Affine3d world_to_object;  ///< the double inverse of the instance's float object_to_world
+    Affine3f float_world_to_object;  ///< Instance::world_to_object, for the valid-ray rule
+    Box3f box;                       ///< the world box of the instance's tree entry
+  };
+  struct RayBoxes;
+  struct BuildItem;
+
+  void build_tree(std::vector<BuildItem>& items, Tree& tree);
+  void traverse(const Tree& tree, const Ray& ray, const Rayd& r, const RayBoxes& rb, uint32_t instance,
+                ReferenceHit& best) const noexcept;
+  void intersect_prim(const Ray& ray, const Rayd& r, const RayBoxes& rb, const LeafPrim& p, uint32_t instance,
+                      ReferenceHit& best) const noexcept;
+  /// The BVH box of bounded primitive p (its t-interval decides plausibility).
+  Box3f prim_box(const LeafPrim& p) const noexcept;
+
+  Tree world_;
+  std::vector<Tree> mesh_trees_;       ///< per mesh; empty but for instanced meshes
+  std::vector<InstanceD> instances_;
+  uint32_t instance_base_ = 0;         ///< the world tree's entry ids from here on are instances
+  std::vector<uint32_t> leaf_index_;   ///< prim_id -> index in its tree's prims (bounded primitives)
+  std::vector<uint32_t> mesh_base_;    ///< first prim_id of each mesh, then the triangle count
+  std::vector<Box3f> analytic_boxes_;  ///< boxes of spheres, quadrics, polygons (id - sphere_base_)
+  std::vector<SphereD> spheres_;
+  std::vector<Quadric<double>> quadrics_;
+  std::vector<PolygonD> polygons_;
+  std::vector<Vec3d> polygon_vertices_;
+  std::vector<PlaneD> planes_;
+  uint32_t sphere_base_ = 0, quadric_base_ = 0, polygon_base_ = 0, plane_base_ = 0;
+  double build_seconds_ = 0;
+};
+
+}  // namespace rp

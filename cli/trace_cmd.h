@@ -1,0 +1,30 @@
+#pragma once
+// `raypack trace`: a ray file through one backend, the hits (with geometric normals) to a hit
+// file.
+
+#include <string>
+
+#include "backends/registry.h"
+#include "mpi/comm.h"
+
+namespace CLI {
+class App;
+}
+
+namespace rp::cli {
+
+struct TraceArgs {
+  std::string scene = "default", rays, output, backend{kDefaultBackend}, variant = "default";
+  std::string coherence = "incoherent";
+  int threads = 0;
+  bool quiet = false;
+
+  /// Adds the `trace` subcommand to `app` with these flags.
+  CLI::App* add_to(CLI::App& app);
+};
+
+/// Traces and writes the hit file; returns the exit status. Across the ranks of `comm` when
+/// there are several: each traces its share of the rays and writes its hits at their place.
+int run_trace(const TraceArgs& args, const dist::Comm& comm);
+
+}  // namespace rp::cli

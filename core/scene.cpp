@@ -1,0 +1,353 @@
+#include "core/scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "base/error.h"
+#include "core/geometry/plane.h"
+#include "core/geometry/sphere.h"
+#include "core/surface_lanes.h"
+
+namespace rp {
+
+const char* to_string(PrimKind k) {
+  switch (k) {
+    case PrimKind::triangle: return "triangle";
+    case PrimKind::sphere: return "sphere";
+    case PrimKind::quadric: return "quadric";
+    case PrimKind::polygon: return "polygon";
+    case PrimKind::plane: return "plane";
+  }
+  return "?";
+}
+
+UpFrame up_frame(int axis) {
+  switch (axis) {
+    case 0: return {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};
+    case 2: return {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}};
+    default: return {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  }
+}
+
+void Scene::set_up_axis(int axis) {
+  RP_CHECK(axis >= 0 && axis <= 2, "up axis ", axis, " is not 0 (x), 1 (y) or 2 (z)");
+  up_axis_ = axis;
+}
+
+uint32_t Scene::add_material(Material m) {
+  RP_CHECK(m.ior >= 1.0f && std::isfinite(m.ior), "material '", m.name, "': ior ", m.ior, " must be >= 1");
+  RP_CHECK(m.shininess >= 0.0f && std::isfinite(m.shininess), "material '", m.name, "': shininess ",
+           m.shininess, " must be >= 0");
+  materials_.push_back(std::move(m));
+  return uint32_t(materials_.size() - 1);
+}
+
+/// "(x, y, z)" for messages.
+static std::string show(const Vec3f& v) { return cat("(", v.x, ", ", v.y, ", ", v.z, ")"); }
+
+/// The coordinate range as messages state it.
+static const char* const kRangeText = "the supported coordinate range |x| <= 1073741824 (2^30)";
+
+static void check_material(const std::vector<Material>& materials, uint32_t id, const std::string& what) {
+  RP_CHECK(id < materials.size(), what, ": material index ", id, " out of range (", materials.size(),
+           " materials)");
+}
+
+uint32_t Scene::add_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), false); }
+
+uint32_t Scene::add_instanced_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), true); }
+
+uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
+  const std::string what = "mesh '" + mesh.name + "'";
+  RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
+  const size_t nv = mesh.positions.size();
+  for (size_t i = 0; i < nv; ++i) {
+    RP_CHECK(is_finite(mesh.positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
+    RP_CHECK(in_coordinate_range(mesh.positions[i]), what, ": vertex ", i, " ", show(mesh.positions[i]),
+             " is outside ", kRangeText);
+  }
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    RP_CHECK(mesh.indices[i] < nv, what, ": triangle ", i / 3, " uses vertex ", mesh.indices[i], " of ", nv);
+  RP_CHECK(mesh.normals.empty() || mesh.normals.size() == nv, what, ": ", mesh.normals.size(),
+           " normals for ", nv, " vertices");
+  RP_CHECK(mesh.uvs.empty() || mesh.uvs.size() == nv, what, ": ", mesh.uvs.size(), " uvs for ", nv, " vertices");
+  RP_CHECK(mesh.face_materials.empty() || mesh.face_materials.size() == mesh.triangle_count(), what, ": ",
+           mesh.face_materials.size(), " face materials for ", mesh.triangle_count(), " triangles");
+  check_material(materials_, mesh.material, what);
+  for (uint32_t m : mesh.face_materials) check_material(materials_, m, what);
+  RP_CHECK(uint64_t(triangle_count_) + mesh.triangle_count() < uint64_t(kInvalidId) / 2, what,
+           ": scene exceeds ", kInvalidId / 2, " triangles");
+  Box3f box;
+  for (uint32_t i : mesh.indices) box.extend(mesh.positions[i]);
+  mesh_base_.push_back(triangle_count_);
+  instanced_.push_back(uint8_t(instanced));
+  mesh_bounds_.push_back(box);
+  triangle_count_ += mesh.triangle_count();
+  meshes_.push_back(std::move(mesh));
+  return uint32_t(meshes_.size() - 1);
+}
+
+uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
+  const std::string what = cat("instance ", instances_.size());
+  RP_CHECK(mesh < meshes_.size(), what, ": mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  RP_CHECK(instanced_[mesh], what, ": mesh '", meshes_[mesh].name, "' is a world mesh, not an instanced one");
+  RP_CHECK(object_to_world.is_finite(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not finite");
+  const std::optional<Affine3f> inv = float_inverse(object_to_world);
+  RP_CHECK(inv.has_value(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not invertible");
+  const Affine3f& world_to_object = *inv;
+  const float stretch = std::max(object_to_world.linear_norm(), world_to_object.linear_norm());
+  RP_CHECK(world_to_object.is_finite() && stretch <= kMaxInstanceScale, what, ": the transform of mesh '",
+           meshes_[mesh].name, "' stretches by ", stretch, ", beyond ", kMaxInstanceScale,
+           " (2^20) either way");
+  RP_CHECK(instances_.size() + 1 < size_t(kNoInstance), what, ": too many instances");
+  Instance in;
+  in.mesh = mesh;
+  in.object_to_world = object_to_world;
+  in.world_to_object = world_to_object;
+  in.orientation = object_to_world.determinant() < 0.0f ? -1.0f : 1.0f;
+  const Box3f& box = mesh_bounds_[mesh];
+  if (!box.empty()) {
+    const Affine3d m(object_to_world);
+    Box3d image;
+    for (int c = 0; c < 8; ++c)
+      image.extend(m.point(Vec3d((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,
+                                 (c & 4) ? box.hi.z : box.lo.z)));
+    in.bounds = outward(image);
+    RP_CHECK(in_coordinate_range(in.bounds.lo) && in_coordinate_range(in.bounds.hi), what, ": mesh '",
+             meshes_[mesh].name, "' placed at ", show(in.bounds.lo), " - ", show(in.bounds.hi), " is outside ",
+             kRangeText);
+  }
+  instances_.push_back(in);
+  instanced_triangle_count_ += meshes_[mesh].triangle_count();
+  return uint32_t(instances_.size() - 1);
+}
+
+void Scene::add_sphere(const Sphere& s) {
+  RP_CHECK(is_finite(s.center) && std::isfinite(s.radius) && s.radius > 0.0f, "sphere at ", show(s.center),
+           " radius ", s.radius, ": needs a finite centre and radius > 0");
+  RP_CHECK(in_coordinate_range(s.center - Vec3f(s.radius)) && in_coordinate_range(s.center + Vec3f(s.radius)),
+           "sphere at ", show(s.center), " radius ", s.radius, ": its box is outside ", kRangeText);
+  check_material(materials_, s.material, "sphere");
+  spheres_.push_back(s);
+}
+
+void Scene::add_quadric(const QuadricShape& q) {
+  const Box3f b = q.quadric.clip;
+  RP_CHECK(!b.empty() && is_finite(b.lo) && is_finite(b.hi), "quadric: clipping box must be finite and non-empty");
+  RP_CHECK(in_coordinate_range(b.lo) && in_coordinate_range(b.hi) && in_coordinate_range(q.quadric.center),
+           "quadric: clipping box ", show(b.lo), " - ", show(b.hi), " or centre ", show(q.quadric.center),
+           " is outside ", kRangeText);
+  check_material(materials_, q.material, "quadric");
+  const Quadricf& c = q.quadric;
+  for (float t : {c.A, c.B, c.C, c.D, c.E, c.F, c.G, c.H, c.I, c.J})
+    RP_CHECK(std::isfinite(t), "quadric: coefficient ", t, " is not finite");
+  QuadricShape scaled = q;
+  scaled.quadric = c.normalized();
+  quadrics_.push_back(scaled);
+}
+
+void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
+  RP_CHECK(vertices.size() >= 3, "polygon: needs at least 3 vertices, got ", vertices.size());
+  for (const Vec3f& v : vertices) {
+    RP_CHECK(is_finite(v), "polygon: non-finite vertex");
+    RP_CHECK(in_coordinate_range(v), "polygon: vertex ", show(v), " is outside ", kRangeText);
+  }
+  check_material(materials_, material, "polygon");
+  PolygonShape p;
+  p.first = uint32_t(polygon_vertices_.size());
+  p.count = uint32_t(vertices.size());
+  p.plane = polygon_plane<float>(vertices);
+  RP_CHECK(length(p.plane.n) > 0.0f, "polygon: vertices are collinear (zero area)");
+  p.convex = polygon_is_convex<float>(vertices);
+  p.material = material;
+  polygon_vertices_.insert(polygon_vertices_.end(), vertices.begin(), vertices.end());
+  polygons_.push_back(p);
+}
+
+void Scene::add_plane(const Plane& p) {
+  RP_CHECK(is_finite(p.normal) && length(p.normal) > 0.0f && std::isfinite(p.d),
+           "plane: needs a finite non-zero normal and finite offset");
+  RP_CHECK(std::abs(p.d) / length(p.normal) <= kMaxCoordinate, "plane: its distance from the origin, ",
+           std::abs(p.d) / length(p.normal), ", is outside ", kRangeText);
+  check_material(materials_, p.material, "plane");
+  planes_.push_back(p);
+}
+
+void Scene::add_light(const PointLight& l) {
+  RP_CHECK(in_coordinate_range(l.position), "point light at ", show(l.position), ": outside ", kRangeText);
+  RP_CHECK(is_finite(l.intensity) && min_component(l.intensity) >= 0.0f, "point light at ", show(l.position),
+           ": intensity ", show(l.intensity), " must be finite and >= 0");
+  point_lights_.push_back(l);
+}
+
+void Scene::add_light(const DirectionalLight& l) {
+  RP_CHECK(is_finite(l.direction) && length(l.direction) > 0.0f, "directional light: direction ", show(l.direction),
+           " must be finite and non-zero");
+  RP_CHECK(is_finite(l.irradiance) && min_component(l.irradiance) >= 0.0f, "directional light: irradiance ",
+           show(l.irradiance), " must be finite and >= 0");
+  directional_lights_.push_back(l);
+}
+
+PrimLocation Scene::locate_triangle(uint32_t id) const {
+  // The last mesh whose base is <= id.
+  auto it = std::upper_bound(mesh_base_.begin(), mesh_base_.end(), id) - 1;
+  return {PrimKind::triangle, uint32_t(it - mesh_base_.begin()), id - *it};
+}
+
+Box3f Scene::bounds() const {
+  Box3f b;
+  for (size_t m = 0; m < meshes_.size(); ++m)
+    if (!instanced_[m]) b.extend(mesh_bounds_[m]);
+  for (const Instance& in : instances_) b.extend(in.bounds);
+  for (const Sphere& s : spheres_) b.extend(Box3f(s.center - Vec3f(s.radius), s.center + Vec3f(s.radius)));
+  for (const QuadricShape& q : quadrics_) b.extend(q.quadric.clip);
+  for (const Vec3f& v : polygon_vertices_) b.extend(v);
+  return b;
+}
+
+Box3f Scene::prim_bounds(uint32_t id) const {
+  const PrimLocation ref = locate(id);
+  switch (ref.kind) {
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      return {s.center - Vec3f(s.radius), s.center + Vec3f(s.radius)};
+    }
+    case PrimKind::quadric: return quadrics_[ref.shape].quadric.clip;
+    case PrimKind::polygon: {
+      Box3f b;
+      const PolygonShape& p = polygons_[ref.shape];
+      for (uint32_t k = 0; k < p.count; ++k) b.extend(polygon_vertices_[p.first + k]);
+      return b;
+    }
+    default: throw Error(cat("prim_bounds: prim ", id, " is a ", to_string(ref.kind), ", not an analytic primitive"));
+  }
+}
+
+Intersection<float> Scene::intersect_analytic(uint32_t id, const Ray& ray) const {
+  const PrimLocation ref = locate(id);
+  switch (ref.kind) {
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      return intersect_sphere_algebraic(ray, s.center, s.radius);
+    }
+    case PrimKind::quadric: return intersect_quadric(ray, quadrics_[ref.shape].quadric);
+    case PrimKind::polygon: {
+      const PolygonShape& p = polygons_[ref.shape];
+      return intersect_polygon(ray, std::span<const Vec3f>(polygon_vertices_).subspan(p.first, p.count), p.plane,
+                               p.convex);
+    }
+    default: return {};
+  }
+}
+
+void Scene::intersect_planes_in_order(const Ray& ray, Hit& hit) const {
+  for (uint32_t k = 0; k < planes_.size(); ++k) {
+    Ray r = ray;
+    r.tfar = std::min(ray.tfar, hit.t);
+    const Intersection<float> h = intersect_plane(r, planes_[k].normal, planes_[k].d);
+    if (h.hit) hit = {h.t, plane_base() + k, h.u, h.v};
+  }
+}
+
+bool Scene::occluded_by_any_plane(const Ray& ray) const {
+  for (const Plane& p : planes_)
+    if (intersect_plane(ray, p.normal, p.d).hit) return true;
+  return false;
+}
+
+// Kept out of line: inside surface, its calls made GCC stop inlining fix_degenerate_normal
+// and normalize into the world primitives' path (a measurable share of the default scene's
+// shading; figures: docs/notes/2026-11-29-figures-from-code-comments.md).
+[[gnu::noinline]] SurfacePoint Scene::instance_surface(const Ray& ray, const Hit& hit) const {
+  // The point and normals in the instance's object space, from the object ray, then mapped.
+  const Instance& in = instances_[hit.instance_id];
+  const SurfacePoint local = surface(object_ray(ray, in.world_to_object), {hit.t, hit.prim_id, hit.u, hit.v});
+  PointLanes<float> p = instance_point<float>({local.position, local.geometric_normal, local.shading_normal},
+                                              in.object_to_world, in.world_to_object,
+                                              in.orientation);
+  fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
+  return {p.position, p.geometric_normal, p.shading_normal, local.material};
+}
+
+SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
+  if (hit.instance_id != kNoInstance) return instance_surface(ray, hit);
+  SurfacePoint sp;
+  const PrimLocation ref = locate(hit.prim_id);
+  switch (ref.kind) {
+    case PrimKind::triangle: {
+      const TriangleMesh& m = meshes_[ref.shape];
+      const uint32_t* idx = &m.indices[3 * ref.local];
+      const Vec3f c[3] = {m.positions[idx[0]], m.positions[idx[1]], m.positions[idx[2]]};
+      const bool has_normals = !m.normals.empty();
+      const Vec3f n[3] = {has_normals ? m.normals[idx[0]] : Vec3f{}, has_normals ? m.normals[idx[1]] : Vec3f{},
+                          has_normals ? m.normals[idx[2]] : Vec3f{}};
+      const PointLanes<float> p = triangle_point<float>(c, n, has_normals, hit.u, hit.v);
+      sp.position = p.position;
+      sp.geometric_normal = p.geometric_normal;
+      sp.shading_normal = p.shading_normal;
+      sp.material = m.face_materials.empty() ? m.material : m.face_materials[ref.local];
+      break;
+    }
+    case PrimKind::sphere: {
+      const Sphere& s = spheres_[ref.shape];
+      const PointLanes<float> p = sphere_point<float>(ray.org, ray.dir, hit.t, s.center, s.radius);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
+      sp.material = s.material;
+      break;
+    }
+    case PrimKind::quadric: {
+      // One Newton step along the gradient pulls org + t*dir (whose error grows with t)
+      // back onto the surface, so that secondary-ray offsets of a few ulps suffice.
+      const PointLanes<float> p = quadric_point<float>(ray.org, ray.dir, hit.t, quadrics_[ref.shape].quadric);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
+      sp.material = quadrics_[ref.shape].material;
+      break;
+    }
+    case PrimKind::polygon:
+    case PrimKind::plane: {
+      const bool polygon = ref.kind == PrimKind::polygon;
+      const Vec3f n = polygon ? polygons_[ref.shape].plane.n : planes_[ref.shape].normal;
+      const float d = polygon ? polygons_[ref.shape].plane.d : planes_[ref.shape].d;
+      const PointLanes<float> p = plane_point<float>(ray.org, ray.dir, hit.t, n, d);
+      sp.position = p.position;
+      sp.geometric_normal = sp.shading_normal = p.geometric_normal;
+      sp.material = polygon ? polygons_[ref.shape].material : planes_[ref.shape].material;
+      break;
+    }
+  }
+  // A shape much smaller than the rounding of a far-away hit point (a unit sphere or quadric
+  // seen from 2^30 away) can put the computed point at its centre, where the gradient is 0:
+  // the normal then faces the ray rather than being zero.
+  PointLanes<float> p{sp.position, sp.geometric_normal, sp.shading_normal};
+  fix_degenerate_normal<float>(p, ray.org, ray.dir, hit.t);
+  sp.position = p.position;
+  sp.geometric_normal = p.geometric_normal;
+  sp.shading_normal = p.shading_normal;
+  return sp;
+}
+
+size_t Scene::degenerate_triangle_count() const {
+  size_t n = 0;
+  for (const TriangleMesh& m : meshes_)
+    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+      Vec3f c = cross(m.vertex(t, 1) - m.vertex(t, 0), m.vertex(t, 2) - m.vertex(t, 0));
+      n += (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f);
+    }
+  return n;
+}
+
+size_t Scene::bytes() const {
+  size_t b = instances_.size() * sizeof(Instance) + mesh_bounds_.size() * sizeof(Box3f) + instanced_.size();
+  for (const TriangleMesh& m : meshes_)
+    b += m.positions.size() * sizeof(Vec3f) + m.indices.size() * sizeof(uint32_t) +
+         m.normals.size() * sizeof(Vec3f) + m.uvs.size() * sizeof(Vec2f) +
+         m.face_materials.size() * sizeof(uint32_t);
+  b += spheres_.size() * sizeof(Sphere) + quadrics_.size() * sizeof(QuadricShape) +
+       polygons_.size() * sizeof(PolygonShape) + polygon_vertices_.size() * sizeof(Vec3f) +
+       planes_.size() * sizeof(Plane) + mesh_base_.size() * sizeof(uint32_t);
+  return b;
+}
+
+}  // namespace rp
