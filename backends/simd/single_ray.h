@@ -60,11 +60,12 @@ void trace_single(const Level& lv, const Ray& r, const SingleRay& sr, int32_t ro
   DistanceEntry stack[kStackSize];
   int sp = 0;
   int32_t ref = root;
+  float tfar = q.tfar;  // in a register: only a leaf lowers it
   for (;;) {
     if (!is_leaf(ref)) {
       const Bvh8Node& n = lv.node(ref);
       float8 t_enter;
-      uint32_t bits = intersect_node(n, sr, r.tnear, q.tfar, t_enter);
+      uint32_t bits = intersect_node(n, sr, r.tnear, tfar, t_enter);
       if (bits) {
         if ((bits & (bits - 1)) == 0) {
           ref = n.child[std::countr_zero(bits)];
@@ -92,13 +93,14 @@ void trace_single(const Level& lv, const Ray& r, const SingleRay& sr, int32_t ro
           for (; bits; bits &= bits - 1) stack[sp++] = {n.child[std::countr_zero(bits)], 0.0f};
         }
       }
-    } else if (single_leaf(lv, ref, r, kr, q)) {
-      return;
+    } else {
+      if (single_leaf(lv, ref, r, kr, q)) return;
+      tfar = q.tfar;
     }
     for (;;) {  // pop, skipping subtrees entered beyond the current answer
       if (sp == 0) return;
       const DistanceEntry e = stack[--sp];
-      if (!Q::kNearFirst || e.t <= std::fma(q.tfar, kSlabPad, sr.pad)) {  // conservative, as intersect_node
+      if (!Q::kNearFirst || e.t <= std::fma(tfar, kSlabPad, sr.pad)) {  // conservative, as intersect_node
         ref = e.ref;
         break;
       }
