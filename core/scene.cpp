@@ -53,6 +53,34 @@ static void check_material(const std::vector<Material>& materials, uint32_t id, 
            " materials)");
 }
 
+/// The image of `box` under `m`: its 8 corners mapped in double, rounded outward (empty
+/// stays empty).
+static Box3f placed_box(const Box3f& box, const Affine3f& object_to_world) {
+  if (box.empty()) return box;
+  const Affine3d m(object_to_world);
+  Box3d image;
+  for (int c = 0; c < 8; ++c)
+    image.extend(
+        m.point(Vec3d((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y, (c & 4) ? box.hi.z : box.lo.z)));
+  return outward(image);
+}
+
+/// Checks that every position is finite and within the coordinate range; `what` names the mesh.
+static void check_positions(std::span<const Vec3f> positions, const std::string& what) {
+  for (size_t i = 0; i < positions.size(); ++i) {
+    RP_CHECK(is_finite(positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
+    RP_CHECK(in_coordinate_range(positions[i]), what, ": vertex ", i, " ", show(positions[i]), " is outside ",
+             kRangeText);
+  }
+}
+
+/// The box of the vertices `indices` use.
+static Box3f used_bounds(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices) {
+  Box3f box;
+  for (uint32_t i : indices) box.extend(positions[i]);
+  return box;
+}
+
 uint32_t Scene::add_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), false); }
 
 uint32_t Scene::add_instanced_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), true); }
@@ -61,11 +89,7 @@ uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
   const std::string what = "mesh '" + mesh.name + "'";
   RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
   const size_t nv = mesh.positions.size();
-  for (size_t i = 0; i < nv; ++i) {
-    RP_CHECK(is_finite(mesh.positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
-    RP_CHECK(in_coordinate_range(mesh.positions[i]), what, ": vertex ", i, " ", show(mesh.positions[i]),
-             " is outside ", kRangeText);
-  }
+  check_positions(mesh.positions, what);
   for (size_t i = 0; i < mesh.indices.size(); ++i)
     RP_CHECK(mesh.indices[i] < nv, what, ": triangle ", i / 3, " uses vertex ", mesh.indices[i], " of ", nv);
   RP_CHECK(mesh.normals.empty() || mesh.normals.size() == nv, what, ": ", mesh.normals.size(),
@@ -77,18 +101,19 @@ uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
   for (uint32_t m : mesh.face_materials) check_material(materials_, m, what);
   RP_CHECK(uint64_t(triangle_count_) + mesh.triangle_count() < uint64_t(kInvalidId) / 2, what,
            ": scene exceeds ", kInvalidId / 2, " triangles");
-  Box3f box;
-  for (uint32_t i : mesh.indices) box.extend(mesh.positions[i]);
+  const Box3f box = used_bounds(mesh.positions, mesh.indices);
   mesh_base_.push_back(triangle_count_);
   instanced_.push_back(uint8_t(instanced));
   mesh_bounds_.push_back(box);
   triangle_count_ += mesh.triangle_count();
   meshes_.push_back(std::move(mesh));
+  changed(Change::added, Object::mesh, uint32_t(meshes_.size() - 1), true, false);
+  mesh_version_.push_back(version_);
+  mesh_uid_.push_back(next_uid_++);
   return uint32_t(meshes_.size() - 1);
 }
 
-uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
-  const std::string what = cat("instance ", instances_.size());
+Instance Scene::placement(uint32_t mesh, const Affine3f& object_to_world, const std::string& what) const {
   RP_CHECK(mesh < meshes_.size(), what, ": mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
   RP_CHECK(instanced_[mesh], what, ": mesh '", meshes_[mesh].name, "' is a world mesh, not an instanced one");
   RP_CHECK(object_to_world.is_finite(), what, ": the transform of mesh '", meshes_[mesh].name, "' is not finite");
@@ -97,28 +122,26 @@ uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
   const Affine3f& world_to_object = *inv;
   const float stretch = std::max(object_to_world.linear_norm(), world_to_object.linear_norm());
   RP_CHECK(world_to_object.is_finite() && stretch <= kMaxInstanceScale, what, ": the transform of mesh '",
-           meshes_[mesh].name, "' stretches by ", stretch, ", beyond ", kMaxInstanceScale,
-           " (2^20) either way");
-  RP_CHECK(instances_.size() + 1 < size_t(kNoInstance), what, ": too many instances");
+           meshes_[mesh].name, "' stretches by ", stretch, ", beyond ", kMaxInstanceScale, " (2^20) either way");
   Instance in;
   in.mesh = mesh;
   in.object_to_world = object_to_world;
   in.world_to_object = world_to_object;
   in.orientation = object_to_world.determinant() < 0.0f ? -1.0f : 1.0f;
-  const Box3f& box = mesh_bounds_[mesh];
-  if (!box.empty()) {
-    const Affine3d m(object_to_world);
-    Box3d image;
-    for (int c = 0; c < 8; ++c)
-      image.extend(m.point(Vec3d((c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,
-                                 (c & 4) ? box.hi.z : box.lo.z)));
-    in.bounds = outward(image);
-    RP_CHECK(in_coordinate_range(in.bounds.lo) && in_coordinate_range(in.bounds.hi), what, ": mesh '",
-             meshes_[mesh].name, "' placed at ", show(in.bounds.lo), " - ", show(in.bounds.hi), " is outside ",
-             kRangeText);
-  }
+  in.bounds = placed_box(mesh_bounds_[mesh], object_to_world);
+  RP_CHECK(in.bounds.empty() || (in_coordinate_range(in.bounds.lo) && in_coordinate_range(in.bounds.hi)), what,
+           ": mesh '", meshes_[mesh].name, "' placed at ", show(in.bounds.lo), " - ", show(in.bounds.hi),
+           " is outside ", kRangeText);
+  return in;
+}
+
+uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
+  const std::string what = cat("instance ", instances_.size());
+  const Instance in = placement(mesh, object_to_world, what);
+  RP_CHECK(instances_.size() + 1 < size_t(kNoInstance), what, ": too many instances");
   instances_.push_back(in);
   instanced_triangle_count_ += meshes_[mesh].triangle_count();
+  changed(Change::added, Object::instance, uint32_t(instances_.size() - 1), false, true);
   return uint32_t(instances_.size() - 1);
 }
 
@@ -129,6 +152,7 @@ void Scene::add_sphere(const Sphere& s) {
            "sphere at ", show(s.center), " radius ", s.radius, ": its box is outside ", kRangeText);
   check_material(materials_, s.material, "sphere");
   spheres_.push_back(s);
+  changed(Change::added, Object::sphere, uint32_t(spheres_.size() - 1), true, false);
 }
 
 void Scene::add_quadric(const QuadricShape& q) {
@@ -144,6 +168,7 @@ void Scene::add_quadric(const QuadricShape& q) {
   QuadricShape scaled = q;
   scaled.quadric = c.normalized();
   quadrics_.push_back(scaled);
+  changed(Change::added, Object::quadric, uint32_t(quadrics_.size() - 1), true, false);
 }
 
 void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
@@ -162,6 +187,7 @@ void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
   p.material = material;
   polygon_vertices_.insert(polygon_vertices_.end(), vertices.begin(), vertices.end());
   polygons_.push_back(p);
+  changed(Change::added, Object::polygon, uint32_t(polygons_.size() - 1), true, false);
 }
 
 void Scene::add_plane(const Plane& p) {
@@ -171,21 +197,160 @@ void Scene::add_plane(const Plane& p) {
            std::abs(p.d) / length(p.normal), ", is outside ", kRangeText);
   check_material(materials_, p.material, "plane");
   planes_.push_back(p);
+  changed(Change::added, Object::plane, uint32_t(planes_.size() - 1), false, false);
 }
 
-void Scene::add_light(const PointLight& l) {
+static void check_light(const PointLight& l) {
   RP_CHECK(in_coordinate_range(l.position), "point light at ", show(l.position), ": outside ", kRangeText);
   RP_CHECK(is_finite(l.intensity) && min_component(l.intensity) >= 0.0f, "point light at ", show(l.position),
            ": intensity ", show(l.intensity), " must be finite and >= 0");
-  point_lights_.push_back(l);
 }
 
-void Scene::add_light(const DirectionalLight& l) {
+static void check_light(const DirectionalLight& l) {
   RP_CHECK(is_finite(l.direction) && length(l.direction) > 0.0f, "directional light: direction ", show(l.direction),
            " must be finite and non-zero");
   RP_CHECK(is_finite(l.irradiance) && min_component(l.irradiance) >= 0.0f, "directional light: irradiance ",
            show(l.irradiance), " must be finite and >= 0");
+}
+
+void Scene::add_light(const PointLight& l) {
+  check_light(l);
+  point_lights_.push_back(l);
+}
+
+void Scene::add_light(const DirectionalLight& l) {
+  check_light(l);
   directional_lights_.push_back(l);
+}
+
+void Scene::set_light(uint32_t i, const PointLight& l) {
+  RP_CHECK(i < point_lights_.size(), "point light ", i, " out of range (", point_lights_.size(), " point lights)");
+  check_light(l);
+  point_lights_[i] = l;
+}
+
+void Scene::set_light(uint32_t i, const DirectionalLight& l) {
+  RP_CHECK(i < directional_lights_.size(), "directional light ", i, " out of range (", directional_lights_.size(),
+           " directional lights)");
+  check_light(l);
+  directional_lights_[i] = l;
+}
+
+void Scene::changed(Change change, Object object, uint32_t index, bool layout, bool instances) {
+  ++version_;
+  if (layout) layout_version_ = version_;
+  if (instances) instances_version_ = version_;
+  last_change_ = change;
+  last_object_ = object;
+  last_index_ = index;
+}
+
+std::string Scene::last_change() const {
+  static constexpr const char* kObject[] = {"mesh", "instance", "sphere", "quadric", "polygon", "plane"};
+  const std::string what = cat(kObject[int(last_object_)], " ", last_index_);
+  switch (last_change_) {
+    case Change::none:
+      return "";
+    case Change::added:
+      return what + " was added";
+    case Change::removed:
+      return what + " was removed";
+    case Change::vertices:
+      return what + " has new vertices";
+    case Change::transform:
+      return what + " has a new transform";
+  }
+  return "";
+}
+
+void Scene::set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::span<const Vec3f> normals) {
+  RP_CHECK(mesh < meshes_.size(), "set_vertices: mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  TriangleMesh& m = meshes_[mesh];
+  const std::string what = cat("mesh '", m.name, "' (", mesh, ")");
+  RP_CHECK(positions.size() == m.positions.size(), what, ": ", positions.size(), " new positions for ",
+           m.positions.size(), " vertices");
+  RP_CHECK(normals.empty() || normals.size() == m.normals.size(), what, ": ", normals.size(), " new normals for ",
+           m.normals.size(), " stored");
+  check_positions(positions, what);
+  for (size_t i = 0; i < normals.size(); ++i)
+    RP_CHECK(is_finite(normals[i]), what, ": normal ", i, " has a non-finite coordinate");
+  // Every instance's new box is checked before anything changes.
+  std::vector<Vec3f> next(positions.begin(), positions.end());
+  const Box3f box = used_bounds(next, m.indices);
+  std::vector<std::pair<uint32_t, Box3f>> moved;
+  for (uint32_t i = 0; i < instances_.size(); ++i) {
+    if (instances_[i].mesh != mesh) continue;
+    const Box3f b = placed_box(box, instances_[i].object_to_world);
+    RP_CHECK(b.empty() || (in_coordinate_range(b.lo) && in_coordinate_range(b.hi)), what, ": instance ", i,
+             " would place it at ", show(b.lo), " - ", show(b.hi), ", outside ", kRangeText);
+    moved.emplace_back(i, b);
+  }
+  m.positions = std::move(next);
+  if (!normals.empty()) m.normals.assign(normals.begin(), normals.end());
+  mesh_bounds_[mesh] = box;
+  for (const auto& [i, b] : moved) instances_[i].bounds = b;
+  changed(Change::vertices, Object::mesh, mesh, false, !moved.empty());
+  mesh_version_[mesh] = version_;
+}
+
+void Scene::set_transform(uint32_t instance, const Affine3f& object_to_world) {
+  RP_CHECK(instance < instances_.size(), "set_transform: instance ", instance, " out of range (", instances_.size(),
+           " instances)");
+  instances_[instance] = placement(instances_[instance].mesh, object_to_world, cat("instance ", instance));
+  changed(Change::transform, Object::instance, instance, false, true);
+}
+
+void Scene::remove_mesh(uint32_t mesh) {
+  RP_CHECK(mesh < meshes_.size(), "remove_mesh: mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  for (uint32_t i = 0; i < instances_.size(); ++i)
+    RP_CHECK(instances_[i].mesh != mesh, "remove_mesh: mesh '", meshes_[mesh].name, "' (", mesh,
+             ") is placed by instance ", i, "; remove its instances first");
+  const uint32_t n = meshes_[mesh].triangle_count();
+  for (size_t m = mesh + 1; m < meshes_.size(); ++m) mesh_base_[m] -= n;
+  for (Instance& in : instances_) in.mesh -= in.mesh > mesh;
+  meshes_.erase(meshes_.begin() + mesh);
+  mesh_base_.erase(mesh_base_.begin() + mesh);
+  instanced_.erase(instanced_.begin() + mesh);
+  mesh_bounds_.erase(mesh_bounds_.begin() + mesh);
+  mesh_version_.erase(mesh_version_.begin() + mesh);
+  mesh_uid_.erase(mesh_uid_.begin() + mesh);
+  triangle_count_ -= n;
+  changed(Change::removed, Object::mesh, mesh, true, !instances_.empty());
+}
+
+void Scene::remove_instance(uint32_t instance) {
+  RP_CHECK(instance < instances_.size(), "remove_instance: instance ", instance, " out of range (", instances_.size(),
+           " instances)");
+  instanced_triangle_count_ -= meshes_[instances_[instance].mesh].triangle_count();
+  instances_.erase(instances_.begin() + instance);
+  changed(Change::removed, Object::instance, instance, false, true);
+}
+
+void Scene::remove_sphere(uint32_t i) {
+  RP_CHECK(i < spheres_.size(), "remove_sphere: sphere ", i, " out of range (", spheres_.size(), " spheres)");
+  spheres_.erase(spheres_.begin() + i);
+  changed(Change::removed, Object::sphere, i, true, false);
+}
+
+void Scene::remove_quadric(uint32_t i) {
+  RP_CHECK(i < quadrics_.size(), "remove_quadric: quadric ", i, " out of range (", quadrics_.size(), " quadrics)");
+  quadrics_.erase(quadrics_.begin() + i);
+  changed(Change::removed, Object::quadric, i, true, false);
+}
+
+void Scene::remove_polygon(uint32_t i) {
+  RP_CHECK(i < polygons_.size(), "remove_polygon: polygon ", i, " out of range (", polygons_.size(), " polygons)");
+  const PolygonShape gone = polygons_[i];
+  polygon_vertices_.erase(polygon_vertices_.begin() + gone.first, polygon_vertices_.begin() + gone.first + gone.count);
+  polygons_.erase(polygons_.begin() + i);
+  for (PolygonShape& p : polygons_) p.first -= p.first > gone.first ? gone.count : 0;
+  changed(Change::removed, Object::polygon, i, true, false);
+}
+
+void Scene::remove_plane(uint32_t i) {
+  RP_CHECK(i < planes_.size(), "remove_plane: plane ", i, " out of range (", planes_.size(), " planes)");
+  planes_.erase(planes_.begin() + i);
+  changed(Change::removed, Object::plane, i, false, false);
 }
 
 PrimLocation Scene::locate_triangle(uint32_t id) const {

@@ -198,12 +198,58 @@ class Scene {
   void add_light(const PointLight& l);
   /// Throws rp::Error for a direction that is not finite and non-zero.
   void add_light(const DirectionalLight& l);
+  /// Replaces point light i (as add_light checks it). Lights are not in any backend's
+  /// structure: no version changes.
+  void set_light(uint32_t i, const PointLight& l);
+  /// Replaces directional light i (as add_light checks it).
+  void set_light(uint32_t i, const DirectionalLight& l);
   void set_camera(const CameraDesc& c) { camera_ = c; }
   /// The axis that points up in the scene's world (0 x, 1 y, 2 z): where a camera that frames
   /// a scene without one stands and where default lights go (up_frame). Y unless a file or
   /// `--up-axis` says otherwise (a glTF is Y up by definition). Throws rp::Error outside 0..2.
   void set_up_axis(int axis);
   int up_axis() const { return up_axis_; }
+
+  /// Changes (docs/updates.md). Each checks its arguments as the add_* calls do and throws
+  /// rp::Error naming the object before changing anything. Every change of what a backend
+  /// traces raises version(); a backend built or updated at an older version refuses to trace
+  /// (rp::Error naming the change) until Backend::update() brings it up to date. Changing a
+  /// scene while any thread traces a backend over it, or updates one, is a data race.
+  ///
+  /// New positions for mesh i's vertices (as many as it has; same triangles). `normals`, when
+  /// not empty, replaces the vertex normals too (as many; a mesh without normals takes none);
+  /// empty keeps the stored ones. The boxes of the instances that place the mesh follow.
+  void set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::span<const Vec3f> normals = {});
+  /// A new object_to_world for instance i, checked as add_instance checks it.
+  void set_transform(uint32_t instance, const Affine3f& object_to_world);
+  /// Removes mesh i: later meshes' indices, and their triangles' prim_ids, move down (as do the
+  /// ids of every sphere, quadric, polygon and plane); instances keep placing the same meshes.
+  /// Throws rp::Error when an instance still places the mesh.
+  void remove_mesh(uint32_t mesh);
+  /// Removes instance i; later instances' ids move down by one.
+  void remove_instance(uint32_t instance);
+  /// Remove one analytic primitive or plane: later ones of every kind move down by one id.
+  void remove_sphere(uint32_t i);
+  void remove_quadric(uint32_t i);
+  void remove_polygon(uint32_t i);
+  void remove_plane(uint32_t i);
+
+  /// Raised by every change of the geometry (an add_*, set_vertices, set_transform, remove_*):
+  /// the scene a backend at this version traced. Starts at 0.
+  uint64_t version() const { return version_; }
+  /// The version at the last change of which primitives exist or of their numbering: any mesh,
+  /// sphere, quadric or polygon added or removed (planes are numbered last and traced beside
+  /// every structure, so a plane changes version() only).
+  uint64_t layout_version() const { return layout_version_; }
+  /// The version at the last instance added, removed or moved (set_transform).
+  uint64_t instances_version() const { return instances_version_; }
+  /// The version at which mesh i's vertices last changed (set_vertices), or it was added.
+  uint64_t mesh_version(size_t i) const { return mesh_version_[i]; }
+  /// Mesh i's identity: a number no other mesh of this scene has had or will have, kept
+  /// while other meshes come and go (a backend keeps the trees of meshes it already built).
+  uint64_t mesh_uid(size_t i) const { return mesh_uid_[i]; }
+  /// What the last change was, e.g. "mesh 3 has new vertices" ("" at version 0).
+  std::string last_change() const;
 
   const std::vector<Material>& materials() const { return materials_; }
   const std::vector<TriangleMesh>& meshes() const { return meshes_; }
@@ -276,12 +322,25 @@ class Scene {
   void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
   bool occluded_by_any_plane(const Ray& ray) const;
   uint32_t append_mesh(TriangleMesh mesh, bool instanced);
+  /// The instance placing `mesh` by `object_to_world`, checked (add_instance); `what` names it.
+  Instance placement(uint32_t mesh, const Affine3f& object_to_world, const std::string& what) const;
+  /// A change as last_change() tells it: what happened to which object.
+  enum class Change : uint8_t { none, added, removed, vertices, transform };
+  enum class Object : uint8_t { mesh, instance, sphere, quadric, polygon, plane };
+  /// Records a change: version() + 1; `layout`, `instances` raise those versions too.
+  void changed(Change change, Object object, uint32_t index, bool layout, bool instances);
 
   std::vector<Material> materials_;
   std::vector<TriangleMesh> meshes_;
   std::vector<uint32_t> mesh_base_;
   std::vector<uint8_t> instanced_;  ///< per mesh: placed only by instances
   std::vector<Box3f> mesh_bounds_;  ///< per mesh, in its own coordinates
+  std::vector<uint64_t> mesh_version_, mesh_uid_;  ///< per mesh (mesh_version, mesh_uid)
+  uint64_t next_uid_ = 0;
+  uint64_t version_ = 0, layout_version_ = 0, instances_version_ = 0;
+  Change last_change_ = Change::none;
+  Object last_object_ = Object::mesh;
+  uint32_t last_index_ = 0;
   std::vector<Instance> instances_;
   uint64_t instanced_triangle_count_ = 0;
   std::vector<Sphere> spheres_;
