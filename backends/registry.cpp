@@ -22,17 +22,20 @@ bool cpu_has_avx2_fma() {
 class SceneSharingBackend final : public Backend {
  public:
   SceneSharingBackend(std::shared_ptr<const Scene> scene, std::unique_ptr<Backend> backend)
-      : scene_(std::move(scene)), backend_(std::move(backend)) {}
+      : Backend(*scene), scene_(std::move(scene)), backend_(std::move(backend)) {}
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
-    backend_->intersect(rays, hits, coherence);
-  }
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const noexcept override {
-    backend_->occluded(rays, occluded, coherence);
-  }
   const BackendInfo& info() const noexcept override { return backend_->info(); }
 
  private:
+  // The inner backend is current whenever this one is: update() goes through here.
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
+    backend_->intersect(rays, hits, coherence);
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const noexcept override {
+    backend_->occluded(rays, occluded, coherence);
+  }
+  UpdateReport apply_changes(uint64_t) override { return backend_->update(); }
+
   std::shared_ptr<const Scene> scene_;
   std::unique_ptr<Backend> backend_;
 };

@@ -64,10 +64,11 @@ std::optional<MethodProblem> check_method(std::string_view name, std::string_vie
 ///
 /// Ownership: the backend keeps a reference to `scene` (the triangles some kernels read, the
 /// analytic primitives and planes every backend tests beside its structure): the caller owns
-/// the scene, must keep it alive and unchanged for as long as the backend lives, and destroys
-/// the backend first. A temporary scene would die at the end of the call, so passing one is a
-/// compile error (the deleted overload below); to hand the scene's lifetime to the backend,
-/// use the shared_ptr overload.
+/// the scene, must keep it alive for as long as the backend lives, and destroys the backend
+/// first. The scene may change meanwhile: Backend::update() then brings the backend up to
+/// date, and it refuses to trace until then (core/backend.h). A temporary scene would die at the end of the call, so
+/// passing one is a compile error (the deleted overload below); to hand the scene's lifetime to the backend, use the
+/// shared_ptr overload.
 std::unique_ptr<Backend> make_backend(std::string_view name, const Scene& scene, const BackendOptions& options = {});
 
 /// Refused at compile time: the backend would keep a reference to a scene that is destroyed
@@ -76,8 +77,8 @@ std::unique_ptr<Backend> make_backend(std::string_view name, const Scene&& scene
 
 /// Builds `name` over a scene the backend shares: the backend holds `scene` (which must not be
 /// null) until it is destroyed, so the scene outlives it whoever else lets go of it. The scene
-/// is const through this pointer; nobody may change it through another while the backend
-/// lives. Throws as the overload above, and rp::Error for a null scene.
+/// is const through this pointer; whoever changes it through another calls update() before
+/// tracing again. Throws as the overload above, and rp::Error for a null scene.
 std::unique_ptr<Backend> make_backend(std::string_view name, std::shared_ptr<const Scene> scene,
                                       const BackendOptions& options = {});
 

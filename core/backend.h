@@ -1,10 +1,17 @@
 #pragma once
 /// The backend seam: one abstract class, queried per batch of rays, never per ray.
 ///
-/// A backend is built from a Scene by its constructor (see backends/registry.h) and is then
-/// immutable and safe to query from many threads at once. Rays are const input, hits are
-/// separate output; directions are never normalized. Backends return t/u/v/prim_id only;
-/// Scene::surface() derives positions and normals.
+/// A backend is built from a Scene by its constructor (see backends/registry.h) for the
+/// scene's version at that moment (Scene::version). It is then safe to query from many threads
+/// at once. When the scene changes (Scene::set_vertices, set_transform, add_*, remove_*),
+/// update() brings the backend up to date with the least work (docs/updates.md); until then
+/// intersect and occluded throw rp::Error naming the change rather than answer for the old
+/// scene. Rays are const input, hits are separate output; directions are never normalized.
+/// Backends return t/u/v/prim_id only; Scene::surface() derives positions and normals.
+///
+/// Threads: tracing is const and may run on any number of threads at once; update() and
+/// every change of the scene must not overlap any trace of the backend (nor each other):
+/// change the scene, update, then trace, as with Embree's rtcCommitScene.
 ///
 /// Valid rays: rp::valid_ray (core/ray.h), the one rule every backend, the reference and the
 /// renderer share. Any other ray is reported as a miss (and as not occluded) by every backend.
@@ -17,6 +24,7 @@
 #include <vector>
 
 #include "core/ray.h"
+#include "core/scene.h"
 
 namespace rp {
 
@@ -39,29 +47,81 @@ struct BackendInfo {
   std::vector<std::pair<std::string, double>> stats;  ///< backend-specific figures (nodes, depth, ...)
 };
 
+/// What one Backend::update() did.
+struct UpdateReport {
+  double seconds = 0;     ///< wall time of the update
+  uint32_t refits = 0;    ///< trees refitted for moved vertices (boxes recomputed, topology kept)
+  uint32_t rebuilds = 0;  ///< trees built anew: added geometry, a changed layout, a refit past refit_limit
+  bool top = false;       ///< the instance level rebuilt (instances moved, added or removed)
+};
+
 /// Construction options; each backend documents the variants and coherent methods it accepts.
 struct BackendOptions {
   std::string variant = "default";
   std::string device_config;    ///< backend-specific configuration string (embree: rtcNewDevice config)
   std::string coherent_method;  ///< how coherent spans are traced; empty: the backend's default
   std::string incoherent_method;  ///< how incoherent batches are traced; empty: the backend's default
+  /// simd: update() rebuilds a tree whose SAH cost after a refit exceeds refit_limit times its
+  /// cost when it was built (docs/updates.md has the figures behind the default); 1 rebuilds
+  /// on any loss, +inf always refits. Embree decides for itself (its "dynamic" variant refits).
+  double refit_limit = 1.5;
 };
 
 class Backend {
  public:
   virtual ~Backend() = default;
+  Backend(const Backend&) = delete;
+  Backend& operator=(const Backend&) = delete;
 
   /// Closest hit of each ray: hits[i] for rays[i] (hits.size() == rays.size()); a miss is
   /// Hit{} (prim_id == kInvalidId). A hit counts only for tnear <= t <= tfar.
   /// `coherence` picks the coherent method (packets of consecutive rays) or the incoherent one
-  /// (single rays, or a ray stream that the backend may reorder internally).
-  virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept = 0;
+  /// (single rays, or a ray stream that the backend may reorder internally). Throws rp::Error
+  /// when the scene changed since the last update() (stale()).
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const {
+    if (!current()) throw_stale();
+    trace_closest(rays, hits, coherence);
+  }
 
   /// Any hit: occluded[i] = 1 when rays[i] hits anything within [tnear, tfar], else 0.
-  virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded,
-                        Coherence coherence) const noexcept = 0;
+  /// Throws as intersect.
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const {
+    if (!current()) throw_stale();
+    trace_any(rays, occluded, coherence);
+  }
+
+  /// Brings the backend up to date with its scene's changes since it was built or last
+  /// updated (Embree's rtcCommitScene): moved vertices refit their trees, moved instances
+  /// rebuild the instance level, added or removed geometry rebuilds what it touches. Nothing
+  /// when the scene has not changed. When it throws (an Embree error, no memory), the backend
+  /// stays stale and refuses to trace.
+  UpdateReport update();
+  /// update() under Embree's name.
+  UpdateReport commit() { return update(); }
+
+  /// True when the backend is up to date with its scene (no change since the last update).
+  bool current() const noexcept { return scene_->version() == version_; }
+  /// The Scene::version() the backend traces.
+  uint64_t version() const noexcept { return version_; }
 
   virtual const BackendInfo& info() const noexcept = 0;
+
+ protected:
+  explicit Backend(const Scene& scene) : scene_(&scene), version_(scene.version()) {}
+  const Scene& scene() const noexcept { return *scene_; }
+
+  /// intersect and occluded of an up-to-date backend.
+  virtual void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept = 0;
+  virtual void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                         Coherence coherence) const noexcept = 0;
+  /// Brings the structures from version `since` to the scene's current one (update()).
+  virtual UpdateReport apply_changes(uint64_t since) = 0;
+
+ private:
+  [[noreturn]] void throw_stale() const;
+
+  const Scene* scene_;
+  uint64_t version_;
 };
 
 /// Rays a parallel batch hands each task: whole 8-ray packets, and enough work per task to

@@ -20,22 +20,47 @@ using namespace detail;
 class EmbreeBackend final : public Backend {
  public:
   EmbreeBackend(const Scene& scene, const BackendOptions& options)
-      : scene_(scene),
+      : Backend(scene),
+        scene_(scene),
         user_{&scene},
         method_(parse_method(options.coherent_method)),
         incoherent_stream_(parse_incoherent(options.incoherent_method)) {
     const auto start = std::chrono::steady_clock::now();
     info_.name = "embree";
     info_.variant = options.variant;
-    RTCSceneFlags flags = RTC_SCENE_FLAG_NONE;
-    RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
-    if (options.variant == "robust") flags = RTC_SCENE_FLAG_ROBUST;
-    else if (options.variant == "compact") flags = RTC_SCENE_FLAG_COMPACT;
-    else if (options.variant == "high") quality = RTC_BUILD_QUALITY_HIGH;
-    else if (options.variant != "default")
-      throw Error(cat("embree: unknown variant '", options.variant, "' (default, robust, compact, high)"));
-
+    if (options.variant == "robust")
+      flags_ = RTC_SCENE_FLAG_ROBUST;
+    else if (options.variant == "compact")
+      flags_ = RTC_SCENE_FLAG_COMPACT;
+    else if (options.variant == "high")
+      quality_ = RTC_BUILD_QUALITY_HIGH;
+    else if (options.variant == "dynamic") {
+      flags_ = RTC_SCENE_FLAG_DYNAMIC;
+      quality_ = RTC_BUILD_QUALITY_LOW;
+      geometry_quality_ = RTC_BUILD_QUALITY_REFIT;
+    } else if (options.variant != "default")
+      throw Error(cat("embree: unknown variant '", options.variant, "' (default, robust, compact, high, dynamic)"));
     device_ = &device_for(options.device_config);
+    build();
+    info_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  ~EmbreeBackend() override { release(); }
+
+  const BackendInfo& info() const noexcept override { return info_; }
+
+ private:
+  /// Where mesh m's triangle geometry is: the top scene's geometry `id`, or its child scene's
+  /// (an instanced mesh); no scene for a mesh without one (no triangles, or not placed).
+  struct MeshGeometry {
+    RTCScene scene = nullptr;
+    unsigned id = RTC_INVALID_GEOMETRY_ID;
+  };
+
+  /// Builds the Embree scenes over the scene as it is, releasing any built before.
+  void build() {
+    release();
+    const Scene& scene = scene_;
     RTCDevice dev = device_->handle;
     // Embree's memory monitor is per device: serialise builds so the delta is this scene's.
     static std::mutex build_mutex;
@@ -45,25 +70,26 @@ class EmbreeBackend final : public Backend {
 
     scene_handle_ = rtcNewScene(dev);
     check(dev, "embree: rtcNewScene");
-    rtcSetSceneFlags(scene_handle_, flags);
-    rtcSetSceneBuildQuality(scene_handle_, quality);
+    rtcSetSceneFlags(scene_handle_, flags_);
+    rtcSetSceneBuildQuality(scene_handle_, quality_);
 
+    triangle_data_.clear();
     triangle_data_.reserve(scene.meshes().size());  // never reallocated: Embree keeps pointers
+    mesh_geometry_.assign(scene.meshes().size(), {});
+    geom_base_.clear();
     // The instanced meshes first, each a child scene of its own, built once (the mesh level).
-    std::vector<RTCScene> child(scene.meshes().size(), nullptr);
     for (const Instance& in : scene.instances()) {
-      if (child[in.mesh] || scene.meshes()[in.mesh].triangle_count() == 0) continue;
+      if (mesh_geometry_[in.mesh].scene || scene.meshes()[in.mesh].triangle_count() == 0) continue;
       RTCScene c = rtcNewScene(dev);
       check(dev, "embree: rtcNewScene");
       children_.push_back(c);
-      rtcSetSceneFlags(c, flags);
-      rtcSetSceneBuildQuality(c, quality);
-      RTCGeometry g = triangle_geometry(dev, quality, in.mesh, buffer_bytes);
+      rtcSetSceneFlags(c, flags_);
+      rtcSetSceneBuildQuality(c, quality_);
+      RTCGeometry g = triangle_geometry(dev, in.mesh, buffer_bytes);
       rtcCommitGeometry(g);
-      rtcAttachGeometry(c, g);
+      mesh_geometry_[in.mesh] = {c, rtcAttachGeometry(c, g)};
       rtcReleaseGeometry(g);
       check(dev, "embree: attach geometry");
-      child[in.mesh] = c;
     }
     for (RTCScene c : children_) rtcCommitScene(c);
     check(dev, "embree: rtcCommitScene (an instanced mesh)");
@@ -74,7 +100,8 @@ class EmbreeBackend final : public Backend {
 
     for (size_t m = 0; m < scene.meshes().size(); ++m) {
       if (scene.is_instanced(m) || scene.meshes()[m].triangle_count() == 0) continue;
-      attach(triangle_geometry(dev, quality, uint32_t(m), buffer_bytes), scene.mesh_base(m));
+      mesh_geometry_[m] = {scene_handle_,
+                           attach(triangle_geometry(dev, uint32_t(m), buffer_bytes), scene.mesh_base(m))};
     }
     add_user<SphereKind>(dev);
     add_user<QuadricKind>(dev);
@@ -83,11 +110,13 @@ class EmbreeBackend final : public Backend {
     first_instance_geom_ = uint32_t(geom_base_.size());
     for (TriangleData& d : triangle_data_)
       if (d.first_instance_geom != kNoInstance) d.first_instance_geom = first_instance_geom_;
+    instance_meshes_.clear();
     for (uint32_t i = 0; i < scene.instances().size(); ++i) {
       const Instance& in = scene.instances()[i];
-      if (!child[in.mesh]) continue;  // a mesh without triangles
+      instance_meshes_.push_back(scene.mesh_uid(in.mesh));
+      if (!mesh_geometry_[in.mesh].scene) continue;  // a mesh without triangles
       RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_INSTANCE);
-      rtcSetGeometryInstancedScene(g, child[in.mesh]);
+      rtcSetGeometryInstancedScene(g, mesh_geometry_[in.mesh].scene);
       rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, &in.object_to_world.m[0][0]);
       rtcCommitGeometry(g);
       rtcAttachGeometryByID(scene_handle_, g, first_instance_geom_ + i);
@@ -102,15 +131,69 @@ class EmbreeBackend final : public Backend {
     const int64_t top_buffers = int64_t(buffer_bytes - mesh_buffers);
     info_.levels.top = top_delta > top_buffers ? size_t(top_delta - top_buffers) : 0;
     info_.bytes = info_.levels.top + info_.levels.meshes;
-    info_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
-  ~EmbreeBackend() override {
+  void release() {
     if (scene_handle_) rtcReleaseScene(scene_handle_);
+    scene_handle_ = nullptr;
     for (RTCScene c : children_) rtcReleaseScene(c);
+    children_.clear();
   }
 
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
+  /// Moved vertices: their meshes' vertex buffers rewritten and committed (Embree refits the
+  /// "dynamic" variant's trees and rebuilds the others'); moved instances: their transforms.
+  /// Anything added or removed: every scene built again.
+  UpdateReport apply_changes(uint64_t since) override {
+    const Scene& s = scene_;
+    UpdateReport r;
+    std::vector<uint64_t> uids;
+    for (const Instance& in : s.instances()) uids.push_back(s.mesh_uid(in.mesh));
+    if (s.layout_version() > since || uids != instance_meshes_) {
+      build();
+      r.rebuilds = 1;
+      r.top = !s.instances().empty();
+      return r;
+    }
+    RTCDevice dev = device_->handle;
+    std::vector<RTCScene> children;
+    bool top = false;
+    for (uint32_t m = 0; m < s.meshes().size(); ++m) {
+      const MeshGeometry& mg = mesh_geometry_[m];
+      if (s.mesh_version(m) <= since || !mg.scene) continue;
+      RTCGeometry g = rtcGetGeometry(mg.scene, mg.id);
+      const std::vector<Vec3f>& p = s.meshes()[m].positions;
+      auto* v = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
+      check(dev, "embree: vertex buffer");
+      std::copy_n(&p[0].x, 3 * p.size(), v);
+      rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+      rtcCommitGeometry(g);
+      check(dev, "embree: vertex update");
+      if (mg.scene == scene_handle_)
+        top = true;
+      else
+        children.push_back(mg.scene);
+      ++(geometry_quality_ == RTC_BUILD_QUALITY_REFIT ? r.refits : r.rebuilds);
+    }
+    for (RTCScene c : children) rtcCommitScene(c);
+    check(dev, "embree: rtcCommitScene (an instanced mesh)");
+    if (s.instances_version() > since) {
+      for (uint32_t i = 0; i < s.instances().size(); ++i) {
+        if (!mesh_geometry_[s.instances()[i].mesh].scene) continue;
+        RTCGeometry g = rtcGetGeometry(scene_handle_, first_instance_geom_ + i);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, &s.instances()[i].object_to_world.m[0][0]);
+        rtcCommitGeometry(g);
+      }
+      check(dev, "embree: instance transforms");
+      top = r.top = true;
+    }
+    if (top || !children.empty()) {
+      rtcCommitScene(scene_handle_);
+      check(dev, "embree: rtcCommitScene");
+    }
+    return r;
+  }
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
     QueryContext q = context(rays, coherence);
     if (coherence == Coherence::incoherent && incoherent_stream_) {
@@ -131,7 +214,7 @@ class EmbreeBackend final : public Backend {
     }
   }
 
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> out, Coherence coherence) const noexcept override {
     simd::FlushDenormals ftz;
     // Embree 3.13.5's coherent any-hit traversal (rtcOccluded16, and rtcOccluded1M, which
     // uses it) never returns on some rays of a scene with instances (reproduced with Embree
@@ -162,9 +245,6 @@ class EmbreeBackend final : public Backend {
     }
   }
 
-  const BackendInfo& info() const noexcept override { return info_; }
-
- private:
   static constexpr Ray kDummy{{0.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 0.0f};
   static constexpr Ray kInactive{{0.0f, 0.0f, 0.0f}, 1.0f, {1.0f, 0.0f, 0.0f}, 0.0f};  ///< tnear > tfar
 
@@ -376,10 +456,10 @@ class EmbreeBackend final : public Backend {
   /// A triangle geometry over mesh m (to be committed and attached), its buffers' bytes added
   /// to `buffer_bytes`. An instanced mesh's TriangleData gets its first_instance_geom once the
   /// world's geometries are attached (the constructor).
-  RTCGeometry triangle_geometry(RTCDevice dev, RTCBuildQuality quality, uint32_t m, size_t& buffer_bytes) {
+  RTCGeometry triangle_geometry(RTCDevice dev, uint32_t m, size_t& buffer_bytes) {
     const TriangleMesh& mesh = scene_.meshes()[m];
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(g, quality);
+    rtcSetGeometryBuildQuality(g, geometry_quality_);
     const bool instanced = scene_.is_instanced(m);
     triangle_data_.push_back({&scene_, scene_.mesh_base(m), instanced ? 0u : kNoInstance});
     rtcSetGeometryUserData(g, &triangle_data_.back());
@@ -396,13 +476,15 @@ class EmbreeBackend final : public Backend {
     return g;
   }
 
-  void attach(RTCGeometry g, uint32_t prim_base) {
+  /// Commits `g`, attaches it to the top scene and returns its id there.
+  unsigned attach(RTCGeometry g, uint32_t prim_base) {
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene_handle_, g);
     rtcReleaseGeometry(g);
     check(device_->handle, "embree: attach geometry");
     if (geom_base_.size() <= id) geom_base_.resize(id + 1, kInvalidId);
     geom_base_[id] = prim_base;
+    return id;
   }
 
   template <typename Kind>
@@ -428,6 +510,11 @@ class EmbreeBackend final : public Backend {
   RTCScene scene_handle_ = nullptr;
   std::vector<uint32_t> geom_base_;
   std::vector<RTCScene> children_;   ///< an instanced mesh's child scene each
+  std::vector<MeshGeometry> mesh_geometry_;  ///< per mesh of the scene
+  std::vector<uint64_t> instance_meshes_;    ///< the mesh_uid each instance placed at the build
+  RTCSceneFlags flags_ = RTC_SCENE_FLAG_NONE;
+  RTCBuildQuality quality_ = RTC_BUILD_QUALITY_MEDIUM;           ///< the scenes'
+  RTCBuildQuality geometry_quality_ = RTC_BUILD_QUALITY_MEDIUM;  ///< the triangle geometries'
   uint32_t first_instance_geom_ = 0;  ///< instance i is geometry first_instance_geom_ + i of the top scene
   bool coherent_occlusion_ = true;    ///< occlusion queries may carry the coherent flag (see occluded)
   Method method_;
@@ -437,7 +524,7 @@ class EmbreeBackend final : public Backend {
 
 }  // namespace
 
-std::vector<std::string> variants() { return {"default", "robust", "compact", "high"}; }
+std::vector<std::string> variants() { return {"default", "robust", "compact", "high", "dynamic"}; }
 
 std::vector<std::string> coherent_methods() { return {"packet8", "packet16", "stream"}; }
 

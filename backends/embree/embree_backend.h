@@ -12,7 +12,10 @@ namespace rp::embree {
 
 /// Variants: "default" (Embree's fast intersectors, medium build quality), "robust"
 /// (RTC_SCENE_FLAG_ROBUST: watertight-leaning triangle tests, conservative traversal),
-/// "compact" (RTC_SCENE_FLAG_COMPACT: smaller BVH), "high" (RTC_BUILD_QUALITY_HIGH).
+/// "compact" (RTC_SCENE_FLAG_COMPACT: smaller BVH), "high" (RTC_BUILD_QUALITY_HIGH),
+/// "dynamic" (for scenes that move: RTC_SCENE_FLAG_DYNAMIC, RTC_BUILD_QUALITY_LOW scenes, whose
+/// two-level structure lets each geometry keep its own tree, and RTC_BUILD_QUALITY_REFIT
+/// geometries, whose trees Backend::update() refits when their vertices move).
 std::vector<std::string> variants();
 
 /// Ways to trace a coherent span (BackendOptions::coherent_method): "packet8" (the default:
@@ -43,7 +46,11 @@ DeviceFacts device_facts();
 /// RTC_GEOMETRY_TYPE_INSTANCE geometry over it with the instance's object_to_world (Embree
 /// inverts it itself, in float, to the bits of Instance::world_to_object: rp::float_inverse)
 /// whose instID[0] names the instance; unbounded planes tested
-/// beside the Embree scene. Throws rp::Error on an Embree error or an unknown variant.
+/// beside the Embree scene. Backend::update(): moved vertices are copied into their
+/// geometry's vertex buffer (rtcUpdateGeometryBuffer) and their scene committed again; moved
+/// instances get their transforms (rtcSetGeometryTransform) and the top scene is committed;
+/// anything added or removed builds every scene anew. Throws rp::Error on an Embree error or
+/// an unknown variant.
 std::unique_ptr<Backend> make_backend(const Scene& scene, const BackendOptions& options);
 
 }  // namespace rp::embree

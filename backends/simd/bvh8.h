@@ -141,6 +141,8 @@ struct BuildOptions {
 struct BuildStats {
   uint32_t nodes = 0, leaves = 0, depth = 0;  ///< depth: 8-wide levels, root = 1
   uint32_t prims = 0;                         ///< primitives in the tree (degenerate triangles excluded)
+  uint32_t zero_area = 0;                     ///< triangles left out of the tree for zero area
+  double built_sah_cost = 0;                  ///< sah_cost when the tree was built (refit changes sah_cost only)
   double sah_cost = 0;   ///< SAH cost of the 8-wide tree, the one its collapse minimises: sum over
                          ///< nodes of area / root area (traversal cost 1) + sum over leaves of
                          ///< area / root area * (0.5 per block test + 0.1 per primitive)
@@ -177,6 +179,26 @@ float mean_leaf_size(const Bvh8& bvh);
 /// Builds the tree of instanced mesh `mesh` alone, in its object space (its leaves hold the
 /// mesh's prim_ids): built once, traversed for every instance that places the mesh.
 Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options);
+
+/// What refit() did.
+enum class Refit : uint8_t {
+  done,     ///< the tree holds the new vertices and boxes
+  rebuild,  ///< the tree cannot or should not be refitted: build it anew (the tree is unusable)
+};
+
+/// Refits `bvh`, the tree that build() (`mesh` = kInvalidId) or build_mesh(scene, mesh, ...)
+/// made, to the scene's current vertices, whose triangles are the ones it was built over: each
+/// leaf's vertex block rewritten in place, each leaf's box recomputed from its vertices, then
+/// the nodes' boxes bottom-up; the topology is kept. In parallel; the result does not depend
+/// on the thread count. Returns Refit::rebuild when a refit would be wrong or poor: a triangle
+/// that had zero area at the build (and so is in no leaf) has area now; two corners that shared
+/// a vertex slot of a leaf (equal bits) now differ; or the SAH cost has grown past `limit`
+/// times built_sah_cost.
+Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit);
+
+/// Renumbers the primitives of an instanced mesh's tree (build_mesh) whose first prim_id moved
+/// from `from` to `to` (meshes before it removed or added): its leaves' ids shifted, nothing else.
+void renumber(Bvh8& bvh, uint32_t from, uint32_t to);
 
 /// The top level of a scene with instances: an 8-wide tree (Bvh8Node) over the instances'
 /// world boxes, by binned SAH, each instance a leaf of its own whose reference is ~instance

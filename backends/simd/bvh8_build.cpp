@@ -16,10 +16,7 @@ namespace rp::bvh8 {
 
 using namespace build_detail;
 
-namespace {
-
-/// SAH cost of the 8-wide tree (see BuildStats::sah_cost).
-double sah_cost(const Bvh8& t) {
+double build_detail::sah_cost(const Bvh8& t) {
   const double root = t.bounds.area();
   if (t.empty() || !(root > 0)) return 0;
   double cost = 1.0;  // the root
@@ -34,6 +31,8 @@ double sah_cost(const Bvh8& t) {
     }
   return cost;
 }
+
+namespace {
 
 /// The tree over `refs` (the primitives of `what`, ids in the scene's numbering), timed from
 /// `start`.
@@ -54,7 +53,7 @@ Bvh8 build_refs(const Scene& scene, RefArray refs, const BuildOptions& options, 
   out.first_analytic = first_analytic;
   out.has_analytic = what.mesh == Selection::kWorld && scene.plane_base() > scene.sphere_base();
   out.stats.nodes = uint32_t(out.nodes.size());
-  out.stats.sah_cost = sah_cost(out);
+  out.stats.built_sah_cost = out.stats.sah_cost = sah_cost(out);
   out.stats.bytes = out.nodes.size() * sizeof(Bvh8Node) + out.leaf_data.size() * sizeof(float);
   out.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -70,19 +69,21 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
   // triangles and the instanced meshes' (which are not in the world), marked kInvalidId,
   // dropped in order.
   RefArray refs(scene.plane_base());  // triangles, then spheres, quadrics and polygons
-  size_t dropped = 0;
+  size_t instanced = 0, zero_area = 0;
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
     if (scene.is_instanced(m)) {
       const uint32_t base = scene.mesh_base(m), n = scene.meshes()[m].triangle_count();
       for (uint32_t t = 0; t < n; ++t) refs[base + t].prim_id = kInvalidId;
-      dropped += n;
+      instanced += n;
     } else {
-      dropped += triangle_refs(scene, m, refs, scene.mesh_base(m));
+      zero_area += triangle_refs(scene, m, refs, scene.mesh_base(m));
     }
   }
   for (uint32_t id = scene.sphere_base(); id < scene.plane_base(); ++id) refs[id] = PrimRef::make(scene.prim_bounds(id), id);
-  if (dropped > 0) drop_invalid(refs);
-  return build_refs(scene, std::move(refs), options, Selection{}, start);
+  if (instanced + zero_area > 0) drop_invalid(refs);
+  Bvh8 out = build_refs(scene, std::move(refs), options, Selection{}, start);
+  out.stats.zero_area = uint32_t(zero_area);
+  return out;
 }
 
 Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options) {
@@ -91,8 +92,11 @@ Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options) 
   RP_CHECK(mesh < scene.meshes().size(), "bvh8: mesh ", mesh, " out of range");
   const auto start = std::chrono::steady_clock::now();
   RefArray refs(scene.meshes()[mesh].triangle_count());
-  if (triangle_refs(scene, mesh, refs, 0) > 0) drop_invalid(refs);
-  return build_refs(scene, std::move(refs), options, Selection{mesh}, start);
+  const size_t zero_area = triangle_refs(scene, mesh, refs, 0);
+  if (zero_area > 0) drop_invalid(refs);
+  Bvh8 out = build_refs(scene, std::move(refs), options, Selection{mesh}, start);
+  out.stats.zero_area = uint32_t(zero_area);
+  return out;
 }
 
 float mean_leaf_size(const Bvh8& bvh) {

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 
+#include "backends/simd/bvh8.h"
+
 namespace rp::bvh8::build_detail {
 
 constexpr float kTraversalCost = 1.0f;      ///< SAH cost of visiting a node
@@ -16,5 +18,8 @@ constexpr float kPrimCost = 0.1f;           ///< ...plus this per primitive in i
 /// docs/notes/2026-11-29-figures-from-code-comments.md).
 constexpr uint32_t kAlwaysLeaf = uint32_t(kTraversalCost / kIntersectionCost);
 static_assert(kIntersectionCost * float(kAlwaysLeaf) <= kTraversalCost);
+
+/// SAH cost of the 8-wide tree `t` (BuildStats::sah_cost).
+double sah_cost(const Bvh8& t);
 
 }  // namespace rp::bvh8::build_detail

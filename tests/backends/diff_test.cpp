@@ -46,8 +46,11 @@ TEST(Diff, EveryBackendAgreesWithItself) {
 /// A test double: a real backend whose answers are broken on purpose, ray by ray.
 class WrongBackend final : public Backend {
  public:
-  explicit WrongBackend(std::unique_ptr<Backend> real) : real_(std::move(real)) {}
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence c) const noexcept override {
+  WrongBackend(const Scene& scene, std::unique_ptr<Backend> real) : Backend(scene), real_(std::move(real)) {}
+  const BackendInfo& info() const noexcept override { return real_->info(); }
+
+ private:
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence c) const noexcept override {
     real_->intersect(rays, hits, c);
     for (size_t i = 0; i < rays.size(); ++i) {
       if (!hits[i].hit()) continue;
@@ -59,12 +62,11 @@ class WrongBackend final : public Backend {
       }
     }
   }
-  void occluded(std::span<const Ray> rays, std::span<uint8_t> o, Coherence c) const noexcept override {
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> o, Coherence c) const noexcept override {
     real_->occluded(rays, o, c);
   }
-  const BackendInfo& info() const noexcept override { return real_->info(); }
+  UpdateReport apply_changes(uint64_t) override { return real_->update(); }
 
- private:
   std::unique_ptr<Backend> real_;
 };
 
@@ -78,7 +80,7 @@ TEST(Diff, ADeliberatelyWrongIntersectorIsCaughtAndClassified) {
   scene.set_camera(*def.camera());
   const RaySet set = primary_rays(scene, 64, 64);
   auto good = make_backend("embree", scene);
-  const WrongBackend bad(make_backend("embree", scene));
+  const WrongBackend bad(scene, make_backend("embree", scene));
   const std::vector<Hit> a = trace(*good, set.rays, Coherence::coherent);
   const std::vector<Hit> b = trace(bad, set.rays, Coherence::coherent);
   size_t leaks = 0, t_off = 0, wrong = 0;

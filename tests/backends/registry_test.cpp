@@ -83,9 +83,11 @@ TEST(Registry, ASharedSceneMustNotBeNull) {
 TEST(Registry, ASharedSceneIsCheckedAsAnyOther) {
   const auto scene = std::make_shared<const Scene>();
   EXPECT_EQ(test::error_of([&] { make_backend("nope", scene); }), "unknown backend 'nope' (available: embree, simd)");
-  EXPECT_EQ(test::error_of([&] { make_backend("embree", scene, {.variant = "fastest", .device_config = {},
-                                                                 .coherent_method = {}, .incoherent_method = {}}); }),
-            "'fastest' is not a variant of embree (default, robust, compact, high)");
+  EXPECT_EQ(test::error_of([&] {
+              make_backend("embree", scene,
+                           {.variant = "fastest", .device_config = {}, .coherent_method = {}, .incoherent_method = {}});
+            }),
+            "'fastest' is not a variant of embree (default, robust, compact, high, dynamic)");
 }
 
 }  // namespace

@@ -88,7 +88,8 @@ TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
 
 TEST_F(Cli, ABadBackendOrVariantNamesTheFlagGivenInEverySubcommand) {
   const std::pair<std::string, std::string> bad[] = {
-      {"render --variant fastest", "--variant: 'fastest' is not a variant of embree (default, robust, compact, high)"},
+      {"render --variant fastest",
+       "--variant: 'fastest' is not a variant of embree (default, robust, compact, high, dynamic)"},
       {"trace --rays r.csv -o h.csv --backend nope", "--backend: unknown backend 'nope' (available: embree, simd)"},
       {"diff -b nope", "-b: unknown backend 'nope' (available: embree, simd)"},
       {"diff --variant-a watertight", "--variant-a: 'watertight' is not a variant of embree"},
