@@ -2,9 +2,15 @@
 // scenes, backends by name, closest and any hits over numpy arrays, the renderer, the diff and
 // ray and hit files. The numpy side of tracing is ray_arrays.{h,cpp}.
 //
-// Ownership: a Python Scene holds its rp::Scene through a shared_ptr<const Scene> and never
-// changes it; a Backend is built by make_backend's shared_ptr overload, so it keeps its scene
-// alive on its own, whatever Python does with the Scene object.
+// Ownership: a Python Scene holds its rp::Scene through a shared_ptr; a Backend is built by
+// make_backend's shared_ptr overload, so it keeps its scene alive on its own, whatever Python
+// does with the Scene object.
+//
+// Threads: the GIL is released while tracing, rendering, diffing and updating. Each scene has
+// a reader-writer lock: every call that reads the scene or traces a backend over it holds it
+// shared; set_vertices, set_transform and Backend.update hold it alone. So Python threads may
+// change a scene while others trace it: the tracing call finishes on the old state, and then
+// raises raypack.Error until update(). A thread holding the lock alone never waits for the GIL.
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -15,7 +21,9 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <shared_mutex>
 #include <string>
 #include <variant>
 
@@ -38,12 +46,16 @@ namespace {
 
 using namespace pybind11::literals;
 
-/// raypack.Scene: an immutable scene and the name it is known by in messages and diff
-/// summaries (the path it was loaded from, "default", or "arrays").
+/// raypack.Scene: a scene, the name it is known by in messages and diff summaries (the path it
+/// was loaded from, "default", or "arrays"), and its lock (the top of this file).
 struct SceneHandle {
-  std::shared_ptr<const Scene> scene;
+  std::shared_ptr<Scene> scene;
   std::string name;
+  std::shared_ptr<std::shared_mutex> guard = std::make_shared<std::shared_mutex>();
 };
+
+/// The scene's lock held shared: for calls that read the scene.
+std::shared_lock<std::shared_mutex> reading(const SceneHandle& s) { return std::shared_lock(*s.guard); }
 
 /// raypack.Backend: a backend and the scene it was built over (which the backend shares too).
 struct BackendHandle {
@@ -54,7 +66,7 @@ struct BackendHandle {
 SceneHandle load(const std::filesystem::path& path) {
   const std::string name = path.string();
   py::gil_scoped_release release;
-  return {std::make_shared<const Scene>(load_scene(name)), name};
+  return {std::make_shared<Scene>(load_scene(name)), name};
 }
 
 /// A C-order (rows, columns) array of `what` as T (converted when it is another dtype: the scene
@@ -111,15 +123,68 @@ SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, c
     for (py::ssize_t i = 0; i < p.shape(0); ++i)
       scene.add_plane(Plane{.normal = {p(i, 0), p(i, 1), p(i, 2)}, .d = p(i, 3), .material = 0});
   }
-  return {std::make_shared<const Scene>(std::move(scene)), "arrays"};
+  return {std::make_shared<Scene>(std::move(scene)), "arrays"};
+}
+
+/// Scene.vertices(mesh): a copy of mesh `mesh`'s positions, (V, 3) float32.
+py::array_t<float> vertices(const SceneHandle& s, uint32_t mesh) {
+  const auto lock = reading(s);
+  RP_CHECK(mesh < s.scene->meshes().size(), "mesh ", mesh, " out of range (", s.scene->meshes().size(), " meshes)");
+  const std::vector<Vec3f>& p = s.scene->meshes()[mesh].positions;
+  py::array_t<float> out({py::ssize_t(p.size()), py::ssize_t(3)});
+  std::copy_n(&p[0].x, 3 * p.size(), out.mutable_data());
+  return out;
+}
+
+/// Scene.set_vertices(mesh, vertices): new positions for mesh `mesh` (Scene::set_vertices).
+void set_vertices(const SceneHandle& s, uint32_t mesh, const py::handle& vertices) {
+  const auto array = table<float>("vertices", vertices, 3, "(V, 3)");
+  const std::span<const Vec3f> p(reinterpret_cast<const Vec3f*>(array.data()), size_t(array.shape(0)));
+  py::gil_scoped_release release;
+  const std::unique_lock writing(*s.guard);
+  s.scene->set_vertices(mesh, p);
+}
+
+/// Scene.transform(instance): instance `instance`'s object-to-world map as a (4, 4) float32 matrix.
+py::array_t<float> transform(const SceneHandle& s, uint32_t instance) {
+  const auto lock = reading(s);
+  RP_CHECK(instance < s.scene->instances().size(), "instance ", instance, " out of range (",
+           s.scene->instances().size(), " instances)");
+  const Affine3f& m = s.scene->instances()[instance].object_to_world;
+  py::array_t<float> out({py::ssize_t(4), py::ssize_t(4)});
+  float* o = out.mutable_data();
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) o[4 * i + j] = i < 3 ? m.m[i][j] : float(j == 3);
+  return out;
+}
+
+/// Scene.set_transform(instance, matrix): a (4, 4) matrix whose last row is 0 0 0 1, or its
+/// top (3, 4) rows (Scene::set_transform).
+void set_transform(const SceneHandle& s, uint32_t instance, const py::handle& matrix) {
+  const auto a = numbers<float, py::array::c_style | py::array::forcecast>("matrix", matrix);
+  RP_CHECK(a.ndim() == 2 && (a.shape(0) == 3 || a.shape(0) == 4) && a.shape(1) == 4, "matrix: shape ", shape_text(a),
+           " is not (4, 4) or (3, 4)");
+  const float* m = a.data();
+  RP_CHECK(a.shape(0) == 3 || (m[12] == 0.0f && m[13] == 0.0f && m[14] == 0.0f && m[15] == 1.0f),
+           "matrix: its last row (", m[12], ", ", m[13], ", ", m[14], ", ", m[15], ") is not 0 0 0 1: not affine");
+  Affine3f t;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) t.m[i][j] = m[4 * i + j];
+  py::gil_scoped_release release;
+  const std::unique_lock writing(*s.guard);
+  s.scene->set_transform(instance, t);
 }
 
 BackendHandle build(const std::string& name, const SceneHandle& scene, const std::string& variant,
-                    const std::string& coherent_method, const std::string& incoherent_method) {
-  const BackendOptions options{.variant = variant, .device_config = {}, .coherent_method = coherent_method,
-                               .incoherent_method = incoherent_method};
+                    const std::string& coherent_method, const std::string& incoherent_method, double refit_limit) {
+  BackendOptions options;
+  options.variant = variant;
+  options.coherent_method = coherent_method;
+  options.incoherent_method = incoherent_method;
+  options.refit_limit = refit_limit;
   py::gil_scoped_release release;
-  return {scene, make_backend(name, scene.scene, options)};
+  const auto lock = reading(scene);
+  return {scene, make_backend(name, std::shared_ptr<const Scene>(scene.scene), options)};
 }
 
 /// What a call does with rays outside the valid-ray rule, which every backend reports as
@@ -147,7 +212,7 @@ py::dict intersect(const BackendHandle& b, const py::handle& origins, const py::
   const InvalidRays policy = parse_invalid(invalid);
   const RayArrays rays(origins, directions, tnear, tfar);
   size_t bad = 0;
-  const HitArrays hits = trace_closest(*b.backend, *b.scene.scene, rays,
+  const HitArrays hits = trace_closest(*b.backend, *b.scene.scene, *b.scene.guard, rays,
                                        coherent ? Coherence::coherent : Coherence::incoherent, normals, threads, bad);
   report_invalid("intersect", policy, bad, rays.size());
   return hits.to_dict();
@@ -159,8 +224,8 @@ py::array_t<bool> occluded(const BackendHandle& b, const py::handle& origins, co
   const InvalidRays policy = parse_invalid(invalid);
   const RayArrays rays(origins, directions, tnear, tfar);
   size_t bad = 0;
-  py::array_t<bool> out = trace_any(*b.backend, rays, coherent ? Coherence::coherent : Coherence::incoherent,
-                                    threads, bad);
+  py::array_t<bool> out =
+      trace_any(*b.backend, *b.scene.guard, rays, coherent ? Coherence::coherent : Coherence::incoherent, threads, bad);
   report_invalid("occluded", policy, bad, rays.size());
   return out;
 }
@@ -210,6 +275,17 @@ void save_rays(const std::filesystem::path& path, const py::handle& origins, con
 /// must have been built over `scene`.
 using BackendArg = std::variant<std::string, const BackendHandle*>;
 
+/// Backend.update(): brings the backend up to date with its scene (Backend::update), as a dict.
+py::dict update(BackendHandle& b) {
+  UpdateReport r;
+  {
+    py::gil_scoped_release release;
+    const std::unique_lock writing(*b.scene.guard);
+    r = b.backend->update();
+  }
+  return py::dict("seconds"_a = r.seconds, "refits"_a = r.refits, "rebuilds"_a = r.rebuilds, "top"_a = r.top);
+}
+
 /// The backend of `arg` over `scene`: the one given, or one built now (kept in `built`).
 const Backend& backend_of(const BackendArg& arg, const std::string& variant, const SceneHandle& scene,
                           const char* what, std::optional<BackendHandle>& built) {
@@ -219,7 +295,7 @@ const Backend& backend_of(const BackendArg& arg, const std::string& variant, con
              (*given)->scene.name, ", not ", scene.name, ")");
     return *(*given)->backend;
   }
-  built = build(std::get<std::string>(arg), scene, variant, "", "");
+  built = build(std::get<std::string>(arg), scene, variant, "", "", BackendOptions{}.refit_limit);
   return *built->backend;
 }
 
@@ -245,7 +321,10 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
   check_image_size("resolution", width, height);
   RP_CHECK(spp >= 1 && spp <= kMaxSpp, "spp: ", spp, " is out of range (1..", kMaxSpp, ")");
   RP_CHECK(max_depth >= 0 && max_depth <= 64, "max_depth: ", max_depth, " is out of range (0..64)");
-  CameraDesc desc = scene.scene->camera().value_or(frame_bounds(scene.scene->bounds(), scene.scene->up_axis()));
+  CameraDesc desc = [&] {
+    const auto lock = reading(scene);
+    return scene.scene->camera().value_or(frame_bounds(scene.scene->bounds(), scene.scene->up_axis()));
+  }();
   const auto vec = [](const std::array<float, 3>& a) { return Vec3f(a[0], a[1], a[2]); };
   if (eye) desc.eye = vec(*eye);
   if (look_at) desc.look_at = vec(*look_at);
@@ -260,6 +339,7 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
     const ProgressFn stop_between_tiles = [&](double) {
       if (stop.load(std::memory_order_relaxed)) throw Stopped();
     };
+    const auto lock = reading(scene);
     with_threads(threads, [&] { image = render(*scene.scene, b, camera, settings, stop_between_tiles).image; });
   });
   return image_array(std::move(image));
@@ -299,6 +379,7 @@ py::object diff(const SceneHandle& scene, const py::handle& origins, const py::h
   std::string json;
   {
     py::gil_scoped_release release;
+    const auto lock = reading(scene);
     with_threads(threads, [&] {
       size_t invalid = 0;  // diffed as every side traces them: misses
       const std::vector<Ray> records = rays.records(invalid);
@@ -352,36 +433,88 @@ PYBIND11_MODULE(_raypack, m) {
   py::register_exception<Error>(m, "Error", PyExc_ValueError);
 
   py::class_<SceneHandle>(m, "Scene",
-                          "An immutable scene: triangle meshes, analytic primitives, materials, lights and a camera.\n"
-                          "Made by load_scene() or Scene.from_arrays(); it owns copies of its data.")
+                          "A scene: triangle meshes, instances, analytic primitives, materials, lights and a camera.\n"
+                          "Made by load_scene() or Scene.from_arrays(); it owns copies of its data. Its meshes'\n"
+                          "vertices and its instances' transforms may change (set_vertices, set_transform); a\n"
+                          "Backend over it then raises raypack.Error until its update().")
       .def_static("from_arrays", &from_arrays, "vertices"_a, "indices"_a, py::kw_only(), "spheres"_a = py::none(),
                   "planes"_a = py::none(),
                   "A scene of one triangle mesh: vertices (V, 3) floats, indices (T, 3) integers (vertex numbers);\n"
                   "optionally spheres (S, 4): centre and radius, and planes (P, 4): normal and d of n.P + d = 0.\n"
                   "prim_id numbers the triangles, then the spheres, then the planes. The data is copied.")
-      .def_property_readonly("name", [](const SceneHandle& s) { return s.name; },
-                             "The path it was loaded from, 'default', or 'arrays'")
-      .def_property_readonly("prim_count", [](const SceneHandle& s) { return s.scene->prim_count(); })
-      .def_property_readonly("triangle_count", [](const SceneHandle& s) { return s.scene->triangle_count(); })
+      .def_property_readonly(
+          "name", [](const SceneHandle& s) { return s.name; }, "The path it was loaded from, 'default', or 'arrays'")
+      .def_property_readonly("prim_count",
+                             [](const SceneHandle& s) {
+                               const auto lock = reading(s);
+                               return s.scene->prim_count();
+                             })
+      .def_property_readonly("triangle_count",
+                             [](const SceneHandle& s) {
+                               const auto lock = reading(s);
+                               return s.scene->triangle_count();
+                             })
+      .def_property_readonly("mesh_count",
+                             [](const SceneHandle& s) {
+                               const auto lock = reading(s);
+                               return s.scene->meshes().size();
+                             })
+      .def_property_readonly("instance_count",
+                             [](const SceneHandle& s) {
+                               const auto lock = reading(s);
+                               return s.scene->instances().size();
+                             })
+      .def_property_readonly(
+          "version",
+          [](const SceneHandle& s) {
+            const auto lock = reading(s);
+            return s.scene->version();
+          },
+          "Raised by every change of the geometry")
+      .def("vertices", &vertices, "mesh"_a, "A copy of mesh `mesh`'s vertex positions, (V, 3) float32")
+      .def("set_vertices", &set_vertices, "mesh"_a, "vertices"_a,
+           "New positions (V, 3) for mesh `mesh`'s vertices, as many as it has (its triangles stay).\n"
+           "Raises raypack.Error, changing nothing, for another count or a coordinate that is not finite\n"
+           "or outside the supported range. Backends over the scene need update() before tracing again.")
+      .def("transform", &transform, "instance"_a, "Instance `instance`'s object-to-world matrix, (4, 4) float32")
+      .def("set_transform", &set_transform, "instance"_a, "matrix"_a,
+           "A new object-to-world matrix, (4, 4) with last row 0 0 0 1 or (3, 4), for instance `instance`.\n"
+           "Raises raypack.Error, changing nothing, for a matrix that is not finite or not invertible.\n"
+           "Backends over the scene need update() before tracing again.")
       .def_property_readonly(
           "bounds",
           [](const SceneHandle& s) {
+            const auto lock = reading(s);
             const Box3f b = s.scene->bounds();
             return std::pair{std::array<float, 3>{b.lo.x, b.lo.y, b.lo.z}, std::array<float, 3>{b.hi.x, b.hi.y, b.hi.z}};
           },
           "(lo, hi) corners of the bounded primitives' box (planes left out)")
       .def("__repr__", [](const SceneHandle& s) {
+        const auto lock = reading(s);
         return cat("<raypack.Scene '", s.name, "': ", s.scene->prim_count(), " primitives, ", s.scene->triangle_count(),
                    " triangles>");
       });
 
   py::class_<BackendHandle>(m, "Backend",
-                            "A backend built over a scene, immutable and safe to call from many threads at once.\n"
-                            "It keeps its scene alive for as long as it lives.")
+                            "A backend built over a scene, safe to call from many threads at once.\n"
+                            "It keeps its scene alive for as long as it lives. When the scene changes, tracing\n"
+                            "raises raypack.Error until update() brings the backend up to date.")
       .def(py::init(&build), "name"_a, "scene"_a, "variant"_a = "default", py::kw_only(), "coherent_method"_a = "",
-           "incoherent_method"_a = "",
+           "incoherent_method"_a = "", "refit_limit"_a = BackendOptions{}.refit_limit,
            "Builds backend `name` (see backends()) over `scene`; raises raypack.Error for an unknown or\n"
-           "unavailable backend or variant, with the message of `raypack --backend`.")
+           "unavailable backend or variant, with the message of `raypack --backend`. refit_limit (simd):\n"
+           "update() rebuilds a tree whose SAH cost after a refit passes this multiple of its built cost.")
+      .def("update", &update,
+           "Brings the backend up to date with its scene's changes, with the least work: moved vertices\n"
+           "refit their trees, moved instances rebuild the instance level, added geometry is built.\n"
+           "Returns a dict: seconds, refits and rebuilds (trees), top (the instance level rebuilt).")
+      .def_property_readonly(
+          "current",
+          [](const BackendHandle& b) {
+            const auto lock = reading(b.scene);
+            return b.backend->current();
+          },
+          "True when no change of the scene awaits update()")
       .def("intersect", &intersect, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
            "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
            "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v, instance_id\n"
@@ -390,20 +523,22 @@ PYBIND11_MODULE(_raypack, m) {
            "origins, directions: (N, 3) or (3,); tnear, tfar: (N,) or scalars. float32 input is read in place.\n"
            "Rays outside the valid-ray rule are misses; invalid='warn' (RuntimeWarning), 'raise' or 'miss'.\n"
            "threads: 0 uses every core. The GIL is released while tracing.")
-      .def("occluded", &occluded, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
-           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
+      .def("occluded", &occluded, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf, "coherent"_a = false,
+           py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
            "Any hit within [tnear, tfar]: a bool array, True where the ray is occluded. Arguments as intersect.")
       .def_property_readonly("name", [](const BackendHandle& b) { return b.backend->info().name; })
       .def_property_readonly("variant", [](const BackendHandle& b) { return b.backend->info().variant; })
       .def_property_readonly("scene", [](const BackendHandle& b) { return b.scene; })
       .def_property_readonly("build_seconds", [](const BackendHandle& b) { return b.backend->info().build_seconds; })
-      .def_property_readonly("bytes", [](const BackendHandle& b) { return b.backend->info().bytes; },
-                             "Bytes of the acceleration structure")
-      .def_property_readonly("stats", [](const BackendHandle& b) {
-        py::dict d;
-        for (const auto& [k, v] : b.backend->info().stats) d[py::str(k)] = v;
-        return d;
-      })
+      .def_property_readonly(
+          "bytes", [](const BackendHandle& b) { return b.backend->info().bytes; },
+          "Bytes of the acceleration structure")
+      .def_property_readonly("stats",
+                             [](const BackendHandle& b) {
+                               py::dict d;
+                               for (const auto& [k, v] : b.backend->info().stats) d[py::str(k)] = v;
+                               return d;
+                             })
       .def("__repr__", [](const BackendHandle& b) {
         return cat("<raypack.Backend ", b.backend->info().name, "/", b.backend->info().variant, " over '",
                    b.scene.name, "'>");
@@ -429,14 +564,23 @@ PYBIND11_MODULE(_raypack, m) {
         "rays_label"_a = "numpy", "threads"_a = 0,
         "The same rays through sides a and b (backend names, Backends, or 'reference') and the double-\n"
         "precision reference: the summary `raypack diff --json` writes, as a dict.");
-  m.def("primary_rays", [](const SceneHandle& s, int w, int h) { return ray_dict(primary_rays(*s.scene, w, h).rays); },
-        "scene"_a, "width"_a, "height"_a,
-        "Pinhole rays through the pixel centres of the scene's camera in the renderer's order (16x16 tiles\n"
-        "of 4x2-pixel packets: trace them with coherent=True). A dict: origins, directions, tnear, tfar.");
-  m.def("random_rays",
-        [](const SceneHandle& s, size_t count, uint64_t seed) { return ray_dict(random_rays(*s.scene, count, seed).rays); },
-        "scene"_a, "count"_a, "seed"_a = 1,
-        "`count` seeded rays from the sphere around the scene into its bounds (incoherent), as primary_rays.");
+  m.def(
+      "primary_rays",
+      [](const SceneHandle& s, int w, int h) {
+        const auto lock = reading(s);
+        return ray_dict(primary_rays(*s.scene, w, h).rays);
+      },
+      "scene"_a, "width"_a, "height"_a,
+      "Pinhole rays through the pixel centres of the scene's camera in the renderer's order (16x16 tiles\n"
+      "of 4x2-pixel packets: trace them with coherent=True). A dict: origins, directions, tnear, tfar.");
+  m.def(
+      "random_rays",
+      [](const SceneHandle& s, size_t count, uint64_t seed) {
+        const auto lock = reading(s);
+        return ray_dict(random_rays(*s.scene, count, seed).rays);
+      },
+      "scene"_a, "count"_a, "seed"_a = 1,
+      "`count` seeded rays from the sphere around the scene into its bounds (incoherent), as primary_rays.");
   m.def("write_rays", &save_rays, "path"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
         "Writes a ray file (.csv, or binary: .bin, .rays) that `raypack trace --rays` reads.");
   m.def("read_rays", [](const std::filesystem::path& path) { return ray_dict(read_rays(path.string())); }, "path"_a,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <mutex>
 
 #include "base/error.h"
 #include "python/interrupt.h"
@@ -187,11 +188,12 @@ constexpr size_t kLongCallRays = size_t(1) << 18;
 
 }  // namespace
 
-HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArrays& rays, Coherence coherence,
-                        bool normals, int threads, size_t& invalid) {
+HitArrays trace_closest(const Backend& backend, const Scene& scene, std::shared_mutex& guard, const RayArrays& rays,
+                        Coherence coherence, bool normals, int threads, size_t& invalid) {
   HitArrays out(rays.size(), normals);
   std::atomic<size_t> bad = 0;
   interruptible(rays.size() >= kLongCallRays, [&](const std::atomic<bool>& stop) {
+    const std::shared_lock reading(guard);
     with_threads(threads, [&] {
       for_each_chunk(rays.size(), [&](size_t begin, size_t n) {
         if (stop.load(std::memory_order_relaxed)) return;
@@ -208,13 +210,14 @@ HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArr
   return out;
 }
 
-py::array_t<bool> trace_any(const Backend& backend, const RayArrays& rays, Coherence coherence, int threads,
-                            size_t& invalid) {
+py::array_t<bool> trace_any(const Backend& backend, std::shared_mutex& guard, const RayArrays& rays,
+                            Coherence coherence, int threads, size_t& invalid) {
   py::array_t<bool> out(py::ssize_t(rays.size()));
   // numpy's bool is one byte holding 0 or 1, what Backend::occluded writes.
   uint8_t* const occluded = reinterpret_cast<uint8_t*>(out.mutable_data());
   std::atomic<size_t> bad = 0;
   interruptible(rays.size() >= kLongCallRays, [&](const std::atomic<bool>& stop) {
+    const std::shared_lock reading(guard);
     with_threads(threads, [&] {
       for_each_chunk(rays.size(), [&](size_t begin, size_t n) {
         if (stop.load(std::memory_order_relaxed)) return;

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <shared_mutex>
 #include <span>
 #include <string>
 
@@ -120,13 +121,14 @@ void with_threads(int threads, const std::function<void()>& f);
 /// kParallelChunk rays over TBB's threads (rp::for_each_chunk, as rp::intersect_parallel cuts a
 /// batch: the same backend calls, so the same bits), the GIL released and, for a long call,
 /// stopped by Ctrl-C (python/interrupt.h); with `normals`, the
-/// geometric normals too. Returns the hits and sets `invalid` to the number of rays outside the
-/// valid-ray rule.
-HitArrays trace_closest(const Backend& backend, const Scene& scene, const RayArrays& rays, Coherence coherence,
-                        bool normals, int threads, size_t& invalid);
+/// geometric normals too, holding `guard` shared (the scene's: changes of the scene and
+/// backend updates hold it alone). Returns the hits and sets `invalid` to the number of rays
+/// outside the valid-ray rule.
+HitArrays trace_closest(const Backend& backend, const Scene& scene, std::shared_mutex& guard, const RayArrays& rays,
+                        Coherence coherence, bool normals, int threads, size_t& invalid);
 
 /// Any hit of every ray, as trace_closest: a bool array, true where the ray is occluded.
-py::array_t<bool> trace_any(const Backend& backend, const RayArrays& rays, Coherence coherence, int threads,
-                            size_t& invalid);
+py::array_t<bool> trace_any(const Backend& backend, std::shared_mutex& guard, const RayArrays& rays,
+                            Coherence coherence, int threads, size_t& invalid);
 
 }  // namespace rp::python
