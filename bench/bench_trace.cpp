@@ -1,4 +1,5 @@
-// BM_Trace/<method>/<scene>/<primary|shadow|diffuse> and BM_Build/<backend/variant>/<scene>:
+// BM_Trace/<method>/<scene>/<primary|shadow|diffuse>, BM_Build/<backend/variant>/<scene> and
+// BM_Update/<backend/variant>/<scene>/<vertices|instances> (update() after motion, see BM_Update):
 // every method of the available backends, named backend/variant:method as everywhere
 // (e.g. BM_Trace/simd/watertight:large/bunny/primary; see methods()), plus Embree's default
 // methods limited to AVX2 ("embree/default:packet8@avx2": equal SIMD width with the simd
@@ -28,6 +29,7 @@
 #include <memory>
 #include <thread>
 
+#include "analysis/motion.h"
 #include "analysis/raygen.h"
 #include "analysis/reference.h"
 #include "backends/registry.h"
@@ -253,6 +255,31 @@ void BM_Build(benchmark::State& state, const Method& m, const std::string& scene
   state.counters["prims"] = double(f.scene.prim_count());
 }
 
+/// BM_Update/<backend/variant>/<scene>/<vertices|instances>: Backend::update() after every mesh
+/// of the scene is deformed, or every instance moved, by 1% of its box's diagonal
+/// (analysis/motion.h; each iteration another frame of the motion from the scene at rest), with
+/// the trees' work as counters. Set against BM_Build of the same variant and scene.
+void BM_Update(benchmark::State& state, const Method& m, const std::string& scene_name, bool vertices) {
+  const SceneFixture& f = fixture(scene_name);
+  Scene moving = f.scene;
+  auto b = make_backend(m.trace.backend, moving, m.options());
+  UpdateReport last;
+  double phase = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    phase += 0.1;
+    if (vertices)
+      wobble_meshes(moving, f.scene, 0.01, phase);
+    else
+      jostle_instances(moving, f.scene, 0.01, phase);
+    state.ResumeTiming();
+    last = b->update();
+  }
+  state.counters["refits"] = double(last.refits);
+  state.counters["rebuilds"] = double(last.rebuilds);
+  state.counters["top"] = double(last.top);
+}
+
 /// BM_Load/<file>: load_scene on a model of ../shared/scenes, with its triangle count and the
 /// file's read rate as counters.
 void BM_Load(benchmark::State& state, const std::string& path) {
@@ -328,8 +355,14 @@ int main(int argc, char** argv) {
             ("BM_Pair/" + a->name() + "-vs-" + b->name() + "/" + scene + "/" + kind).c_str(), BM_Pair, *a, *b, scene,
             std::string(kind)));
     }
-    for (const Method& m : builds())
+    for (const Method& m : builds()) {
       timed(benchmark::RegisterBenchmark(("BM_Build/" + m.name() + "/" + scene).c_str(), BM_Build, m, scene));
+      timed(benchmark::RegisterBenchmark(("BM_Update/" + m.name() + "/" + scene + "/vertices").c_str(), BM_Update, m,
+                                         scene, true));
+      if (scene.starts_with("bunnies-instanced"))
+        timed(benchmark::RegisterBenchmark(("BM_Update/" + m.name() + "/" + scene + "/instances").c_str(), BM_Update, m,
+                                           scene, false));
+    }
   }
   // The kernel benchmarks run AVX2+FMA code: only where the simd backend is offered.
   for (const BackendEntry& e : list_backends())

@@ -24,6 +24,8 @@
 #include "base/error.h"
 #include "base/text.h"
 #include "cli/args.h"
+#include "cli/bench_timing.h"
+#include "cli/bench_updates.h"
 #include "cli/build_info.h"
 #include "cli/pareto.h"
 #include "cli/plot.h"
@@ -110,45 +112,6 @@ Json provenance(size_t threads) {
                   {"hardware_threads", std::thread::hardware_concurrency()}, {"date", today()}};
   return j;
 }
-
-
-/// Timing runs until the spread of the last min_runs is below the target (or max_runs).
-struct Timing {
-  double median_mrays = 0, spread = 0;  ///< spread: (max - min) / median over the runs kept
-  int runs = 0;
-};
-
-template <typename Trace>
-Timing time_it(size_t rays, const BenchArgs& a, Trace&& trace) {
-  trace();  // warm-up, untimed
-  std::vector<double> secs;
-  Timing t;
-  while (int(secs.size()) < a.max_runs) {
-    const auto start = std::chrono::steady_clock::now();
-    trace();
-    secs.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    if (int(secs.size()) < a.min_runs) continue;
-    std::vector<double> last(secs.end() - a.min_runs, secs.end());
-    std::sort(last.begin(), last.end());
-    const double med = last[last.size() / 2];
-    if ((last.back() - last.front()) / med < a.target_spread) break;
-  }
-  std::vector<double> last(secs.end() - std::min<ptrdiff_t>(ptrdiff_t(secs.size()), a.min_runs), secs.end());
-  std::sort(last.begin(), last.end());
-  const double med = last[last.size() / 2];
-  t.median_mrays = double(rays) / med * 1e-6;
-  t.spread = (last.back() - last.front()) / med;
-  t.runs = int(secs.size());
-  return t;
-}
-
-/// One set of rays a method is timed on, with the reference's answers.
-struct Kind {
-  std::string name;
-  std::vector<Ray> rays;
-  bool occlusion;
-  std::vector<ReferenceHit> ref;
-};
 
 /// The kinds measured on `scene`: primary, shadow and diffuse rays (those named in `wanted`,
 /// all when empty), or `file_rays` (read from a.ray_file).
@@ -249,6 +212,9 @@ CLI::App* BenchArgs::add_to(CLI::App& app) {
   c->add_option("--kind", kinds, "Only these ray kinds: primary, shadow, diffuse (repeatable)");
   c->add_option("--rays", ray_file, "Time the rays of this ray file (one --scene) instead of the generated kinds");
   c->add_flag("--any-hit", occlusion, "With --rays: time any-hit (occlusion) queries, not closest hits");
+  c->add_flag("--updates,!--no-updates", updates,
+              "Also time update() after every mesh is deformed and every instance moved (default: on), against "
+              "the build, and the trace speed after it against a new build");
   c->add_option("--json", json, "Write the results as JSON");
   c->add_option("--chart", chart, "Also draw the charts (.png or .svg by the extension, with gnuplot)");
   c->add_option("--stability", stability,
@@ -430,6 +396,7 @@ int run_bench(const BenchArgs& a) {
           be["build_seconds"].get<double>(), 100.0 * be["build_spread"].get<double>(),
           be["build_seconds_first"].get<double>(), be["bytes"].get<size_t>(), be["bytes_per_prim"].get<double>());
     print_build_ratio(table, js);
+    if (a.updates) js["updates"] = bench_updates(scene, chosen, kinds, js["backends"], a, table);
     out["scenes"].push_back(js);
   }
   for (const auto& [name, why] : skipped) say(table, "\n%s: not run: %s\n", name.c_str(), why.c_str());

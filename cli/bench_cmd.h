@@ -23,6 +23,7 @@ struct BenchArgs {
   std::vector<std::string> kinds;  ///< primary, shadow, diffuse: the ray kinds timed (empty: all)
   std::string ray_file;           ///< time these rays (one scene) instead of the generated kinds
   bool occlusion = false;         ///< with ray_file: any-hit queries instead of closest hits
+  bool updates = true;            ///< also time Backend::update() after motion (bench_updates.h)
   std::string json, chart;
   std::string stability;  ///< a `raypack stability --json` file: also draw the Pareto chart (pareto.h)
   int threads = 0;

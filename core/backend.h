@@ -64,7 +64,7 @@ struct BackendOptions {
   /// simd: update() rebuilds a tree whose SAH cost after a refit exceeds refit_limit times its
   /// cost when it was built (docs/updates.md has the figures behind the default); 1 rebuilds
   /// on any loss, +inf always refits. Embree decides for itself (its "dynamic" variant refits).
-  double refit_limit = 1.5;
+  double refit_limit = 1.25;
 };
 
 class Backend {

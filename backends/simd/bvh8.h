@@ -141,7 +141,6 @@ struct BuildOptions {
 struct BuildStats {
   uint32_t nodes = 0, leaves = 0, depth = 0;  ///< depth: 8-wide levels, root = 1
   uint32_t prims = 0;                         ///< primitives in the tree (degenerate triangles excluded)
-  uint32_t zero_area = 0;                     ///< triangles left out of the tree for zero area
   double built_sah_cost = 0;                  ///< sah_cost when the tree was built (refit changes sah_cost only)
   double sah_cost = 0;   ///< SAH cost of the 8-wide tree, the one its collapse minimises: sum over
                          ///< nodes of area / root area (traversal cost 1) + sum over leaves of
@@ -155,6 +154,7 @@ struct Bvh8 {
   std::vector<Bvh8Node, HugePageAllocator<Bvh8Node>> nodes;  ///< nodes[0] is the root when !empty()
   /// Every leaf (see Leaf), leaf after leaf in tree order, then kLeafPad zeros.
   std::vector<float, HugePageAllocator<float>> leaf_data;
+  std::vector<uint32_t> zero_area;       ///< prim_ids of the triangles left out for zero area (refit)
   uint32_t first_analytic = kInvalidId;  ///< prim_ids >= this in a leaf are analytic
   bool has_analytic = false;             ///< any analytic primitive in the tree
   Box3f bounds;

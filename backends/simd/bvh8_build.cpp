@@ -34,6 +34,13 @@ double build_detail::sah_cost(const Bvh8& t) {
 
 namespace {
 
+/// Appends to `ids` the prim_ids of the refs in [at, at + n) that triangle_refs marked
+/// zero-area; refs[at] is triangle `first_id`.
+void zero_area_ids(const RefArray& refs, uint32_t at, uint32_t n, uint32_t first_id, std::vector<uint32_t>& ids) {
+  for (uint32_t i = at; i < at + n; ++i)
+    if (refs[i].prim_id == kInvalidId) ids.push_back(first_id + (i - at));
+}
+
 /// The tree over `refs` (the primitives of `what`, ids in the scene's numbering), timed from
 /// `start`.
 Bvh8 build_refs(const Scene& scene, RefArray refs, const BuildOptions& options, const Selection& what,
@@ -80,9 +87,14 @@ Bvh8 build(const Scene& scene, const BuildOptions& options) {
     }
   }
   for (uint32_t id = scene.sphere_base(); id < scene.plane_base(); ++id) refs[id] = PrimRef::make(scene.prim_bounds(id), id);
+  std::vector<uint32_t> left_out;
+  if (zero_area > 0)
+    for (size_t m = 0; m < scene.meshes().size(); ++m)
+      if (!scene.is_instanced(m))
+        zero_area_ids(refs, scene.mesh_base(m), scene.meshes()[m].triangle_count(), scene.mesh_base(m), left_out);
   if (instanced + zero_area > 0) drop_invalid(refs);
   Bvh8 out = build_refs(scene, std::move(refs), options, Selection{}, start);
-  out.stats.zero_area = uint32_t(zero_area);
+  out.zero_area = std::move(left_out);
   return out;
 }
 
@@ -92,10 +104,13 @@ Bvh8 build_mesh(const Scene& scene, uint32_t mesh, const BuildOptions& options) 
   RP_CHECK(mesh < scene.meshes().size(), "bvh8: mesh ", mesh, " out of range");
   const auto start = std::chrono::steady_clock::now();
   RefArray refs(scene.meshes()[mesh].triangle_count());
-  const size_t zero_area = triangle_refs(scene, mesh, refs, 0);
-  if (zero_area > 0) drop_invalid(refs);
+  std::vector<uint32_t> left_out;
+  if (triangle_refs(scene, mesh, refs, 0) > 0) {
+    zero_area_ids(refs, 0, uint32_t(refs.size()), scene.mesh_base(mesh), left_out);
+    drop_invalid(refs);
+  }
   Bvh8 out = build_refs(scene, std::move(refs), options, Selection{mesh}, start);
-  out.stats.zero_area = uint32_t(zero_area);
+  out.zero_area = std::move(left_out);
   return out;
 }
 

@@ -8,7 +8,8 @@
 #include <atomic>
 #include <bit>
 #include <chrono>
-#include <memory>
+#include <tuple>
+#include <utility>
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/bvh8_costs.h"
@@ -19,83 +20,61 @@ namespace rp::bvh8 {
 namespace {
 
 /// Where the corners of a tree's triangles are: the scene's meshes, by prim_id (the world's
-/// tree, or one instanced mesh's).
+/// tree, or one instanced mesh's). Walks a leaf's triangles remembering the mesh of the last
+/// one (a leaf's triangles nearly always share a mesh), so a mesh is looked up once per leaf.
 class TreeTriangles {
  public:
-  TreeTriangles(const Scene& scene, uint32_t mesh)
-      : scene_(scene), mesh_(mesh), first_(mesh == kInvalidId ? 0 : scene.mesh_base(mesh)) {}
-
-  /// The corners of triangle `prim` of the tree.
-  void corners(uint32_t prim, Vec3f out[3]) const {
-    uint32_t m = mesh_, local = prim - first_;
-    if (mesh_ == kInvalidId) {
-      const PrimLocation at = scene_.locate(prim);
-      m = at.shape;
-      local = at.local;
-    }
-    const TriangleMesh& tm = scene_.meshes()[m];
-    const uint32_t* row = tm.indices.data() + 3 * size_t(local);
-    for (int j = 0; j < 3; ++j) out[j] = tm.positions[row[j]];
+  TreeTriangles(const Scene& scene, uint32_t mesh) : scene_(scene) {
+    if (mesh != kInvalidId) take(mesh);
   }
 
-  /// Calls f(index, a, b, c) for every triangle the tree was built over (zero-area ones
-  /// included), in parallel; index: the prim_id less the tree's first.
-  template <typename F>
-  void for_each(F f) const {
-    for (uint32_t m = 0; m < scene_.meshes().size(); ++m) {
-      if (mesh_ == kInvalidId ? scene_.is_instanced(m) : m != mesh_) continue;
-      const TriangleMesh& tm = scene_.meshes()[m];
-      const uint32_t base = scene_.mesh_base(m) - first_;
-      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, tm.triangle_count(), 4096),
-                        [&](const tbb::blocked_range<uint32_t>& r) {
-                          for (uint32_t t = r.begin(); t < r.end(); ++t)
-                            f(base + t, tm.vertex(t, 0), tm.vertex(t, 1), tm.vertex(t, 2));
-                        });
-    }
+  /// The index row of triangle `prim` and its mesh's positions.
+  std::pair<const uint32_t*, const Vec3f*> row(uint32_t prim) {
+    if (prim - first_ >= count_) take(scene_.locate(prim).shape);
+    return {mesh_->indices.data() + 3 * size_t(prim - first_), mesh_->positions.data()};
   }
-
-  /// How many triangles the tree's ids number (the size of a table indexed by them).
-  uint32_t id_count() const {
-    return mesh_ == kInvalidId ? scene_.triangle_count() : scene_.meshes()[mesh_].triangle_count();
-  }
-  /// The prim_id of the tree's first triangle.
-  uint32_t first() const { return first_; }
 
  private:
+  void take(uint32_t m) {
+    mesh_ = &scene_.meshes()[m];
+    first_ = scene_.mesh_base(m);
+    count_ = mesh_->triangle_count();
+  }
+
   const Scene& scene_;
-  uint32_t mesh_, first_;
+  const TriangleMesh* mesh_ = nullptr;
+  uint32_t first_ = 0, count_ = 0;  ///< the prim_ids of mesh_: [first_, first_ + count_)
 };
 
-/// Rewrites the vertex block of the leaf at `words` from the triangles' current corners and
-/// returns its box; `conflict` is set when two corners that share a slot now differ. Marks
-/// each triangle in `seen` (when not null).
-Box3f refit_leaf(float* words, const TreeTriangles& tris, std::atomic<uint8_t>* seen, bool& conflict) {
+/// Rewrites the vertex block of the leaf at `words` from its triangles' current corners and
+/// returns its box; sets `conflict` when two corners that share a slot now differ.
+Box3f refit_leaf(float* words, TreeTriangles& tris, bool& conflict) {
   const Leaf leaf(words);
   float* x = words + (3 * leaf.n + 4) / 4 + leaf.n;
   float* y = x + leaf.v;
   float* z = y + leaf.v;
+  // The rows first, then the corners they name: the scattered reads start together.
+  const uint32_t* rows[8];
+  const Vec3f* positions[8];
+  for (uint32_t k = 0; k < leaf.n; ++k) std::tie(rows[k], positions[k]) = tris.row(leaf.prim(k));
   uint32_t written = 0;  // slots written so far, one bit each (at most 24)
   Box3f box;
-  for (uint32_t k = 0; k < leaf.n; ++k) {
-    const uint32_t prim = leaf.prim(k);
-    if (seen) seen[prim - tris.first()].store(1, std::memory_order_relaxed);
-    Vec3f c[3];
-    tris.corners(prim, c);
+  for (uint32_t k = 0; k < leaf.n; ++k)
     for (uint32_t j = 0; j < 3; ++j) {
+      const Vec3f c = positions[k][rows[k][j]];
       const uint32_t i = leaf.corners(j)[k];
-      box.extend(c[j]);
+      box.extend(c);
       if (written >> i & 1u) {
-        conflict |= std::bit_cast<uint32_t>(x[i]) != std::bit_cast<uint32_t>(c[j].x) ||
-                    std::bit_cast<uint32_t>(y[i]) != std::bit_cast<uint32_t>(c[j].y) ||
-                    std::bit_cast<uint32_t>(z[i]) != std::bit_cast<uint32_t>(c[j].z);
+        conflict |= std::bit_cast<uint32_t>(x[i]) != std::bit_cast<uint32_t>(c.x) ||
+                    std::bit_cast<uint32_t>(y[i]) != std::bit_cast<uint32_t>(c.y) ||
+                    std::bit_cast<uint32_t>(z[i]) != std::bit_cast<uint32_t>(c.z);
         continue;
       }
       written |= 1u << i;
-      x[i] = c[j].x;
-      y[i] = c[j].y;
-      z[i] = c[j].z;
+      x[i] = c.x;
+      y[i] = c.y;
+      z[i] = c.z;
     }
-  }
   return box;
 }
 
@@ -123,15 +102,9 @@ Box3f node_box(const Bvh8Node& n) {
 Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit) {
   const auto start = std::chrono::steady_clock::now();
   if (bvh.empty()) return Refit::done;
-  const TreeTriangles tris(scene, mesh);
-  // Only a tree that left zero-area triangles out needs to know which are in it.
-  std::unique_ptr<std::atomic<uint8_t>[]> seen;
-  if (bvh.stats.zero_area > 0) {
-    seen = std::make_unique<std::atomic<uint8_t>[]>(tris.id_count());
-    for (uint32_t i = 0; i < tris.id_count(); ++i) seen[i].store(0, std::memory_order_relaxed);
-  }
   std::atomic<bool> conflict{false};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, bvh.nodes.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    TreeTriangles tris(scene, mesh);
     bool clash = false;
     for (size_t i = r.begin(); i < r.end(); ++i) {
       Bvh8Node& n = bvh.nodes[i];
@@ -139,20 +112,18 @@ Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit) {
         if (!is_leaf(n.child[k])) continue;
         const Leaf leaf = bvh.leaf(n.child[k]);
         if (bvh.has_analytic && leaf.n == 1 && leaf.prim(0) >= bvh.first_analytic) continue;  // does not move
-        set_box(n, k, refit_leaf(bvh.leaf_data.data() + leaf_offset(n.child[k]), tris, seen.get(), clash));
+        set_box(n, k, refit_leaf(bvh.leaf_data.data() + leaf_offset(n.child[k]), tris, clash));
       }
     }
     if (clash) conflict.store(true, std::memory_order_relaxed);
   });
   if (conflict.load()) return Refit::rebuild;
-  if (seen) {
-    std::atomic<bool> missing{false};
-    tris.for_each([&](uint32_t id, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
-      const Vec3f n = cross(b - a, c - a);
-      if (!seen[id].load(std::memory_order_relaxed) && !(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f))
-        missing.store(true, std::memory_order_relaxed);
-    });
-    if (missing.load()) return Refit::rebuild;
+  // A triangle left out for zero area that has area now is in no leaf.
+  for (uint32_t id : bvh.zero_area) {
+    const PrimLocation at = scene.locate(id);
+    const TriangleMesh& m = scene.meshes()[at.shape];
+    const Vec3f a = m.vertex(at.local, 0), n = cross(m.vertex(at.local, 1) - a, m.vertex(at.local, 2) - a);
+    if (!(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)) return Refit::rebuild;
   }
   // Inner boxes bottom-up: the collapse lays a node's children out after it.
   for (size_t i = bvh.nodes.size(); i-- > 0;) {
@@ -182,6 +153,7 @@ void renumber(Bvh8& bvh, uint32_t from, uint32_t to) {
         for (uint32_t k = 0; k < leaf.n; ++k) ids[k] = std::bit_cast<float>(leaf.prim(k) - from + to);
       }
   });
+  for (uint32_t& id : bvh.zero_area) id = id - from + to;
 }
 
 }  // namespace rp::bvh8

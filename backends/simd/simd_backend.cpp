@@ -25,6 +25,7 @@ struct InstanceTrees {
   std::vector<uint64_t> uid;      ///< Scene::mesh_uid of meshes[k]
   std::vector<uint64_t> version;  ///< the Scene::mesh_version that meshes[k] holds
   std::vector<uint32_t> base;     ///< the Scene::mesh_base that meshes[k]'s prim_ids start at
+  std::vector<float> leaf_size;   ///< mean_leaf_size of meshes[k]
   std::vector<Placed> placed;  ///< instance i of the scene: placed[i]
   InstanceTree tree;
   size_t mesh_bytes = 0;
@@ -45,6 +46,7 @@ struct InstanceTrees {
     std::vector<Bvh8> next;
     std::vector<uint64_t> next_uid, next_version;
     std::vector<uint32_t> next_base;
+    std::vector<float> next_leaf_size;
     std::vector<uint32_t> tree_of(scene.meshes().size(), kInvalidId);
     for (const Instance& in : scene.instances()) {
       if (tree_of[in.mesh] != kInvalidId) continue;
@@ -53,9 +55,11 @@ struct InstanceTrees {
       const auto old = had.find(u);
       if (old == had.end()) {
         next.push_back(build_mesh(scene, in.mesh, options));
+        next_leaf_size.push_back(mean_leaf_size(next.back()));
         ++report.rebuilds;
       } else {
         Bvh8& t = meshes[old->second];
+        float size = leaf_size[old->second];
         renumber(t, base[old->second], scene.mesh_base(in.mesh));
         if (version[old->second] != v) {
           if (refit(t, scene, in.mesh, limit) == Refit::done) {
@@ -64,8 +68,10 @@ struct InstanceTrees {
             t = build_mesh(scene, in.mesh, options);
             ++report.rebuilds;
           }
+          size = mean_leaf_size(t);
         }
         next.push_back(std::move(t));
+        next_leaf_size.push_back(size);
       }
       next_uid.push_back(u);
       next_version.push_back(v);
@@ -75,13 +81,10 @@ struct InstanceTrees {
     uid = std::move(next_uid);
     version = std::move(next_version);
     base = std::move(next_base);
+    leaf_size = std::move(next_leaf_size);
     mesh_bytes = 0;
-    std::vector<float> leaf_size;  // meshes is complete: the instances point into it
-    for (const Bvh8& m : meshes) {
-      mesh_bytes += m.stats.bytes;
-      leaf_size.push_back(mean_leaf_size(m));
-    }
-    placed.clear();
+    for (const Bvh8& m : meshes) mesh_bytes += m.stats.bytes;
+    placed.clear();  // meshes is complete: the instances point into it
     for (const Instance& in : scene.instances()) {
       const float scale = float(std::cbrt(std::abs(double(in.object_to_world.determinant()))));
       const uint32_t k = tree_of[in.mesh];

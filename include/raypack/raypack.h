@@ -32,18 +32,23 @@
 /// Ownership:
 /// - a Scene owns all its data (add_* copy or move it in); load_scene returns one by value;
 /// - a Backend reads the Scene it was built over for as long as it lives. Either the caller
-///   keeps the scene alive and unchanged until the backend is destroyed
-///   (make_backend(name, scene), scene an lvalue; a temporary scene does not compile), or the
-///   backend shares it (make_backend(name, std::shared_ptr<const Scene>)), and the scene
-///   lives until its last owner lets go;
+///   keeps the scene alive until the backend is destroyed (make_backend(name, scene), scene an
+///   lvalue; a temporary scene does not compile), or the backend shares it
+///   (make_backend(name, std::shared_ptr<const Scene>)), and the scene lives until its last
+///   owner lets go;
+/// - scenes that move: Scene::set_vertices, set_transform, add_* and remove_* change a scene;
+///   Backend::update() then brings a backend up to date (refit, instance level, rebuild of what
+///   was added), and until then tracing throws rp::Error (core/backend.h, docs/updates.md);
 /// - a Reference copies what it needs: the scene may go away once it is built;
 /// - render, diff_hits, primary_rays and the other functions read their arguments during the
 ///   call only and return values the caller owns.
 ///
 /// Errors: setup calls (loading, building, file I/O, bad settings) throw rp::Error, whose
-/// what() is one line naming the file, value or name at fault; tracing calls are noexcept.
-/// Threads: a built backend and a Reference are immutable and may be queried from many
-/// threads at once; the *_parallel functions, render and Reference::intersect over spans use
+/// what() is one line naming the file, value or name at fault; tracing calls throw only for a
+/// backend whose scene changed since its last update().
+/// Threads: a backend and a Reference may be queried from many threads at once; a scene's
+/// changes and Backend::update() must not overlap tracing; the *_parallel functions, render
+/// and Reference::intersect over spans use
 /// TBB's threads (limit them with a tbb::task_arena or tbb::global_control).
 
 #include "analysis/diff.h"
