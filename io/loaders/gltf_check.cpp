@@ -1,6 +1,8 @@
 /// The glTF JSON check (io/loaders/gltf_check.h): types, ranges and indices of the values
 /// the reader uses, buffer URIs confined to the glTF's folder, and the memory tinygltf would
-/// take for the objects the JSON lists.
+/// take for the objects the JSON lists. Over 600 lines as one class on purpose: every section's
+/// check names the others' sizes (an index into nodes, accessors, samplers) through the one
+/// set of Section counts and helpers, which a split by section would have to pass around.
 
 #include "io/loaders/gltf_check.h"
 
@@ -70,11 +72,6 @@ bool lies_in(const std::string& path, const std::string& folder) {
   return path.starts_with(folder) && (path.size() == folder.size() || path[folder.size()] == '/');
 }
 
-/// The most a node's rotation may differ from a unit quaternion in length: glTF-Validator's
-/// tolerance for ROTATION_NON_UNIT (unitLengthThresholdVec4, just above the error of a
-/// quaternion quantised to signed bytes).
-constexpr double kUnitQuaternionTolerance = 0.00769;
-
 /// The glTF JSON document, checked before tinygltf reads it: every value of the sections the
 /// reader uses has the type glTF 2.0 gives it and lies in its range, and every index names an
 /// element that exists. tinygltf 2.7 cannot be trusted with them: a value of the wrong type
@@ -118,7 +115,8 @@ class JsonCheck {
         for (size_t i = 0; i < a->size(); ++i)
           if (!(*a)[i].is_string()) fail(cat("$.", key, "[", i, "]"), cat(shown((*a)[i]), " is not a string"));
       }
-    for (const char* key : {"images", "textures", "samplers", "animations", "skins"}) objects(doc_, "$", key);
+    for (const char* key : {"images", "textures", "samplers"}) objects(doc_, "$", key);
+    const json& animations = objects(doc_, "$", "animations");
     const json& scenes = objects(doc_, "$", "scenes");
     const json& nodes = objects(doc_, "$", "nodes");
     const json& meshes = objects(doc_, "$", "meshes");
@@ -140,6 +138,7 @@ class JsonCheck {
     material_ = {"material", "materials", materials.size()};
     camera_ = {"camera", "cameras", cameras.size()};
     light_ = {"light", "lights", lights.size()};
+    skin_ = {"skin", "skins", objects(doc_, "$", "skins").size()};
     memory(meshes, buffers, lp);
 
     index(doc_, "$", "scene", scene_);
@@ -151,6 +150,7 @@ class JsonCheck {
     for (size_t i = 0; i < materials.size(); ++i) material(materials[i], cat("$.materials[", i, "]"));
     for (size_t i = 0; i < cameras.size(); ++i) camera(cameras[i], cat("$.cameras[", i, "]"));
     for (size_t i = 0; i < lights.size(); ++i) light(lights[i], cat(lp, ".lights[", i, "]"));
+    for (size_t i = 0; i < animations.size(); ++i) animation(animations[i], cat("$.animations[", i, "]"));
     std::vector<GltfBufferFile> external;
     for (size_t i = 0; i < buffers.size(); ++i)
       if (std::optional<GltfBufferFile> b = buffer(buffers[i], i)) external.push_back(std::move(*b));
@@ -309,29 +309,28 @@ class JsonCheck {
     return s;
   }
 
-  /// A node's rotation, when present, a unit quaternion within kUnitQuaternionTolerance. Its
-  /// length is found from the components divided by the largest, so that no square overflows.
-  void rotation(const std::vector<double>& q, const std::string& path) const {
-    double big = 0.0;
-    for (double c : q) big = std::max(big, std::abs(c));
-    if (big == 0.0) fail(path, "a zero quaternion is no rotation");
-    double sum = 0.0;
-    for (double c : q) sum += (c / big) * (c / big);
-    const double length = big * std::sqrt(sum);
-    if (!(std::abs(length - 1.0) <= kUnitQuaternionTolerance))
-      fail(path, cat("its length ", length, " is not 1 (a rotation is a unit quaternion, within ",
-                     kUnitQuaternionTolerance, ")"));
+  /// Array `key` of `o` (at `path`) of any number of finite numbers (morph target weights),
+  /// when present.
+  void weights(const json& o, const std::string& path, const char* key) const {
+    const json* a = find(o, key);
+    if (!a) return;
+    const std::string p = cat(path, ".", key);
+    if (!a->is_array()) fail(p, cat(shown(*a), " is not an array of numbers"));
+    for (size_t i = 0; i < a->size(); ++i) number((*a)[i], cat(p, "[", i, "]"), kAny);
   }
 
   void node(const json& n, const std::string& path) const {
     indices(n, path, "children", node_);
     index(n, path, "mesh", mesh_);
     index(n, path, "camera", camera_);
+    index(n, path, "skin", skin_);
     numbers(n, path, "matrix", 16, kAny);
     numbers(n, path, "translation", 3, kAny);
     numbers(n, path, "scale", 3, kAny);
+    weights(n, path, "weights");
     const std::vector<double> q = numbers(n, path, "rotation", 4, kAny);
-    if (!q.empty()) rotation(q, path + ".rotation");
+    if (!q.empty())
+      if (const std::optional<std::string> problem = rotation_problem(q)) fail(path + ".rotation", *problem);
     if (const json* e = object(n, path, "extensions"))
       if (const json* l = object(*e, path + ".extensions", "KHR_lights_punctual"))
         index(*l, path + ".extensions.KHR_lights_punctual", "light", light_, true);
@@ -355,6 +354,35 @@ class JsonCheck {
         for (const auto& [name, v] : targets[t].items())
           index_value(v, cat(pp, ".targets[", t, "].", printable(name)), accessor_);
     }
+    weights(m, path, "weights");
+  }
+
+  /// An animation: its channels name a sampler of its own and a node, and a path glTF
+  /// defines; its samplers name accessors and an interpolation glTF defines. tinygltf 2.7
+  /// drops a channel without a target node or path without a word (the channels after it then
+  /// move up), so both are required here; a target without a node (KHR_animation_pointer's)
+  /// is refused with them.
+  void animation(const json& a, const std::string& path) const {
+    for (const char* key : {"channels", "samplers"})
+      if (!find(a, key)) fail(path, cat("has no \"", key, "\""));
+    const json& samplers = objects(a, path, "samplers");
+    const Section sampler{"sampler", "samplers", samplers.size()};
+    const json& channels = objects(a, path, "channels");
+    for (size_t c = 0; c < channels.size(); ++c) {
+      const std::string cp = cat(path, ".channels[", c, "]");
+      index(channels[c], cp, "sampler", sampler, true);
+      const json* target = object(channels[c], cp, "target");
+      if (!target) fail(cp, "has no \"target\"");
+      index(*target, cp + ".target", "node", node_, true);
+      string(*target, cp + ".target", "path", true, {"translation", "rotation", "scale", "weights"},
+             "an animation path");
+    }
+    for (size_t s = 0; s < samplers.size(); ++s) {
+      const std::string sp = cat(path, ".samplers[", s, "]");
+      index(samplers[s], sp, "input", accessor_, true);
+      index(samplers[s], sp, "output", accessor_, true);
+      string(samplers[s], sp, "interpolation", false, {"LINEAR", "STEP", "CUBICSPLINE"}, "an interpolation");
+    }
   }
 
   void accessor(const json& a, const std::string& path) const {
@@ -368,6 +396,8 @@ class JsonCheck {
       fail(path + ".componentType", cat(shown(type), " is not a componentType (5120, 5121, 5122, 5123, 5125, 5126)"));
     integer(a, path, "count", 1, INT64_MAX, true);
     string(a, path, "type", true, {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"}, "an accessor type");
+    if (const json* n = find(a, "normalized"); n && !n->is_boolean())
+      fail(path + ".normalized", cat(shown(*n), " is not true or false"));
   }
 
   void buffer_view(const json& v, const std::string& path) const {
@@ -579,13 +609,26 @@ class JsonCheck {
   const uint64_t json_bytes_;
   mutable std::string folder_;  ///< realpath of base_, found on the first external buffer
   const json none_ = json::array();
-  Section scene_, node_, mesh_, accessor_, view_, buffer_, material_, camera_, light_;
+  Section scene_, node_, mesh_, accessor_, view_, buffer_, material_, camera_, light_, skin_;
 };
 
 }  // namespace
 
 std::vector<GltfBufferFile> check_gltf_json(const GltfSource& source, const nlohmann::json& doc) {
   return JsonCheck(source, doc).run();
+}
+
+std::optional<std::string> rotation_problem(std::span<const double> q) {
+  double big = 0.0;
+  for (double c : q) big = std::max(big, std::abs(c));
+  if (big == 0.0) return "a zero quaternion is no rotation";
+  double sum = 0.0;
+  for (double c : q) sum += (c / big) * (c / big);
+  const double length = big * std::sqrt(sum);
+  if (!(std::abs(length - 1.0) <= kUnitQuaternionTolerance))
+    return cat("its length ", length, " is not 1 (a rotation is a unit quaternion, within ", kUnitQuaternionTolerance,
+               ")");
+  return std::nullopt;
 }
 
 std::string gltf_quoted(std::string_view text) { return cat("\"", printable(text), "\""); }

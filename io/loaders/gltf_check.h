@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -24,6 +25,17 @@ inline constexpr uint64_t kGltfMemoryPerInputByte = 32;
 
 /// What tinygltf's JSON DOM (nlohmann-json's) is counted to take per byte of JSON text.
 inline constexpr uint64_t kGltfDomBytesPerJsonByte = 12;
+
+/// The most a rotation (a node's, an animation keyframe's) may differ from a unit quaternion in
+/// length: glTF-Validator's tolerance for ROTATION_NON_UNIT (unitLengthThresholdVec4, just
+/// above the error of a quaternion quantised to signed bytes).
+inline constexpr double kUnitQuaternionTolerance = 0.00769;
+
+/// What is wrong with rotation `q` (x, y, z, w) as glTF takes it: "a zero quaternion is no
+/// rotation", or its length outside 1 +- kUnitQuaternionTolerance, with that length; nothing
+/// when it is a rotation. The length is found from the components divided by the largest, so
+/// that no square overflows.
+std::optional<std::string> rotation_problem(std::span<const double> q);
 
 /// A buffer the glTF names by a file URI, resolved inside the glTF's folder.
 struct GltfBufferFile {
@@ -49,11 +61,13 @@ struct GltfSource {
 /// "<path>: <JSON path>: <what is wrong>", for the first problem found (the memory estimate
 /// as soon as the sections are known to be arrays of objects, then element by element):
 /// - a value of the sections the reader uses (asset, scenes, nodes, meshes, accessors,
-///   bufferViews, buffers, materials, cameras, KHR_lights_punctual lights) of the wrong JSON
-///   type, outside glTF 2.0's range or missing when required: an index naming no element, a
-///   negative offset, a count or length of 0, a non-number in a transform, a factor outside
-///   [0, 1], a rotation whose length is not within 0.00769 of 1 (glTF-Validator's tolerance),
-///   an unknown componentType, accessor, camera or light type;
+///   bufferViews, buffers, materials, cameras, KHR_lights_punctual lights, animations) of the
+///   wrong JSON type, outside glTF 2.0's range or missing when required: an index naming no
+///   element (a node's skin, an animation channel's sampler or target node among them), a
+///   negative offset, a count or length of 0, a non-number in a transform or in morph
+///   weights, a factor outside [0, 1], a rotation whose length is not within 0.00769 of 1
+///   (glTF-Validator's tolerance), an unknown componentType, accessor, camera or light type,
+///   animation path or interpolation;
 /// - a buffer with no URI outside a GLB's buffer 0, or longer than the GLB's BIN chunk;
 /// - a buffer URI that, %-decoded as tinygltf decodes it, is absolute, holds a NUL byte or
 ///   leads out of `source.base` as written ("../x.bin") or once symbolic links are followed
