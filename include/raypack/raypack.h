@@ -4,8 +4,10 @@
 /// or with `pkg-config --cflags --libs raypack`. C++20. Everything is in namespace rp.
 ///
 /// What it offers, and the header that documents each part (installed beside this one):
-/// - scenes: rp::load_scene(path) for .obj, .ply and .json files or "default"
-///   (io/loaders/load.h); rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
+/// - scenes: rp::load_scene(path) for .obj, .ply, .json, .gltf and .glb files or "default",
+///   and rp::load_animated_scene(path) for the scene with its animation, which
+///   SceneAnimation::apply poses at a time (io/loaders/load.h, io/loaders/animation.h);
+///   rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
 ///   .positions, .indices}), add_sphere, add_quadric, add_polygon, add_plane, lights,
 ///   materials and a camera (core/scene.h);
 /// - backends: rp::list_backends() (names, variants, coherent and incoherent methods, whether

@@ -10,8 +10,8 @@
 ///   indexed or not, indices of an unsigned integer type: componentType 5121, 5123 or 5125) of
 ///   a glTF mesh becomes part of one TriangleMesh, a primitive's material on its triangles;
 ///   NORMAL kept when every primitive of the mesh has it. A mesh one node places is baked into
-///   world coordinates; a mesh several nodes place is stored once in its own coordinates and
-///   each node is an instance (Scene::add_instance);
+///   world coordinates; a mesh several nodes place, or any node the animation moves (below),
+///   is stored once in its own coordinates and each node is an instance (Scene::add_instance);
 /// - the first camera met in that walk, when perspective: eye, look-at one unit down its -Z,
 ///   up its +Y, `yfov` as the vertical field of view (the image's aspect replaces
 ///   `aspectRatio`; `znear`, `zfar` are not used);
@@ -25,6 +25,23 @@
 ///   alphaMode is "BLEND". Not used: textures of every kind, metallic and roughness, normal and
 ///   occlusion maps, alpha masks, doubleSided (raypack's surfaces are seen from both sides),
 ///   every other material extension; images are neither decoded nor opened;
+/// - animations (io/loaders/animation.h), read into the SceneAnimation load_gltf returns,
+///   the scene itself at its rest pose (the nodes' own values): every channel whose
+///   target.path is "translation", "rotation" or "scale"; every animation of the file plays
+///   at once from 0 s, each value before a sampler's first keyframe its first, after its last
+///   its last; the value a channel gives replaces that property of the node, which keeps its
+///   own values of the others. Samplers: LINEAR (rotations by slerp along the shorter arc),
+///   STEP, CUBICSPLINE (glTF's Appendix C: in-tangent, value, out-tangent per keyframe,
+///   tangents times the keyframes' interval; a rotation's result normalised). Input accessors
+///   of floats (SCALAR, 5126), finite and strictly increasing; outputs of VEC3 floats for a
+///   translation or scale and VEC4 for a rotation, of floats or of normalized integers (5120,
+///   5121, 5122, 5123: "normalized": true, mapped as glTF says), as many elements as
+///   keyframes (three times as many for CUBICSPLINE), every number finite, every rotation
+///   value a unit quaternion within 0.00769 (then normalised). What a node the animation moves
+///   places (the node animated, or below an animated node) moves with it: its meshes as
+///   instances (Scene::set_transform), its KHR_lights_punctual lights (Scene::set_light), the
+///   camera (Scene::set_camera), each node's placement composed parent * child in double as
+///   above;
 /// - external buffers only from the glTF's folder and below: a buffer's URI, %-decoded as
 ///   tinygltf decodes it, is a relative path that must stay inside that folder both as written
 ///   ("../x.bin", "..%2Fx.bin" and "/etc/x" are refused, "sub/../x.bin" is read) and with every
@@ -39,10 +56,19 @@
 /// accessor, camera or light type, a required property missing), since
 /// tinygltf turns most of them into defaults without a word; buffer URIs leading out of the
 /// glTF's folder; and objects that would take tinygltf far more memory than the file (below).
+/// Then, what cannot be animated or drawn as the file means it: a node with a "skin"
+/// ("$.nodes[3].skin: skinned meshes are not supported"), morph targets of a non-zero weight
+/// (the node's "weights", else its mesh's: "$.meshes[0].weights[1]: 0.5: morph targets of a
+/// non-zero weight are not supported"; targets of weight 0 change nothing and are not read),
+/// a channel of target.path "weights" ("morph-target animation is not supported"), a channel
+/// on a node placed by a "matrix" (glTF animates translation, rotation and scale only), two
+/// channels on one property of one node (in one animation or two: as all play at once, which
+/// would win is refused rather than chosen), a sampler breaking the rules above, and a node
+/// the animation moves whose rest transform is singular (its mesh could not be placed).
 /// Then: Draco-compressed primitives without an uncompressed fallback, sparse accessors that
-/// a primitive reads (sparse ones it does not read, a morph target's, are left alone), accessors whose
-/// elements do not fit their bufferView and buffer (bad offsets, strides, absurd counts:
-/// checked before anything is allocated for them), indices that name no vertex or are not of
+/// a primitive or an animation sampler reads (sparse ones nothing reads, a morph target's, are
+/// left alone), accessors whose elements do not fit their bufferView and buffer (bad offsets,
+/// strides, absurd counts: checked before anything is allocated for them), indices that name no vertex or are not of
 /// an unsigned integer type, positions that are not 3 floats or lie outside the coordinate
 /// range, node cycles and nodes with two parents, non-affine matrices, buffers missing or
 /// unreadable (a device, a directory: io/input_file.h's rule) or of another size than
@@ -71,7 +97,7 @@
 /// This file is the tinygltf glue (file callbacks, GLB chunks, tinygltf's messages); the JSON
 /// check before it is io/loaders/gltf_check.cpp, the mapping onto the Scene after it
 /// io/loaders/gltf_reader.h (the node hierarchy in gltf_scene.cpp, accessors and
-/// primitives in gltf_mesh.cpp).
+/// primitives in gltf_mesh.cpp, animations in gltf_animation.cpp).
 
 #include <algorithm>
 #include <array>
@@ -222,7 +248,7 @@ std::string first_line(const std::string& s) {
 
 }  // namespace
 
-void load_gltf(const std::string& path, Scene& scene) {
+SceneAnimation load_gltf(const std::string& path, Scene& scene) {
   const MappedFile file(path);
   if (file.size() > kMaxGltfBytes)
     throw Error(cat(path, ": ", file.size(), " bytes, more than the ", kMaxGltfBytes, " a glTF file may have"));
@@ -290,7 +316,7 @@ void load_gltf(const std::string& path, Scene& scene) {
     }
     throw Error(cat(path, ": ", first_line(err)));
   }
-  GltfReader(path, model, scene).read();
+  return GltfReader(path, model, scene).read();
 }
 
 }  // namespace rp

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -12,16 +13,51 @@
 #include "io/loaders/gltf_reader.h"
 
 namespace rp {
+namespace {
+
+/// The accessor type of elements of 1 to 4 components.
+constexpr const char* kTypeNames[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
+
+/// The normalized integer component at `p`, mapped to a number as glTF 2.0 maps it (its
+/// "Animations" section): signed max(c / (2^(n-1) - 1), -1), unsigned c / (2^n - 1).
+template <typename Int>
+double unit_number(const unsigned char* p) {
+  Int c;
+  std::memcpy(&c, p, sizeof c);
+  return std::max(double(c) / double(std::numeric_limits<Int>::max()), -1.0);
+}
+
+/// The component at `p` of `component_type` as a number: a float as it is, an integer as a
+/// normalized one (unit_number).
+double number(const unsigned char* p, int component_type) {
+  switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+      return unit_number<int8_t>(p);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return unit_number<uint8_t>(p);
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+      return unit_number<int16_t>(p);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return unit_number<uint16_t>(p);
+    default: {
+      float f;
+      std::memcpy(&f, p, 4);
+      return f;
+    }
+  }
+}
+
+}  // namespace
 
 GltfReader::View GltfReader::view(int a, const std::string& use, int type,
                                   std::initializer_list<int> component_types) const {
   const tinygltf::Accessor& acc = at(m_.accessors, a, use);
   const std::string ap = cat("$.accessors[", a, "]");
   // Refused where the reader reads one only: a model may have sparse accessors elsewhere
-  // (morph targets, animation), which it does not read.
+  // (morph targets), which it does not read.
   if (acc.sparse.isSparse) fail(ap + ".sparse", "sparse accessors are not supported");
-  if (acc.type != type)
-    fail(ap + ".type", cat(use, " needs ", type == TINYGLTF_TYPE_SCALAR ? "SCALAR" : "VEC3", " elements"));
+  const uint64_t components = type == TINYGLTF_TYPE_SCALAR ? 1 : type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+  if (acc.type != type) fail(ap + ".type", cat(use, " needs ", kTypeNames[components], " elements"));
   if (std::find(component_types.begin(), component_types.end(), acc.componentType) == component_types.end()) {
     std::string list;
     for (int t : component_types) list += cat(list.empty() ? "" : ", ", t);
@@ -35,7 +71,6 @@ GltfReader::View GltfReader::view(int a, const std::string& use, int type,
   if (uint64_t(bv.byteOffset) > buffer_bytes || uint64_t(bv.byteLength) > buffer_bytes - bv.byteOffset)
     fail(vp, cat(bv.byteLength, " bytes from byte ", bv.byteOffset, " do not fit in buffer ", bv.buffer, "'s ",
                  buffer_bytes, " bytes"));
-  const uint64_t components = type == TINYGLTF_TYPE_SCALAR ? 1 : 3;
   const uint64_t element = components * uint64_t(tinygltf::GetComponentSizeInBytes(uint32_t(acc.componentType)));
   const uint64_t stride = bv.byteStride == 0 ? element : bv.byteStride;
   if (stride < element || stride > 252)
@@ -47,12 +82,22 @@ GltfReader::View GltfReader::view(int a, const std::string& use, int type,
       offset + (count - 1) * stride + element > bv.byteLength)
     fail(ap, cat(count, " elements of ", element, " bytes, ", stride, " apart from byte ", offset, ", do not fit in ",
                  vp.substr(2), "'s ", bv.byteLength, " bytes"));
-  return {buffer.data.data() + bv.byteOffset + offset, size_t(count), size_t(stride), acc.componentType};
+  return {buffer.data.data() + bv.byteOffset + offset, size_t(count), size_t(stride), size_t(components),
+          acc.componentType};
 }
 
 std::vector<Vec3f> GltfReader::vectors(const View& v) const {
   std::vector<Vec3f> out(v.count);
   for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, 12);
+  return out;
+}
+
+std::vector<double> GltfReader::numbers(const View& v) const {
+  std::vector<double> out(v.count * v.components);
+  const size_t size = size_t(tinygltf::GetComponentSizeInBytes(uint32_t(v.component_type)));
+  for (size_t i = 0; i < v.count; ++i)
+    for (size_t c = 0; c < v.components; ++c)
+      out[i * v.components + c] = number(v.data + i * v.stride + c * size, v.component_type);
   return out;
 }
 

@@ -1,6 +1,7 @@
 /// The glTF node hierarchy onto the Scene (io/loaders/gltf_reader.h): the scene's nodes
-/// walked from its roots, each mesh baked by one node or instanced by several, the first
-/// camera, KHR_lights_punctual lights, materials, and the warnings of one load.
+/// walked from its roots, each mesh baked by one node or instanced by several (or by a node
+/// the animation moves), the first camera, KHR_lights_punctual lights, materials, what the
+/// animation moves, and the warnings of one load.
 
 #include <algorithm>
 #include <array>
@@ -38,23 +39,9 @@ std::optional<Matrix> affine_of(const std::vector<double>& m) {
   return a;
 }
 
-/// T * R * S of translation t, unit quaternion q (x, y, z, w) and scale s.
-Matrix trs(const std::array<double, 3>& t, const std::array<double, 4>& q, const std::array<double, 3>& s) {
-  const double x = q[0], y = q[1], z = q[2], w = q[3];
-  const double r[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
-                          {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
-                          {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
-  Matrix a;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) a.m[i][j] = r[i][j] * s[size_t(j)];
-    a.m[i][3] = t[size_t(i)];
-  }
-  return a;
-}
-
 }  // namespace
 
-void GltfReader::read() {
+SceneAnimation GltfReader::read() {
   try {
     read_scene();
   } catch (...) {
@@ -62,11 +49,13 @@ void GltfReader::read() {
     throw;
   }
   print_warnings();
+  return SceneAnimation(file_, std::move(curves_), std::move(moving_), std::move(targets_), counts_);
 }
 
 void GltfReader::read_scene() {
   check_required_extensions();
   if (m_.scenes.empty()) fail("$.scenes", "the file has no scene");
+  read_animations();
   walk(m_.defaultScene >= 0 ? m_.defaultScene : 0);
   std::vector<MeshUse> uses(m_.meshes.size());
   for (const Placed& p : placed_) uses[size_t(p.mesh)].placements.emplace_back(p.to_world, p.node);
@@ -119,6 +108,18 @@ void GltfReader::check_required_extensions() {
   }
 }
 
+NodeTrs GltfReader::trs(int n) const {
+  const tinygltf::Node& node = m_.nodes[size_t(n)];
+  NodeTrs out;
+  const auto take = [](const std::vector<double>& v, auto& to) {
+    if (v.size() == to.size()) std::copy(v.begin(), v.end(), to.begin());
+  };
+  take(node.translation, out.translation);
+  take(node.rotation, out.rotation);
+  take(node.scale, out.scale);
+  return out;
+}
+
 Matrix GltfReader::local(int n) const {
   const tinygltf::Node& node = m_.nodes[size_t(n)];
   if (!node.matrix.empty()) {
@@ -126,39 +127,42 @@ Matrix GltfReader::local(int n) const {
     if (!a) fail(cat("$.nodes[", n, "].matrix"), "not an affine transform (its last row is not 0 0 0 1)");
     return *a;
   }
-  std::array<double, 3> t{0, 0, 0}, s{1, 1, 1};
-  std::array<double, 4> q{0, 0, 0, 1};
-  const auto take = [](const std::vector<double>& v, auto& out) {
-    if (v.size() == out.size()) std::copy(v.begin(), v.end(), out.begin());
-  };
-  take(node.translation, t);
-  take(node.rotation, q);
-  take(node.scale, s);
-  const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  for (double& c : q) c /= len;
-  return trs(t, q, s);
+  return trs(n).matrix();
 }
 
 void GltfReader::walk(int s) {
   const tinygltf::Scene& scene = at(m_.scenes, s, "$.scene");
   std::vector<uint8_t> state(m_.nodes.size(), 0);  // 0 unseen, 1 on the current path, 2 done
+  moving_index_.assign(m_.nodes.size(), -1);
   struct Frame {
     int node;
     Matrix to_world;
     size_t next_child;
   };
   std::vector<Frame> stack;
-  const auto enter = [&](int n, const Matrix& parent, const std::string& path) {
+  const auto enter = [&](int n, const Matrix& parent, int parent_moving, const std::string& path) {
     at(m_.nodes, n, path);
     if (state[size_t(n)] == 1) fail(path, cat("node ", n, " is its own ancestor (a cycle)"));
     if (state[size_t(n)] == 2) fail(path, cat("node ", n, " is reached twice (a node may have one parent only)"));
     state[size_t(n)] = 1;
-    const Matrix to_world = compose(parent, local(n));
+    const Matrix own = local(n);
+    AnimatedNode a;
+    a.curves = node_curves_[size_t(n)];
+    if (parent_moving >= 0 || a.animated()) {
+      a.path = cat("$.nodes[", n, "]");
+      a.parent = parent_moving;
+      if (parent_moving < 0) a.base = parent;
+      a.rest = trs(n);
+      a.local = own;
+      moving_index_[size_t(n)] = int(moving_.size());
+      moving_.push_back(std::move(a));
+    }
+    const Matrix to_world = compose(parent, own);
     visit(n, to_world);
     stack.push_back({n, to_world, 0});
   };
   for (size_t r = 0; r < scene.nodes.size(); ++r) {
-    enter(scene.nodes[r], Matrix{}, cat("$.scenes[", s, "].nodes[", r, "]"));
+    enter(scene.nodes[r], Matrix{}, -1, cat("$.scenes[", s, "].nodes[", r, "]"));
     while (!stack.empty()) {
       Frame& f = stack.back();
       const tinygltf::Node& node = m_.nodes[size_t(f.node)];
@@ -169,7 +173,7 @@ void GltfReader::walk(int s) {
       }
       const size_t c = f.next_child++;
       const Matrix parent = f.to_world;
-      enter(node.children[c], parent, cat("$.nodes[", f.node, "].children[", c, "]"));
+      enter(node.children[c], parent, moving(f.node), cat("$.nodes[", f.node, "].children[", c, "]"));
     }
   }
 }
@@ -177,8 +181,18 @@ void GltfReader::walk(int s) {
 void GltfReader::visit(int n, const Matrix& to_world) {
   const tinygltf::Node& node = m_.nodes[size_t(n)];
   const std::string path = cat("$.nodes[", n, "]");
+  if (node.skin >= 0) fail(path + ".skin", "skinned meshes are not supported");
   if (node.mesh >= 0) {
-    at(m_.meshes, node.mesh, path + ".mesh");
+    const tinygltf::Mesh& mesh = at(m_.meshes, node.mesh, path + ".mesh");
+    // Morph targets are not read: refused unless their weights leave the mesh as it is.
+    const bool targets = std::any_of(mesh.primitives.begin(), mesh.primitives.end(),
+                                     [](const tinygltf::Primitive& p) { return !p.targets.empty(); });
+    const bool own = !node.weights.empty();
+    const std::vector<double>& weights = own ? node.weights : mesh.weights;
+    for (size_t k = 0; targets && k < weights.size(); ++k)
+      if (weights[k] != 0.0)
+        fail(cat(own ? path : cat("$.meshes[", node.mesh, "]"), ".weights[", k, "]"),
+             cat(weights[k], ": morph targets of a non-zero weight are not supported"));
     placed_.push_back({node.mesh, n, to_world});
   }
   if (node.camera >= 0) camera(n, to_world);
@@ -195,20 +209,28 @@ void GltfReader::camera(int n, const Matrix& to_world) {
     warning(cp, cat("a ", gltf_quoted(c.type), " camera is not supported; it is not used"));
     return;
   }
-  const double fov = c.perspective.yfov * 180.0 / kPi;
   CameraDesc d;
-  d.eye = Vec3f(to_world.point({0, 0, 0}));
-  d.look_at = Vec3f(to_world.point({0, 0, -1}));
-  d.up = Vec3f(to_world.vector({0, 1, 0}));
-  d.vfov_degrees = float(fov);
-  const Vec3f view = d.look_at - d.eye;
-  if (!(fov > 0.0 && fov < 180.0) || !in_coordinate_range(d.eye) || !in_coordinate_range(d.look_at) ||
-      !(length(view) > 0.0f) || !(length(cross(normalize(view), d.up)) > 1e-6f * length(d.up))) {
+  d.vfov_degrees = float(c.perspective.yfov * 180.0 / kPi);
+  const std::optional<CameraDesc> placed = node_camera(to_world, d);
+  if (!placed) {
     warning(cp, "its field of view or its node's placement cannot make a camera; it is not used");
     return;
   }
-  scene_.set_camera(d);
+  scene_.set_camera(*placed);
   camera_set_ = true;
+  follow(n, AnimatedTarget::Kind::camera, 0, Vec3f(1.0f), d);
+}
+
+void GltfReader::follow(int n, AnimatedTarget::Kind kind, uint32_t index, const Vec3f& power,
+                        const CameraDesc& camera) {
+  if (moving(n) < 0) return;
+  AnimatedTarget t;
+  t.kind = kind;
+  t.node = uint32_t(moving(n));
+  t.index = index;
+  t.power = power;
+  t.camera = camera;
+  targets_.push_back(t);
 }
 
 void GltfReader::light(int n, const tinygltf::Value& ext, const Matrix& to_world) {
@@ -218,16 +240,21 @@ void GltfReader::light(int n, const tinygltf::Value& ext, const Matrix& to_world
   Vec3d colour(1.0);
   if (light.color.size() == 3) colour = {light.color[0], light.color[1], light.color[2]};
   const Vec3f power = Vec3f(colour * light.intensity);
+  const bool directional = light.type == "directional";
   try {
-    if (light.type == "directional") {
-      scene_.add_light(DirectionalLight{Vec3f(normalize(to_world.vector({0, 0, -1}))), power});
+    if (directional) {
+      scene_.add_light(node_directional_light(to_world, power));
     } else {
       if (light.type == "spot") warning(lp, "a \"spot\" light is placed as a point light");
-      scene_.add_light(PointLight{Vec3f(to_world.point({0, 0, 0})), power});
+      scene_.add_light(node_point_light(to_world, power));
     }
   } catch (const Error& e) {
     fail(lp, e.what());
   }
+  if (directional)
+    follow(n, AnimatedTarget::Kind::directional_light, uint32_t(scene_.directional_lights().size() - 1), power);
+  else
+    follow(n, AnimatedTarget::Kind::point_light, uint32_t(scene_.point_lights().size() - 1), power);
 }
 
 uint32_t GltfReader::material(int i, const std::string& path) {
@@ -262,16 +289,23 @@ void GltfReader::place_mesh(int i, const MeshUse& use) {
   if (mesh.indices.empty()) return;
   const std::string mp = cat("$.meshes[", i, "]");
   std::vector<std::pair<Matrix, int>> placements;
+  bool moves = false;
   for (const auto& [to_world, node] : use.placements) {
     if (!inverse(to_world)) {
+      // A mesh the animation moves could not be placed at the poses it reaches from here.
+      if (moving(node) >= 0)
+        fail(cat("$.nodes[", node, "]"),
+             "its rest transform is singular (a zero scale) or too large to invert, so the mesh it places cannot be "
+             "animated");
       warning(cat("$.nodes[", node, "]"),
               "its transform is singular (a zero scale) or too large to invert; its mesh is not placed");
       continue;
     }
+    moves = moves || moving(node) >= 0;
     placements.emplace_back(to_world, node);
   }
   if (placements.empty()) return;
-  if (placements.size() == 1) {
+  if (placements.size() == 1 && !moves) {
     const Matrix& t = placements[0].first;
     const Matrix w = *inverse(t);
     for (Vec3f& p : mesh.positions) p = Vec3f(t.point(Vec3d(p)));
@@ -290,11 +324,13 @@ void GltfReader::place_mesh(int i, const MeshUse& use) {
     fail(mp, e.what());
   }
   for (const auto& [to_world, node] : placements) {
+    uint32_t instance = 0;
     try {
-      scene_.add_instance(id, Affine3f(to_world));
+      instance = scene_.add_instance(id, Affine3f(to_world));
     } catch (const Error& e) {
       fail(cat("$.nodes[", node, "]"), e.what());
     }
+    follow(node, AnimatedTarget::Kind::instance, instance);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "base/error.h"
 #include "base/text.h"
@@ -38,11 +39,19 @@ std::string lower_extension(const std::string& path) {
 }
 
 Scene load_scene(const std::string& path, std::optional<int> up_axis) {
-  if (path == "default") return make_default_scene();
+  return std::move(load_animated_scene(path, up_axis).scene);
+}
+
+AnimatedScene load_animated_scene(const std::string& path, std::optional<int> up_axis) {
+  AnimatedScene out;
+  if (path == "default") {
+    out.scene = make_default_scene();
+    return out;
+  }
 
   const std::string lower = lower_extension(path);
 
-  Scene scene;
+  Scene& scene = out.scene;
   if (lower == ".json") {
     load_json_scene(path, scene);  // needs at least one object, of any kind
   } else {
@@ -51,7 +60,7 @@ Scene load_scene(const std::string& path, std::optional<int> up_axis) {
     else if (lower == ".ply")
       load_ply(path, scene);
     else if (lower == ".gltf" || lower == ".glb")
-      load_gltf(path, scene);
+      out.animation = load_gltf(path, scene);
     else
       throw Error(cat(path, ": unknown scene format '", std::filesystem::path(path).extension().string(),
                       "' (.obj, .ply, .json, .gltf, .glb)"));
@@ -63,7 +72,7 @@ Scene load_scene(const std::string& path, std::optional<int> up_axis) {
   if (const size_t degenerate = scene.degenerate_triangle_count(); degenerate > 0)
     warn(cat(path, ": ", degenerate, " zero-area triangle", degenerate == 1 ? "" : "s", " kept; no ray can hit ",
              degenerate == 1 ? "it" : "them"));
-  return scene;
+  return out;
 }
 
 }  // namespace rp

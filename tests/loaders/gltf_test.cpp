@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "gltf_scratch.h"
 #include "io/loaders/load.h"
 #include "scratch.h"
 #include "tests/support/gltf_files.h"
@@ -30,26 +31,11 @@ namespace rp {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_loading;
 using test::GltfBuilder;
 using test::GltfForm;
 using test::scratch;
-
-/// `model` written as `name` in `form` in the scratch folder; its path.
-std::string written(const tinygltf::Model& model, const std::string& name, GltfForm form,
-                    const std::function<void(nlohmann::json&)>& patch = {}) {
-  const fs::path path = scratch() / name;
-  fs::create_directories(path.parent_path());
-  test::write_gltf(model, path.string(), form, patch);
-  return path.string();
-}
-
-/// what() of load_scene(path)'s rp::Error with the scratch folder's path removed, or "no error".
-std::string error_loading(const std::string& path) {
-  std::string s = test::error_of([&] { load_scene(path); });
-  const std::string dir = scratch().string() + "/";
-  for (size_t at = s.find(dir); at != std::string::npos; at = s.find(dir)) s.erase(at, dir.size());
-  return s;
-}
+using test::written;
 
 void expect_near(const Vec3d& a, const Vec3d& b, double tolerance, const std::string& what) {
   EXPECT_LE(length(a - b), tolerance) << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") vs (" << b.x << ", "

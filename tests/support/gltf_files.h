@@ -79,6 +79,41 @@ class GltfBuilder {
     return accessor(bv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, v.size());
   }
 
+  /// An accessor of floats of `type` (SCALAR, VEC3 or VEC4: 1, 3 or 4 floats an element).
+  int floats(const std::vector<float>& v, int type) {
+    const size_t n = type == TINYGLTF_TYPE_SCALAR ? 1 : type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+    return accessor(view(v.data(), v.size() * 4), TINYGLTF_COMPONENT_TYPE_FLOAT, type, v.size() / n);
+  }
+
+  /// A channel of animation `animation` (made when it is the next) moving the `path`
+  /// ("translation", "rotation" or "scale") of `node`, by a sampler of its own: keyframe
+  /// `times` and their `values` (3 or 4 floats an element; 3 elements a keyframe, in-tangent,
+  /// value, out-tangent, for "CUBICSPLINE"). Returns the sampler's index in the animation.
+  int animate(int node, const std::string& path, const std::vector<float>& times, const std::vector<float>& values,
+              const std::string& interpolation = "LINEAR", size_t animation = 0) {
+    const int input = floats(times, TINYGLTF_TYPE_SCALAR);
+    const int output = floats(values, path == "rotation" ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3);
+    return animate(node, path, input, output, interpolation, animation);
+  }
+
+  /// The same with a sampler of accessors `input` (times) and `output` (values) made already.
+  int animate(int node, const std::string& path, int input, int output, const std::string& interpolation,
+              size_t animation = 0) {
+    if (model.animations.size() <= animation) model.animations.resize(animation + 1);
+    tinygltf::AnimationSampler s;
+    s.input = input;
+    s.output = output;
+    s.interpolation = interpolation;
+    tinygltf::Animation& a = model.animations[animation];
+    a.samplers.push_back(s);
+    tinygltf::AnimationChannel c;
+    c.sampler = int(a.samplers.size() - 1);
+    c.target_node = node;
+    c.target_path = path;
+    a.channels.push_back(c);
+    return c.sampler;
+  }
+
   /// An accessor of indices stored as `component_type` (unsigned byte, short or int).
   int indices(const std::vector<uint32_t>& idx, int component_type) {
     std::vector<unsigned char> bytes;
