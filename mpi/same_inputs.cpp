@@ -54,12 +54,13 @@ static_assert(sizeof(Vec3f) == 12 && sizeof(Vec2f) == 8);
 static_assert(sizeof(Sphere) == 20 && sizeof(Plane) == 20);
 static_assert(sizeof(QuadricShape) == 4 * (10 + 3 + 6) + 4);
 static_assert(sizeof(PointLight) == 24 && sizeof(DirectionalLight) == 24);
-static_assert(sizeof(Affine3f) == 48);
+static_assert(sizeof(Affine3f) == 48 && sizeof(Affine3d) == 96);
 
 }  // namespace
 
-uint64_t scene_digest(const Scene& scene) {
-  Hasher h;
+namespace {
+
+void hash_scene(Hasher& h, const Scene& scene) {
   h.raw(uint64_t(scene.materials().size()));
   for (const Material& m : scene.materials()) {
     h.text(m.name);
@@ -99,6 +100,50 @@ uint64_t scene_digest(const Scene& scene) {
     h.raw(uint8_t(c->model));
   }
   h.raw(int32_t(scene.up_axis()));
+}
+
+void hash_animation(Hasher& h, const SceneAnimation& animation) {
+  h.raw(uint64_t(animation.curves().size()));
+  for (const AnimationCurve& c : animation.curves()) {
+    h.raw(uint8_t(c.property));
+    h.raw(uint8_t(c.interpolation));
+    h.array(c.times);
+    h.array(c.values);
+  }
+  h.raw(uint64_t(animation.nodes().size()));
+  for (const AnimatedNode& n : animation.nodes()) {
+    h.raw(int32_t(n.parent));
+    h.raw(n.base);
+    h.raw(n.curves);
+    h.raw(n.rest.translation);
+    h.raw(n.rest.rotation);
+    h.raw(n.rest.scale);
+    h.raw(n.local);
+  }
+  h.raw(uint64_t(animation.targets().size()));
+  for (const AnimatedTarget& t : animation.targets()) {
+    h.raw(uint8_t(t.kind));
+    for (const uint32_t v : {t.node, t.index}) h.raw(v);
+    h.raw(t.power);
+    for (const float f :
+         {t.camera.vfov_degrees, t.camera.fisheye_fov_degrees, t.camera.aperture, t.camera.focus_distance})
+      h.raw(f);
+    h.raw(uint8_t(t.camera.model));
+  }
+}
+
+}  // namespace
+
+uint64_t scene_digest(const Scene& scene) {
+  Hasher h;
+  hash_scene(h, scene);
+  return h.digest();
+}
+
+uint64_t scene_digest(const Scene& scene, const SceneAnimation& animation) {
+  Hasher h;
+  hash_scene(h, scene);
+  hash_animation(h, animation);
   return h.digest();
 }
 

@@ -8,7 +8,8 @@
 /// digest covers:
 /// - a scene: everything loaded that a trace or render reads (meshes with their names,
 ///   vertices, indices, normals, uvs and materials; spheres, quadrics, polygons, planes,
-///   instances, materials, lights, camera, up axis), hashed with XXH3 (xxHash): any change
+///   instances, materials, lights, camera, up axis) and its animation (every curve's
+///   keyframes, the nodes it moves and what they place), hashed with XXH3 (xxHash): any change
 ///   in what is loaded, from the scene file or a file it names (a material library, a mesh, a
 ///   glTF buffer), changes the digest;
 /// - a file read in parts (a ray file, each rank reading its share): its size and XXH3 of its
@@ -21,12 +22,17 @@
 #include <vector>
 
 #include "core/scene.h"
+#include "io/loaders/animation.h"
 #include "mpi/comm.h"
 
 namespace rp::dist {
 
 /// XXH3 (64-bit) of what a trace or render reads of `scene` (see the top of this file).
 uint64_t scene_digest(const Scene& scene);
+
+/// The same of `scene` and the animation that poses it (a render of several frames reads
+/// every pose).
+uint64_t scene_digest(const Scene& scene, const SceneAnimation& animation);
 
 /// The size and sampled XXH3 of the regular file `path` (see the top of this file). Throws
 /// rp::Error naming the path when it cannot be read.
