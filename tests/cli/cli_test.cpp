@@ -21,6 +21,7 @@
 #include "render/image_io.h"
 #include "tests/support/build_paths.h"
 #include "tests/support/gltf_files.h"
+#include "tests/support/raypack_command.h"
 #include "tests/support/sanitized.h"
 #include "tests/support/shell.h"
 #include "tests/support/temp_dir.h"
@@ -31,10 +32,8 @@ namespace fs = std::filesystem;
 
 using Result = rp::test::ShellResult;
 
-/// Runs `raypack <args>` through the shell, after `prefix` (shell commands such as a ulimit).
-Result run(const std::string& args, const std::string& prefix = "") {
-  return rp::test::run_shell(prefix + std::string(rp::test::kRaypackExe) + " " + args);
-}
+using rp::test::file_bytes;
+using rp::test::run_raypack;
 
 /// Each test in a fresh folder of its own (mkdtemp), so that two runs of the suite on one
 /// machine (two clones, CI beside a developer) never share one.
@@ -46,7 +45,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, RenderWritesAnImageOfTheRequestedSizeThatIsNotBlank) {
   const fs::path out = dir_ / "small.png";
-  const Result r = run("render --resolution 96x64 --spp 1 -o " + out.string());
+  const Result r = run_raypack("render --resolution 96x64 --spp 1 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   ASSERT_TRUE(fs::exists(out));
   const rp::Image img = rp::read_image(out.string());
@@ -59,17 +58,12 @@ TEST_F(Cli, RenderWritesAnImageOfTheRequestedSizeThatIsNotBlank) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
-std::string file_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 TEST_F(Cli, RenderWritesTheSameExrBytesForOneAndTwoThreads) {
   const fs::path one = dir_ / "one.exr", two = dir_ / "two.exr";
-  Result r = run("render --resolution 40x24 --spp 4 --seed 3 -q -t 1 -o " + one.string());
+  Result r = run_raypack("render --resolution 40x24 --spp 4 --seed 3 -q -t 1 -o " + one.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(r.output.empty()) << r.output;
-  r = run("render --resolution 40x24 --spp 4 --seed 3 -q -t 2 -o " + two.string());
+  r = run_raypack("render --resolution 40x24 --spp 4 --seed 3 -q -t 2 -o " + two.string());
   ASSERT_EQ(r.status, 0) << r.output;
   const rp::Image img = rp::read_image(one.string());
   EXPECT_EQ(img.width, 40);
@@ -80,7 +74,7 @@ TEST_F(Cli, RenderWritesTheSameExrBytesForOneAndTwoThreads) {
 }
 
 TEST_F(Cli, UnknownBackendIsAOneLineErrorWithStatusTwo) {
-  const Result r = run("render --backend nope -o " + (dir_ / "x.png").string());
+  const Result r = run_raypack("render --backend nope -o " + (dir_ / "x.png").string());
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.output, "raypack: --backend: unknown backend 'nope' (available: embree, simd)\n");
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
@@ -99,7 +93,7 @@ TEST_F(Cli, ABadBackendOrVariantNamesTheFlagGivenInEverySubcommand) {
       {"stability --method simd/watertight", "--method: unknown method 'simd/watertight' ("},
       {"stability --family edgs", "--family: unknown family 'edgs' ("}};
   for (const auto& [args, message] : bad) {
-    const Result r = run(args);
+    const Result r = run_raypack(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(r.output.rfind("raypack: " + message, 0), 0u) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
@@ -116,7 +110,7 @@ TEST_F(Cli, MistypedSubcommandsAndFlagsGetTheNearestNameAndTheirOwnHelp) {
       {"render -x", "raypack: render: unknown flag '-x' (see raypack render --help)\n"},
       {"render --threads -1", "raypack: --threads: Value -1 not in range 0 to 1024 (see raypack render --help)\n"}};
   for (const auto& [args, message] : cases) {
-    const Result r = run(args);
+    const Result r = run_raypack(args);
     EXPECT_EQ(r.status, 2) << args;
     EXPECT_EQ(r.output, message) << args;
   }
@@ -130,12 +124,12 @@ TEST_F(Cli, QuietPrintsNothingOnSuccessInEverySubcommand) {
         "trace --rays " + rays.string() + " -o " + (dir_ / "hits.csv").string(), std::string("diff --count 64"),
         "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --json " + json.string(),
         std::string("stability --count 8 --family edges --method embree/default:single")}) {
-    const Result r = run(args + " -q");
+    const Result r = run_raypack(args + " -q");
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_EQ(r.output, "") << args;
   }
   ASSERT_TRUE(fs::exists(json));
-  const Result r = run("chart " + json.string() + " -o " + (dir_ / "c.png").string() + " -q");
+  const Result r = run_raypack("chart " + json.string() + " -o " + (dir_ / "c.png").string() + " -q");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(r.output, "");
   EXPECT_TRUE(fs::exists(dir_ / "c.png"));
@@ -146,7 +140,7 @@ TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
                                  "render --resolution 100000x100000", "render --spp 0", "render --spp abc",
                                  "render --threads -1", "render --no-such-flag", "frobnicate", "render --up-axis w",
                                  "diff --up-axis 2", "bench --up-axis up"}) {
-    const Result r = run(args + " -o " + (dir_ / "x.png").string());
+    const Result r = run_raypack(args + " -o " + (dir_ / "x.png").string());
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
     EXPECT_EQ(r.output.rfind("raypack: ", 0), 0u) << args << ": " << r.output;
@@ -156,7 +150,7 @@ TEST_F(Cli, BadFlagValuesAreOneLineErrorsWithStatusTwo) {
 
 TEST_F(Cli, MissingSceneFileIsAnErrorWithStatusOne) {
   const fs::path scene = dir_ / "nope.obj";
-  const Result r = run("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
+  const Result r = run_raypack("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output, "raypack: " + scene.string() + ": cannot open: No such file or directory\n");
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
@@ -165,7 +159,8 @@ TEST_F(Cli, MissingSceneFileIsAnErrorWithStatusOne) {
 TEST_F(Cli, RendersAnObjFileWithTheSimdBackend) {
   const fs::path scene = dir_ / "quad.obj", out = dir_ / "quad.png";
   std::ofstream(scene) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n";
-  const Result r = run("render --backend simd --scene " + scene.string() + " --resolution 32x32 -o " + out.string());
+  const Result r =
+      run_raypack("render --backend simd --scene " + scene.string() + " --resolution 32x32 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("with simd/default"), std::string::npos) << r.output;
   const rp::Image img = rp::read_image(out.string());
@@ -175,7 +170,7 @@ TEST_F(Cli, RendersAnObjFileWithTheSimdBackend) {
 
 TEST_F(Cli, AnOutputInAMissingFolderIsABadFlagAndNoFile) {
   const fs::path out = dir_ / "missing-dir" / "x.png";
-  const Result r = run("render --resolution 16x16 -o " + out.string());
+  const Result r = run_raypack("render --resolution 16x16 -o " + out.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output, "raypack: -o: " + out.string() + ": cannot write: No such file or directory\n");
   EXPECT_NE(r.output.find(out.string()), std::string::npos) << r.output;
@@ -188,7 +183,7 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n"
                       << "5,10,5,0,-1,0,0,inf\n"
                       << "5,10,5,0,1,0,0,inf\n";
-  Result r = run("trace --rays " + rays.string() + " -o " + hits.string() + " --backend simd");
+  Result r = run_raypack("trace --rays " + rays.string() + " -o " + hits.string() + " --backend simd");
   ASSERT_EQ(r.status, 0) << r.output;
   std::ifstream in(hits);
   std::string header, first, second;
@@ -199,7 +194,7 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
   EXPECT_EQ(first.rfind("10,", 0), 0u) << first;  // t = 10 on the plane
   EXPECT_EQ(first.substr(first.size() - 9), ",0,1,0,-1") << first;  // normal +y, no instance
   EXPECT_EQ(second, "inf,-1,0,0,0,0,0,-1");
-  r = run("trace --rays " + rays.string() + " -o " + bin.string() + " -q");
+  r = run_raypack("trace --rays " + rays.string() + " -o " + bin.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(fs::file_size(bin), 16u + 2u * 32u);
 }
@@ -207,14 +202,14 @@ TEST_F(Cli, TraceWritesOneHitPerRayAsTheBackendFindsThem) {
 TEST_F(Cli, AFileNameWithAnUnknownExtensionIsABadFlagFoundBeforeAnyWork) {
   const fs::path rays = dir_ / "rays.csv";
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz\n5,10,5,0,-1,0\n";
-  Result r = run("trace --rays " + rays.string() + " -o " + (dir_ / "hits.txt").string());
+  Result r = run_raypack("trace --rays " + rays.string() + " -o " + (dir_ / "hits.txt").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output, "raypack: -o: " + (dir_ / "hits.txt").string() +
                           ": unknown hit file extension '.txt' (.csv for text; .bin, .hits or none for binary)\n");
   EXPECT_FALSE(fs::exists(dir_ / "hits.txt"));
   for (const std::string& cmd : {"trace -o " + (dir_ / "h.bin").string() + " --rays", std::string("diff --rays"),
                                  std::string("bench --rays")}) {
-    r = run(cmd + " " + (dir_ / "rays.json").string());
+    r = run_raypack(cmd + " " + (dir_ / "rays.json").string());
     EXPECT_EQ(r.status, 2) << cmd << ": " << r.output;
     EXPECT_EQ(r.output.rfind("raypack: --rays: " + (dir_ / "rays.json").string() + ": unknown ray file extension '.json'", 0), 0u)
         << cmd << ": " << r.output;
@@ -224,7 +219,7 @@ TEST_F(Cli, AFileNameWithAnUnknownExtensionIsABadFlagFoundBeforeAnyWork) {
 TEST_F(Cli, TraceRejectsAMalformedRayFileWithStatusOne) {
   const fs::path rays = dir_ / "bad.csv";
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n1,2,3\n";
-  const Result r = run("trace --rays " + rays.string() + " -o " + (dir_ / "h.csv").string());
+  const Result r = run_raypack("trace --rays " + rays.string() + " -o " + (dir_ / "h.csv").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(r.output, "raypack: " + rays.string() + ": line 2: 3 values, expected 8\n");
   EXPECT_FALSE(fs::exists(dir_ / "h.csv"));
@@ -232,8 +227,8 @@ TEST_F(Cli, TraceRejectsAMalformedRayFileWithStatusOne) {
 
 TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
   const fs::path json = dir_ / "d.json", image = dir_ / "d.png";
-  Result r = run("diff --kind primary --count 4096 -a embree -b simd --json " + json.string() + " --image " +
-                 image.string() + " --min-agreement 99");
+  Result r = run_raypack("diff --kind primary --count 4096 -a embree -b simd --json " + json.string() + " --image " +
+                         image.string() + " --min-agreement 99");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("\n4096 rays, embree/default (A) vs simd/default (B)"), std::string::npos) << r.output;
   for (const char* word : {"agree", "tie", "hit/miss", "wrong primitive", "t error", "reference supports"})
@@ -243,22 +238,22 @@ TEST_F(Cli, DiffPrintsTheTableWritesJsonAndAnImageAndHonoursMinAgreement) {
   // A backend against the reference itself, demanding more agreement than float can give on
   // a scene with shared edges, must fail with status 3 when it falls short; 0 disagreements
   // would pass, so check the status matches the printed agreement.
-  r = run("diff --kind random --count 20000 -a simd -b reference --min-agreement 100");
+  r = run_raypack("diff --kind random --count 20000 -a simd -b reference --min-agreement 100");
   const bool perfect = r.output.find("agreement 100.00000%") != std::string::npos;
   EXPECT_EQ(r.status, perfect ? 0 : 3) << r.output;
-  r = run("diff --rays nowhere.rays");
+  r = run_raypack("diff --rays nowhere.rays");
   EXPECT_EQ(r.status, 1) << r.output;
   // --count is the number of rays traced, for every kind, not a rounded image size.
   for (const char* kind : {"primary", "diffuse", "random"}) {
-    r = run(std::string("diff --count 100 --kind ") + kind);
+    r = run_raypack(std::string("diff --count 100 --kind ") + kind);
     EXPECT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("\n100 rays, "), std::string::npos) << kind << ": " << r.output;
   }
   // --rays is a ray file in every command; generated rays are a --kind.
-  r = run("diff --rays primary");
+  r = run_raypack("diff --rays primary");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output, "raypack: --rays: there is no ray file 'primary'; generated rays are chosen with --kind primary\n");
-  r = run("diff --kind secondary");
+  r = run_raypack("diff --kind secondary");
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output, "raypack: --kind: 'secondary' is not primary, diffuse or random\n");
 }
@@ -267,7 +262,7 @@ TEST_F(Cli, InfoCountsTheScene) {
   const fs::path scene = dir_ / "two.obj";
   // A quad (2 triangles), a degenerate triangle, and an unreferenced vertex.
   std::ofstream(scene) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nf 1 2 3 4\nf 1 2 2\n";
-  const Result r = run("info " + scene.string());
+  const Result r = run_raypack("info " + scene.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("triangles    3 in 1 mesh(es), 4 vertices"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("degenerate   1 zero-area triangles"), std::string::npos) << r.output;
@@ -281,10 +276,10 @@ TEST_F(Cli, InfoCountsTheScene) {
 
 TEST_F(Cli, RenderWritesAovsAsOneExr) {
   const fs::path out = dir_ / "b.png", aov = dir_ / "aov.exr";
-  Result r = run("render --resolution 24x16 -q -o " + out.string() + " --aov " + aov.string());
+  Result r = run_raypack("render --resolution 24x16 -q -o " + out.string() + " --aov " + aov.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_GT(fs::file_size(aov), 100u);
-  r = run("render --resolution 24x16 -q -o " + out.string() + " --aov " + (dir_ / "aov.png").string());
+  r = run_raypack("render --resolution 24x16 -q -o " + out.string() + " --aov " + (dir_ / "aov.png").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("AOVs are written as OpenEXR"), std::string::npos) << r.output;
 }
@@ -295,13 +290,13 @@ TEST_F(Cli, EveryCameraAndSamplerRenders) {
                                  "--sampler uniform --spp 4", "--sampler random --spp 2", "--sampler adaptive",
                                  "--eye 0,2,9 --look-at 0,1,0 --up 0,1,0 --fov 50"}) {
     const fs::path out = dir_ / "c.png";
-    const Result r = run("render --resolution 32x24 -o " + out.string() + " " + args);
+    const Result r = run_raypack("render --resolution 32x24 -o " + out.string() + " " + args);
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_EQ(rp::read_image(out.string()).width, 32) << args;
   }
   for (const std::string args : {"--camera orthographic", "--sampler uniform --spp 3", "--eye 1,2", "--fov 200",
                                  "--eye 0,1,0 --look-at 0,1,0"}) {
-    const Result r = run("render --resolution 32x24 -o " + (dir_ / "d.png").string() + " " + args);
+    const Result r = run_raypack("render --resolution 32x24 -o " + (dir_ / "d.png").string() + " " + args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
   }
@@ -309,7 +304,8 @@ TEST_F(Cli, EveryCameraAndSamplerRenders) {
 
 TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   const fs::path json = dir_ / "b.json", chart = dir_ / "c.png", again = dir_ / "again.png";
-  Result r = run("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
+  Result r =
+      run_raypack("bench --size 16 --min-runs 1 --max-runs 2 --json " + json.string() + " --chart " + chart.string());
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* word : {"simd/default:large",
                            "simd/default:packet8",
@@ -342,21 +338,21 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
     EXPECT_GT(fs::exists(p) ? fs::file_size(p) : 0u, 1000u) << p;
   EXPECT_FALSE(fs::exists(dir_ / "c.svg")) << "a .png chart is drawn as PNG only";
   EXPECT_EQ(rp::read_image(chart.string()).width, 3 * 500 + 280) << "three kinds' panels and the legend column";
-  r = run("chart " + json.string() + " -o " + again.string());
+  r = run_raypack("chart " + json.string() + " -o " + again.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(again));
   // The format follows the extension: an SVG named .svg, the PNG beside it untouched.
   const std::string png_bytes = file_bytes(chart);
-  r = run("chart " + json.string() + " -o " + (dir_ / "c.svg").string());
+  r = run_raypack("chart " + json.string() + " -o " + (dir_ / "c.svg").string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(file_bytes(dir_ / "c.svg").rfind("<?xml", 0), 0u);
   EXPECT_EQ(file_bytes(dir_ / "c-scaling.svg").rfind("<?xml", 0), 0u);
   EXPECT_EQ(file_bytes(chart), png_bytes);
-  r = run("chart " + json.string() + " -o " + (dir_ / "c.jpg").string());
+  r = run_raypack("chart " + json.string() + " -o " + (dir_ / "c.jpg").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("unknown chart format '.jpg'"), std::string::npos) << r.output;
   std::ofstream(dir_ / "bad.json") << "{\"not\": 1}";
-  r = run("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
+  r = run_raypack("chart " + (dir_ / "bad.json").string() + " -o " + again.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("bad.json: not a raypack bench file"), std::string::npos) << r.output;
   // Results of one ray kind, or of a ray file, chart as panels of those kinds only.
@@ -364,8 +360,8 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n5,10,5,0,1,0,0,inf\n";
   for (const std::string& args : {std::string("--kind primary"), "--rays " + rays.string()}) {
     fs::remove(chart);
-    r = run("bench --size 8 --min-runs 1 --max-runs 1 --method 'simd/default:large' " + args + " --chart " +
-            chart.string());
+    r = run_raypack("bench --size 8 --min-runs 1 --max-runs 1 --method 'simd/default:large' " + args + " --chart " +
+                    chart.string());
     EXPECT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_TRUE(fs::exists(chart)) << args;
   }
@@ -373,7 +369,8 @@ TEST_F(Cli, BenchWritesJsonAndChartsThatChartRedraws) {
 
 TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
   // --method and --kind choose the rows; every other method and kind is left out.
-  Result r = run("bench --size 16 --min-runs 1 --max-runs 1 --method '^embree/default:(stream|single)$' --kind shadow");
+  Result r = run_raypack(
+      "bench --size 16 --min-runs 1 --max-runs 1 --method '^embree/default:(stream|single)$' --kind shadow");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("embree/default:stream            shadow"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("embree/default:single            shadow"), std::string::npos) << r.output;
@@ -387,7 +384,7 @@ TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
     for (int i = 0; i < 64; ++i) out << (i % 8) * 0.1 - 0.4 << "," << (i / 8) * 0.1 - 0.4 << ",5,0,0,-1,0,inf\n";
   }
   for (const std::string& flag : {std::string(), std::string(" --any-hit")}) {
-    r = run("bench --min-runs 1 --max-runs 1 --method 'simd/default:large' --rays " + rays.string() + flag);
+    r = run_raypack("bench --min-runs 1 --max-runs 1 --method 'simd/default:large' --rays " + rays.string() + flag);
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find(flag.empty() ? "simd/default:large               file "
                                          : "simd/default:large               file-any"),
@@ -405,7 +402,7 @@ TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
       {"--any-hit", "--any-hit applies to --rays only", 2},
       {"--rays " + (dir_ / "absent.bin").string(), "absent.bin", 1}};
   for (const auto& [args, message, status] : bad) {
-    r = run("bench --size 8 --min-runs 1 --max-runs 1 " + args);
+    r = run_raypack("bench --size 8 --min-runs 1 --max-runs 1 " + args);
     EXPECT_EQ(r.status, status) << args;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
     EXPECT_NE(r.output.find(message), std::string::npos) << args << ": " << r.output;
@@ -413,13 +410,13 @@ TEST_F(Cli, BenchFiltersMethodsAndKindsAndTimesRayFiles) {
 }
 
 TEST_F(Cli, HelpAndVersion) {
-  Result r = run("--help");
+  Result r = run_raypack("--help");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("render"), std::string::npos);
-  r = run("--version");
+  r = run_raypack("--version");
   EXPECT_EQ(r.status, 0);
   EXPECT_EQ(r.output.rfind("raypack ", 0), 0u) << r.output;
-  r = run("backends");
+  r = run_raypack("backends");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("embree"), std::string::npos);
 }
@@ -429,21 +426,21 @@ TEST_F(Cli, HelpAndVersion) {
 TEST_F(Cli, CameraAndLightFlagsOutsideTheCoordinateRangeAreBadFlags) {
   const std::string out = " --resolution 16x16 -o " + (dir_ / "x.png").string();
   // Embree aborted the process (SIGABRT) on these before the range rule.
-  Result r = run("render --eye 0,0,1e19 --look-at 0,0,0" + out);
+  Result r = run_raypack("render --eye 0,0,1e19 --look-at 0,0,0" + out);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output, "raypack: --eye: '0,0,1e19' is outside the supported coordinate range |x| <= 1073741824 (2^30)\n");
-  r = run("render --eye 0,0,3e38" + out);
+  r = run_raypack("render --eye 0,0,3e38" + out);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output.find("parallel"), std::string::npos) << r.output;
-  r = run("render --camera thin-lens --eye 0,0,1e9 --aperture 1e9" + out);
+  r = run_raypack("render --camera thin-lens --eye 0,0,1e9 --aperture 1e9" + out);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output.rfind("raypack: --aperture: 1e+09 puts the lens around the eye", 0), 0u) << r.output;
-  r = run("render --light 0,0,1e19,5" + out);
+  r = run_raypack("render --light 0,0,1e19,5" + out);
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_EQ(r.output.rfind("raypack: --light: '0,0,1e19,5' is outside the supported coordinate range", 0), 0u) << r.output;
   // A light is four numbers; the message says so whichever of them is wrong.
   for (const char* light : {"1,2,3", "1,2,x,4", "1,2,3,-1", "1,2,3,4,5"}) {
-    r = run(std::string("render --light ") + light + out);
+    r = run_raypack(std::string("render --light ") + light + out);
     EXPECT_EQ(r.status, 2) << r.output;
     EXPECT_EQ(r.output, std::string("raypack: --light: '") + light + "' is not four numbers x,y,z,intensity with intensity > 0\n");
   }
@@ -458,7 +455,7 @@ TEST_F(Cli, AFileOutsideTheCoordinateRangeNamesTheFileAndLineNotTheCamera) {
                                "1073741824 (2^30)\n";
   for (const std::string& cmd : {"render -o " + (dir_ / "x.png").string(), std::string("diff --count 64"),
                                 std::string("info")}) {
-    const Result r = run(cmd + " --scene " + scene.string());
+    const Result r = run_raypack(cmd + " --scene " + scene.string());
     EXPECT_EQ(r.status, 1) << cmd << ": " << r.output;
     EXPECT_EQ(r.output, expected) << cmd;
   }
@@ -472,7 +469,8 @@ TEST_F(Cli, RaysOutsideTheRangeAreTracedAsMissesWithAWarning) {
                       << "5,10,5,0,-1e-30,0,0,inf\n"    // too short to trace without overflow
                       << "5,10,5,0,-1,0,0,inf\n";       // an ordinary ray onto the ground plane
   for (const char* backend : {"embree", "simd"}) {
-    const Result r = run(std::string("trace --backend ") + backend + " --rays " + rays.string() + " -o " + hits.string());
+    const Result r =
+        run_raypack(std::string("trace --backend ") + backend + " --rays " + rays.string() + " -o " + hits.string());
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_NE(r.output.find("warning: " + rays.string() + ": 3 of 4 rays are outside the valid-ray rule"),
               std::string::npos)
@@ -482,7 +480,7 @@ TEST_F(Cli, RaysOutsideTheRangeAreTracedAsMissesWithAWarning) {
     for (int i = 0; i < 3; ++i) EXPECT_EQ(h[i].prim_id, rp::kInvalidId) << backend << " ray " << i;
     EXPECT_EQ(h[3].t, 10.0f) << backend;
   }
-  const Result r = run("diff --rays " + rays.string() + " -a embree -b simd --min-agreement 100");
+  const Result r = run_raypack("diff --rays " + rays.string() + " -a embree -b simd --min-agreement 100");
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
@@ -491,13 +489,13 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
   std::ofstream(rays) << "ox,oy,oz,dx,dy,dz,tnear,tfar\n5,10,5,0,-1,0,0,inf\n";
   struct stat before {}, after {};
   ASSERT_EQ(::stat("/dev/null", &before), 0);
-  Result r = run("trace --rays " + rays.string() + " -o /dev/null -q");
+  Result r = run_raypack("trace --rays " + rays.string() + " -o /dev/null -q");
   EXPECT_EQ(r.status, 0) << r.output;
   ASSERT_EQ(::stat("/dev/null", &after), 0);
   EXPECT_TRUE(S_ISCHR(after.st_mode)) << "/dev/null was replaced";
   EXPECT_EQ(after.st_ino, before.st_ino);
   // Standard output on a pipe: the bytes arrive there.
-  r = run("trace --rays " + rays.string() + " -o /dev/stdout -q");
+  r = run_raypack("trace --rays " + rays.string() + " -o /dev/stdout -q");
   EXPECT_EQ(r.status, 0);
   EXPECT_EQ(r.output.size(), 16u + 32u);
   EXPECT_EQ(r.output.substr(0, 4), "RPHT");
@@ -505,7 +503,7 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
   fs::create_directory(dir_ / "store");
   std::ofstream(dir_ / "store" / "render.png") << "old";
   fs::create_symlink(dir_ / "store" / "render.png", dir_ / "latest.png");
-  r = run("render --resolution 16x16 -q -o " + (dir_ / "latest.png").string());
+  r = run_raypack("render --resolution 16x16 -q -o " + (dir_ / "latest.png").string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::is_symlink(dir_ / "latest.png"));
   EXPECT_EQ(rp::read_image((dir_ / "store" / "render.png").string()).width, 16);
@@ -514,7 +512,7 @@ TEST_F(Cli, OutputsNeverReplaceDevicesOrSymlinks) {
 
 TEST_F(Cli, AnOutputWithoutAnImageWriterIsABadFlagThatLeavesNothing) {
   // OIIO has no writer for .xyz: refused with the flags, before an output file is opened.
-  const Result r = run("render --resolution 16x16 -q -o " + (dir_ / "image.xyz").string());
+  const Result r = run_raypack("render --resolution 16x16 -q -o " + (dir_ / "image.xyz").string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("no image writer for extension '.xyz'"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::is_empty(dir_)) << "left " << fs::directory_iterator(dir_)->path();
@@ -526,12 +524,12 @@ TEST_F(Cli, SpecialInputFilesAreRefusedAtOnce) {
   fs::create_symlink("/dev/zero", dir_ / "zero.ply");
   fs::create_symlink("/dev/zero", dir_ / "zero.bin");
   // `timeout` turns a hang (the old blocking open of a FIFO) into a failure, not a stuck suite.
-  Result r = run("info " + fifo.string(), "timeout 20 ");
+  Result r = run_raypack("info " + fifo.string(), "timeout 20 ");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output, "raypack: " + fifo.string() + ": cannot read: not a regular file (a FIFO)\n");
-  r = run("info " + (dir_ / "zero.ply").string(), "timeout 20 ");
+  r = run_raypack("info " + (dir_ / "zero.ply").string(), "timeout 20 ");
   EXPECT_EQ(r.output, "raypack: " + (dir_ / "zero.ply").string() + ": cannot read: not a regular file (a character device)\n");
-  r = run("trace --rays " + (dir_ / "zero.bin").string() + " -o " + (dir_ / "h.bin").string(), "timeout 20 ");
+  r = run_raypack("trace --rays " + (dir_ / "zero.bin").string() + " -o " + (dir_ / "h.bin").string(), "timeout 20 ");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("not a regular file (a character device)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "h.bin"));
@@ -539,15 +537,15 @@ TEST_F(Cli, SpecialInputFilesAreRefusedAtOnce) {
 
 TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
   const fs::path bench = dir_ / "b.json", stability = dir_ / "s.json", chart = dir_ / "c.svg";
-  Result r =
-      run("stability --count 64 --family edges --family vertices --family translated --method simd/default:stream "
-          "--method simd/watertight:stream --method embree/robust:single -q --json " +
-          stability.string());
+  Result r = run_raypack(
+      "stability --count 64 --family edges --family vertices --family translated --method simd/default:stream "
+      "--method simd/watertight:stream --method embree/robust:single -q --json " +
+      stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
-  r =
-      run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --kind diffuse --method "
-          "'simd/(default|watertight):large|embree/(robust|default):packet8' -q --json " +
-          bench.string() + " --chart " + chart.string() + " --stability " + stability.string());
+  r = run_raypack(
+      "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --kind diffuse --method "
+      "'simd/(default|watertight):large|embree/(robust|default):packet8' -q --json " +
+      bench.string() + " --chart " + chart.string() + " --stability " + stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string svg = file_bytes(dir_ / "c-pareto.svg");
   ASSERT_EQ(svg.rfind("<?xml", 0), 0u);
@@ -559,36 +557,39 @@ TEST_F(Cli, ParetoChartJoinsBenchAndStabilityByMethod) {
   for (const char* panel : {"primary rays", "diffuse rays"}) EXPECT_NE(svg.find(panel), std::string::npos) << panel;
   EXPECT_EQ(svg.find("shadow rays"), std::string::npos) << "no panel for a kind not timed";
   // The redraw from the saved file gives the same picture.
-  r = run("chart " + bench.string() + " -o " + (dir_ / "again.svg").string() + " --stability " + stability.string());
+  r = run_raypack("chart " + bench.string() + " -o " + (dir_ / "again.svg").string() + " --stability " +
+                  stability.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(file_bytes(dir_ / "again-pareto.svg"), svg);
   EXPECT_EQ(r.output, "raypack: wrote " + (dir_ / "again.svg").string() + ", " + (dir_ / "again-scaling.svg").string() +
                           ", " + (dir_ / "again-pareto.svg").string() + "\n");
   // Files that cannot be joined: one-line errors naming the file, and no chart.
   const fs::path only_needles = dir_ / "needles.json";
-  ASSERT_EQ(run("stability --count 16 --family needles -q --json " + only_needles.string()).status, 0);
+  ASSERT_EQ(run_raypack("stability --count 16 --family needles -q --json " + only_needles.string()).status, 0);
   for (const auto& [file, message] :
        {std::pair{only_needles, ": no results of the families edges, vertices, translated 1e6, grazing"},
         std::pair{bench, ": not a raypack stability file (no \"results\")"}}) {
-    r = run("chart " + bench.string() + " -o " + (dir_ / "bad.svg").string() + " --stability " + file.string());
+    r = run_raypack("chart " + bench.string() + " -o " + (dir_ / "bad.svg").string() + " --stability " + file.string());
     EXPECT_EQ(r.status, 1) << r.output;
     EXPECT_EQ(r.output, "raypack: " + file.string() + message + "\n");
     EXPECT_FALSE(fs::exists(dir_ / "bad-pareto.svg"));
   }
   // A stability file whose methods the bench did not time.
-  r = run("bench --size 8 --min-runs 1 --max-runs 1 --kind primary --method 'embree/default:stream' -q --json " +
-          (dir_ / "e.json").string());
+  r = run_raypack(
+      "bench --size 8 --min-runs 1 --max-runs 1 --kind primary --method 'embree/default:stream' -q --json " +
+      (dir_ / "e.json").string());
   ASSERT_EQ(r.status, 0) << r.output;
-  r = run("chart " + (dir_ / "e.json").string() + " -o " + (dir_ / "e.svg").string() + " --stability " + stability.string());
+  r = run_raypack("chart " + (dir_ / "e.json").string() + " -o " + (dir_ / "e.svg").string() + " --stability " +
+                  stability.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find(stability.string() + ": no method in common with the bench results"), std::string::npos)
       << r.output;
   // --stability draws a chart, so bench refuses it without --chart, and a bad file before timing.
-  r = run("bench --size 8 --min-runs 1 --max-runs 1 --stability " + stability.string());
+  r = run_raypack("bench --size 8 --min-runs 1 --max-runs 1 --stability " + stability.string());
   EXPECT_EQ(r.status, 2) << r.output;
   EXPECT_NE(r.output.find("--stability: draws a chart, so it needs --chart"), std::string::npos) << r.output;
-  r = run("bench --size 8 --min-runs 1 --max-runs 1 --chart " + (dir_ / "x.svg").string() + " --stability " +
-          only_needles.string());
+  r = run_raypack("bench --size 8 --min-runs 1 --max-runs 1 --chart " + (dir_ / "x.svg").string() + " --stability " +
+                  only_needles.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "x.svg"));
@@ -598,10 +599,10 @@ TEST_F(Cli, DeepJsonIsAOneLineError) {
   const fs::path scene = dir_ / "deep.json", bench = dir_ / "deep-bench.json";
   std::ofstream(scene) << "{\"objects\": " << std::string(70000, '[') << std::string(70000, ']') << "}";
   std::ofstream(bench) << std::string(70000, '{');
-  Result r = run("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
+  Result r = run_raypack("render --scene " + scene.string() + " -o " + (dir_ / "x.png").string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output, "raypack: " + scene.string() + ": line 1, column 76: nesting deeper than 64 levels\n");
-  r = run("chart " + bench.string() + " -o " + (dir_ / "c.png").string());
+  r = run_raypack("chart " + bench.string() + " -o " + (dir_ / "c.png").string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output, "raypack: " + bench.string() + ": line 1, column 65: nesting deeper than 64 levels\n");
 }
@@ -610,13 +611,13 @@ TEST_F(Cli, MessagesAreOneLineOfValidUtf8) {
   const fs::path scene = dir_ / "bad.json";
   // An unknown key with invalid UTF-8 and a newline and an escape sequence in it.
   std::ofstream(scene) << "{\"objects\": [], \"k\xff\xfe\\n\\u001b[31m\": 1}";
-  Result r = run("render --scene " + scene.string());
+  Result r = run_raypack("render --scene " + scene.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_EQ(rp::one_line(r.output.substr(0, r.output.size() - 1)), r.output.substr(0, r.output.size() - 1)) << r.output;
   // A syntax error whose "last read" text holds raw bytes.
   std::ofstream(scene) << "{\"objects\": [\xc3\x28\x1b]}";
-  r = run("render --scene " + scene.string());
+  r = run_raypack("render --scene " + scene.string());
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_EQ(rp::one_line(r.output.substr(0, r.output.size() - 1)), r.output.substr(0, r.output.size() - 1)) << r.output;
@@ -624,11 +625,11 @@ TEST_F(Cli, MessagesAreOneLineOfValidUtf8) {
 
 TEST_F(Cli, ChartFileNamesAndLabelsAreDataNeverCommands) {
   const fs::path json = dir_ / "b.json";
-  Result r = run("bench --size 8 --min-runs 1 --max-runs 1 --json " + json.string());
+  Result r = run_raypack("bench --size 8 --min-runs 1 --max-runs 1 --json " + json.string());
   ASSERT_EQ(r.status, 0) << r.output;
   // A name that closed gnuplot's quotes ran `system` through the old shell-and-script route.
   const fs::path odd = dir_ / "a'; system 'touch X'; x='.png";
-  r = run("chart " + json.string() + " -o \"" + odd.string() + "\"");
+  r = run_raypack("chart " + json.string() + " -o \"" + odd.string() + "\"");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(odd));
   EXPECT_FALSE(fs::exists(dir_ / "X"));
@@ -640,7 +641,7 @@ TEST_F(Cli, ChartFileNamesAndLabelsAreDataNeverCommands) {
   const size_t method = text.find("\"method\": \"");
   text.insert(method + 11, "m\\\"\\nEOD\\nsystem(\\\"touch W\\\")\\n");
   std::ofstream(dir_ / "evil.json") << text;
-  r = run("chart " + (dir_ / "evil.json").string() + " -o " + (dir_ / "evil.svg").string());
+  r = run_raypack("chart " + (dir_ / "evil.json").string() + " -o " + (dir_ / "evil.svg").string());
   ASSERT_EQ(r.status, 0) << r.output;
   for (const char* made : {"Y", "Z", "W"}) EXPECT_FALSE(fs::exists(dir_ / made) || fs::exists(made)) << made;
   EXPECT_EQ(file_bytes(dir_ / "evil.svg").rfind("<?xml", 0), 0u);
@@ -657,23 +658,25 @@ TEST_F(Cli, InfoPrintsCountsAsIntegers) {
   for (int y = 0; y < 60; ++y)
     for (int x = 0; x < 60; ++x) f << "f " << y * 61 + x + 1 << " " << y * 61 + x + 2 << " " << (y + 1) * 61 + x + 2 << "\n";
   f.close();
-  const Result r = run("info " + scene.string());
+  const Result r = run_raypack("info " + scene.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("prims=3600"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("e+"), std::string::npos) << r.output;
 }
 
 TEST_F(Cli, UpAxisIsXYOrZ) {
-  const Result r = run("render --up-axis w -o " + (dir_ / "x.png").string());
+  const Result r = run_raypack("render --up-axis w -o " + (dir_ / "x.png").string());
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.output, "raypack: --up-axis: 'w' is not x, y or z\n");
   // A Z-up quad standing in the xz plane: with --up-axis z it faces the camera and fills the
   // middle of the picture; taken as Y up, the camera looks down at its edge and sees sky.
   const fs::path scene = dir_ / "standing.obj", out = dir_ / "standing.png";
   std::ofstream(scene) << "v -1 0 0\nv 1 0 0\nv 1 0 2\nv -1 0 2\nf 1 2 3 4\n";
-  ASSERT_EQ(run("render --scene " + scene.string() + " --up-axis z --resolution 32x32 -q -o " + out.string()).status, 0);
+  ASSERT_EQ(
+      run_raypack("render --scene " + scene.string() + " --up-axis z --resolution 32x32 -q -o " + out.string()).status,
+      0);
   const rp::Image z = rp::read_image(out.string());
-  ASSERT_EQ(run("render --scene " + scene.string() + " --resolution 32x32 -q -o " + out.string()).status, 0);
+  ASSERT_EQ(run_raypack("render --scene " + scene.string() + " --resolution 32x32 -q -o " + out.string()).status, 0);
   const rp::Image y = rp::read_image(out.string());
   const auto grey = [](const rp::Image& img, int x, int row) {  // the quad is grey, the sky bluish
     const float* p = &img.rgb[3 * size_t(row * img.width + x)];
@@ -686,10 +689,10 @@ TEST_F(Cli, UpAxisIsXYOrZ) {
 TEST_F(Cli, RendersAndDescribesAGltfWithInstances) {
   const fs::path scene = dir_ / "scene.glb", out = dir_ / "gltf.png";
   rp::test::write_gltf(rp::test::hierarchy_gltf().model, scene.string(), rp::test::GltfForm::binary);
-  Result r = run("render --backend simd --scene " + scene.string() + " --resolution 48x32 -o " + out.string());
+  Result r = run_raypack("render --backend simd --scene " + scene.string() + " --resolution 48x32 -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(rp::read_image(out.string()).width, 48);
-  r = run("info " + scene.string());
+  r = run_raypack("info " + scene.string());
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("triangles    15 in 4 mesh(es)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("instances    3 placing 1 instanced mesh(es): 2 unique triangles, 6 instanced (placed) "
@@ -706,7 +709,8 @@ TEST_F(Cli, RendersAndDescribesAGltfWithInstances) {
 TEST_F(Cli, OutOfMemoryNamesWhatWasBuiltAndTheBytes) {
   if (rp::test::kSanitized)
     GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space, so `ulimit -v` cannot apply to it";
-  const Result r = run("render --resolution 20000x10000 -q -o " + (dir_ / "x.png").string(), "ulimit -v 1500000; ");
+  const Result r =
+      run_raypack("render --resolution 20000x10000 -q -o " + (dir_ / "x.png").string(), "ulimit -v 1500000; ");
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_EQ(r.output.rfind("raypack: out of memory while rendering 20000x10000: an allocation of ", 0), 0u) << r.output;
   EXPECT_NE(r.output.find(" bytes failed\n"), std::string::npos) << r.output;
@@ -744,7 +748,7 @@ TEST_F(Cli, AWriteThatFailsMidFileFailsTheCommandAndKeepsTheOldFile) {
   };
   for (const Case& c : cases) {
     std::ofstream(dir_ / c.output) << "the old file";
-    const Result r = run(c.args + " -q", "trap '' XFSZ; ulimit -f " + std::to_string(c.limit) + "; ");
+    const Result r = run_raypack(c.args + " -q", "trap '' XFSZ; ulimit -f " + std::to_string(c.limit) + "; ");
     EXPECT_EQ(r.status, 1) << c.args << ": " << r.output;
     EXPECT_NE(r.output.find(c.output + ": cannot write: File too large"), std::string::npos)
         << c.args << ": " << r.output;
@@ -755,7 +759,7 @@ TEST_F(Cli, AWriteThatFailsMidFileFailsTheCommandAndKeepsTheOldFile) {
           << c.args << " left " << e.path();
   }
   // The same commands without the limit write what they could not (the limit was the cause).
-  const Result r = run("chart " + d + "b.json -q -o " + d + "old-chart.svg");
+  const Result r = run_raypack("chart " + d + "b.json -q -o " + d + "old-chart.svg");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_GT(fs::file_size(dir_ / "old-chart.svg"), 2048u);
 }
@@ -800,7 +804,7 @@ TEST_F(Cli, AnOutputThatIsAnInputOrAnotherOutputIsRefusedBeforeAnyWork) {
   for (const Case& c : cases) {
     const std::string before =
         file_bytes(dir_ / "r.csv") + file_bytes(dir_ / "scene.obj") + file_bytes(dir_ / "b.json");
-    const Result r = run(c.args);
+    const Result r = run_raypack(c.args);
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
     EXPECT_EQ(r.output, "raypack: " + c.message + "\n") << c.args;
     EXPECT_EQ(file_bytes(dir_ / "r.csv") + file_bytes(dir_ / "scene.obj") + file_bytes(dir_ / "b.json"), before)
@@ -840,7 +844,7 @@ TEST_F(Cli, EveryOutputIsCheckedBeforeAnyWork) {
        "--chart: " + d + "nowhere/s.svg: cannot write: No such file or directory"},
   };
   for (const Case& c : cases) {
-    const Result r = run(c.args);
+    const Result r = run_raypack(c.args);
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
     EXPECT_EQ(r.output.rfind("raypack: " + c.message, 0), 0u) << c.args << ": " << r.output;
     for (const char* written : {"x.png", "d.json", "c.png", "bench.json", "s.json"})
@@ -861,7 +865,7 @@ TEST_F(Cli, ATemporaryLeftByAKilledRunIsRemovedByTheNextOutputOfItsName) {
   for (const std::string& name : {gone, other, live, odd}) std::ofstream(dir_ / name) << "partial";
   const int lock = ::open((dir_ / live).c_str(), O_RDONLY);
   ASSERT_EQ(::flock(lock, LOCK_EX), 0);
-  const Result r = run("trace -q --rays " + (dir_ / "rays.csv").string() + " -o " + (dir_ / "h.csv").string());
+  const Result r = run_raypack("trace -q --rays " + (dir_ / "rays.csv").string() + " -o " + (dir_ / "h.csv").string());
   ::close(lock);
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(fs::exists(dir_ / "h.csv"));
@@ -885,8 +889,8 @@ TEST_F(Cli, RunningOutOfMemoryWhileLoadingIsAlwaysTheOneLineMessage) {
   }
   int loaded = 0, refused = 0;
   for (int mib = 500; mib <= 1100; mib += 40) {
-    const Result r =
-        run("info --no-backends " + (dir_ / "many.json").string(), "ulimit -v " + std::to_string(mib * 1024) + "; ");
+    const Result r = run_raypack("info --no-backends " + (dir_ / "many.json").string(),
+                                 "ulimit -v " + std::to_string(mib * 1024) + "; ");
     if (r.status == 0) {
       ++loaded;
       continue;
