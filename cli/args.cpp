@@ -11,6 +11,7 @@
 #include "cli/out_of_memory.h"
 #include "core/ray.h"
 #include "io/loaders/load.h"
+#include "render/camera.h"
 
 namespace rp::cli {
 
@@ -100,6 +101,22 @@ std::optional<int> parse_up_axis(const std::string& up_axis) {
   throw UsageError(cat("--up-axis: '", up_axis, "' is not x, y or z"));
 }
 
+CLI::Option* add_time_option(CLI::App* app, std::string& time) {
+  return app->add_option("--time", time,
+                         "Seconds into the scene's animation: the pose to load it at (default: its rest pose)");
+}
+
+std::optional<double> parse_time(const std::string& time) {
+  if (time.empty()) return std::nullopt;
+  try {
+    size_t used = 0;
+    const double t = std::stod(time, &used);
+    if (used == time.size() && std::isfinite(t)) return t;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(cat("--time: '", time, "' is not a number of seconds (a finite number)"));
+}
+
 void add_backend_options(CLI::App* app, std::string& backend, std::string& variant) {
   app->add_option("--backend", backend, "Backend name (see `raypack backends`)")->capture_default_str();
   app->add_option("--variant", variant, "Backend variant (see `raypack backends`)")->capture_default_str();
@@ -148,8 +165,20 @@ void check_distinct_files(const std::vector<NamedFile>& inputs, const std::vecto
 }
 
 Scene load_scene_or_default(const std::string& path, const std::string& up_axis) {
+  return std::move(load_animated_scene_or_default(path, up_axis).scene);
+}
+
+AnimatedScene load_animated_scene_or_default(const std::string& path, const std::string& up_axis) {
   const std::optional<int> up = parse_up_axis(up_axis);
-  return with_memory_context("loading " + path, [&] { return load_scene(path, up); });
+  return with_memory_context("loading " + path, [&] { return load_animated_scene(path, up); });
+}
+
+void frame_rest_pose(AnimatedScene& s) {
+  if (!s.animation.empty() && !s.scene.camera()) s.scene.set_camera(frame_bounds(s.scene.bounds(), s.scene.up_axis()));
+}
+
+void pose(AnimatedScene& s, std::optional<double> time) {
+  if (time) with_memory_context(cat("posing the scene at ", *time, " s"), [&] { s.animation.apply(s.scene, *time); });
 }
 
 std::unique_ptr<Backend> build_backend(const std::string& name, const std::string& variant, const Scene& scene,

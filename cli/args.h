@@ -16,10 +16,12 @@
 #include "base/math.h"
 #include "core/backend.h"
 #include "core/scene.h"
+#include "io/loaders/animation.h"
 #include "io/output_file.h"
 
 namespace CLI {
 class App;
+class Option;
 class ParseError;
 }
 
@@ -47,6 +49,15 @@ void add_scene_option(CLI::App* app, std::string& scene);
 /// camera is framed from and lit (Scene::set_up_axis); empty: what the file says (Y unless a
 /// format defines its own).
 void add_up_axis_option(CLI::App* app, std::string& up_axis);
+
+/// --time: seconds into the scene's animation, the pose the command loads the scene at (every
+/// animation of the file plays at once from 0 s; each holds its first and last values before
+/// and after its keyframes); empty: the rest pose. Returns the option, for flags it excludes.
+CLI::Option* add_time_option(CLI::App* app, std::string& time);
+
+/// --time's value in seconds: any finite number (nothing for ""), or a usage error naming the
+/// flag.
+std::optional<double> parse_time(const std::string& time);
 
 /// --backend and --variant: a backend by name and its variant (see `raypack backends`).
 void add_backend_options(CLI::App* app, std::string& backend, std::string& variant);
@@ -85,6 +96,19 @@ void check_distinct_files(const std::vector<NamedFile>& inputs, const std::vecto
 /// The scene at `path` ('default' or a file), with an out-of-memory failure named as such;
 /// `up_axis` as --up-axis takes it (a usage error naming the flag when it is not x, y or z).
 Scene load_scene_or_default(const std::string& path, const std::string& up_axis = "");
+
+/// The same scene at its rest pose with its animation (rp::load_animated_scene).
+AnimatedScene load_animated_scene_or_default(const std::string& path, const std::string& up_axis = "");
+
+/// Gives an animated scene that has no camera the one framing its rest pose (frame_bounds, as
+/// a still scene is framed), so that it is seen from one place at every time: the frames of an
+/// animation, and a render at --time t, share one view. A still scene, or one with a camera
+/// (which the animation may move), is left as it is.
+void frame_rest_pose(AnimatedScene& scene);
+
+/// `scene` posed at `time` (SceneAnimation::apply), with an out-of-memory failure named as
+/// such; nothing: left at its rest pose.
+void pose(AnimatedScene& scene, std::optional<double> time);
 
 /// --up-axis's value as an axis index (nothing for ""), or a usage error naming the flag.
 std::optional<int> parse_up_axis(const std::string& up_axis);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "analysis/diff.h"
 #include "analysis/raygen.h"
@@ -35,6 +36,7 @@ CLI::App* DiffArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("diff", "The same rays through backends A and B and the double-precision reference");
   add_scene_option(c, scene);
   add_up_axis_option(c, up_axis);
+  add_time_option(c, time);
   CLI::Option* k = c->add_option("--kind", kind, "Generated rays: primary, diffuse or random")->capture_default_str();
   c->add_option("--rays", rays, "A ray file (.csv, or binary: .bin, .rays) instead of generated rays")->excludes(k);
   c->add_option("--count", count, "Generated rays (primary: the first COUNT of the smallest packet-aligned image)")
@@ -69,7 +71,7 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
     if (a.b != "reference") check_method("-b", a.b, "--variant-b", a.variant_b);
   });
   const ThreadLimit limit(a.threads);
-  dist::together(comm, [&] {
+  const std::optional<double> time = dist::together(comm, [&] {
     if (a.count == 0 || a.count > (size_t(1) << 28))
       throw UsageError(cat("--count: ", a.count, " is out of range (1..", size_t(1) << 28, ")"));
     if (a.kind != "primary" && a.kind != "diffuse" && a.kind != "random")
@@ -82,8 +84,16 @@ int run_diff(const DiffArgs& a, const dist::Comm& comm) {
       if (!a.json.empty()) check_file_name("--json", a.json, check_output);
       if (!a.image.empty()) check_file_name("--image", a.image, check_image_output);
     }
+    return parse_time(a.time);
   });
-  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene, a.up_axis); });
+  // The scene posed at --time, seen (without a camera of its own) from where its rest pose is.
+  const AnimatedScene animated = dist::together(comm, [&] {
+    AnimatedScene s = load_animated_scene_or_default(a.scene, a.up_axis);
+    frame_rest_pose(s);
+    pose(s, time);
+    return s;
+  });
+  const Scene& scene = animated.scene;
   if (across) {  // each rank reads its own copies: they must be the same files
     std::vector<dist::InputDigest> inputs{{"--scene", a.scene, dist::scene_digest(scene)}};
     if (!a.rays.empty() && a.rays != "-")

@@ -18,6 +18,7 @@ namespace rp::cli {
 struct DiffArgs {
   std::string scene = "default";
   std::string up_axis;  ///< --up-axis: "" (the file's), x, y or z
+  std::string time;     ///< --time: "" (the rest pose) or seconds into the scene's animation
   std::string kind = "primary";  ///< generated rays: primary, diffuse or random
   std::string rays;              ///< a ray file instead of generated rays
   size_t count = 1 << 20;

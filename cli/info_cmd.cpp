@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "backends/registry.h"
+#include "base/error.h"
 #include "cli/args.h"
 
 namespace rp::cli {
@@ -14,6 +16,7 @@ CLI::App* InfoArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("info", "Counts, bounds and bytes of a scene and of each backend's structure");
   c->add_option("scene,--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .gltf, .glb, .json)")
       ->capture_default_str();
+  add_time_option(c, time);
   c->add_flag("--no-backends", no_backends, "Skip building the backends");
   add_quiet_flag(c, quiet);
   return c;
@@ -22,8 +25,11 @@ CLI::App* InfoArgs::add_to(CLI::App& app) {
 /// Counts, bounds, degenerate triangles and the bytes of the scene and of each backend.
 int run_info(const InfoArgs& a) {
   std::FILE* const out = a.quiet ? nullptr : stdout;  // -q: the scene and backends are still checked
+  const std::optional<double> time = parse_time(a.time);
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene_or_default(a.scene);
+  AnimatedScene animated = load_animated_scene_or_default(a.scene);
+  pose(animated, time);
+  const Scene& scene = animated.scene;
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   size_t vertices = 0, with_normals = 0, with_uvs = 0;
   for (const TriangleMesh& m : scene.meshes()) {
@@ -61,6 +67,11 @@ int run_info(const InfoArgs& a) {
   say(out, "materials    %zu; lights: %zu point, %zu directional; camera: %s\n", scene.materials().size(),
       scene.point_lights().size(), scene.directional_lights().size(),
       scene.camera() ? "from the scene" : "derived from the bounds");
+  if (const SceneAnimation& anim = animated.animation; !anim.empty()) {
+    const AnimationCounts& n = anim.counts();
+    say(out, "animation    %zu animation(s), %zu channel(s) moving %zu node(s), %g s long; shown %s\n", n.animations,
+        n.channels, n.nodes, anim.duration(), time ? cat("at ", *time, " s").c_str() : "at its rest pose");
+  }
   const double prims = std::max(1.0, double(scene.prim_count()));
   say(out, "scene bytes  %zu (%.1f per primitive)\n", scene.bytes(), double(scene.bytes()) / prims);
   if (a.no_backends) return 0;

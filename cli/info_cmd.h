@@ -12,6 +12,7 @@ namespace rp::cli {
 
 struct InfoArgs {
   std::string scene = "default";
+  std::string time;  ///< --time: "" (the rest pose) or seconds into the scene's animation
   bool no_backends = false;
   bool quiet = false;  ///< -q: print nothing (the scene is loaded and the backends built all the same)
 
@@ -19,7 +20,8 @@ struct InfoArgs {
   CLI::App* add_to(CLI::App& app);
 };
 
-/// Prints the scene's figures and, unless --no-backends, each backend's; returns 0.
+/// Prints the scene's figures (posed at --time) with its animation's and, unless
+/// --no-backends, each backend's; returns 0.
 int run_info(const InfoArgs& args);
 
 /// Adds the `backends` subcommand to `app`.

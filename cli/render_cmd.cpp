@@ -144,6 +144,7 @@ CLI::App* RenderArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
   add_scene_option(c, scene);
   add_up_axis_option(c, up_axis);
+  add_time_option(c, time);
   c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
   c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
   add_backend_options(c, backend, variant);
@@ -183,12 +184,13 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
     Resolution res;
     RenderSettings settings;
     std::vector<PointLight> lights;
+    std::optional<double> time;  ///< --time
   };
   const Flags f = dist::together(comm, [&] {
     if (across && a.measure_traces)
       throw UsageError("--measure-traces: times the traces of one process; start it without mpirun");
     const Resolution res = parse_resolution(a.resolution);
-    Flags flags{res, render_settings(a, res), {}};
+    Flags flags{res, render_settings(a, res), {}, parse_time(a.time)};
     for (const std::string& l : a.lights) flags.lights.push_back(parse_light(l));
     check_method("--backend", a.backend, "--variant", a.variant);
     if (comm.root()) {  // rank 0 writes the outputs
@@ -201,15 +203,18 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
   const Resolution& res = f.res;
   const ThreadLimit limit(a.threads);
 
-  // Every rank loads the scene and builds its own backend (replicated data).
+  // Every rank loads the scene, poses it and builds its own backend (replicated data).
   auto t = clock::now();
-  Scene scene = dist::together(comm, [&] {
-    Scene s = load_scene_or_default(a.scene, a.up_axis);
-    for (const PointLight& l : f.lights) s.add_light(l);
+  AnimatedScene animated = dist::together(comm, [&] {
+    AnimatedScene s = load_animated_scene_or_default(a.scene, a.up_axis);
+    for (const PointLight& l : f.lights) s.scene.add_light(l);
+    frame_rest_pose(s);
     return s;
   });
+  const Scene& scene = animated.scene;
   const double load_s = seconds_since(t);
-  if (across) dist::check_same_inputs(comm, {{"--scene", a.scene, dist::scene_digest(scene)}});
+  if (across) dist::check_same_inputs(comm, {{"--scene", a.scene, dist::scene_digest(scene, animated.animation)}});
+  dist::together(comm, [&] { pose(animated, f.time); });
   std::optional<Camera> camera_or;
   dist::together(comm, [&] {
     const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())));

@@ -34,6 +34,7 @@ struct RenderArgs {
   int adaptive_depth = 3;
   std::string scene = "default";
   std::string up_axis;  ///< --up-axis: "" (the file's), x, y or z
+  std::string time;     ///< --time: "" (the rest pose) or seconds into the scene's animation
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
   std::string backend{kDefaultBackend};

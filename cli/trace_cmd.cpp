@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 
 #include "analysis/raygen.h"
 #include "base/text.h"
@@ -33,6 +34,7 @@ std::vector<HitRecord> to_records(const Scene& scene, std::span<const Ray> rays,
 CLI::App* TraceArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("trace", "Trace a ray file through a backend and write the hits");
   add_scene_option(c, scene);
+  add_time_option(c, time);
   c->add_option("--rays", rays, "Ray file: .csv, or binary (.bin, .rays)")->required();
   c->add_option("-o,--output", output, "Hit file: .csv, or binary (.bin, .hits)")->required();
   add_backend_options(c, backend, variant);
@@ -44,17 +46,27 @@ CLI::App* TraceArgs::add_to(CLI::App& app) {
 
 int run_trace(const TraceArgs& a, const dist::Comm& comm) {
   const bool across = comm.size() > 1, quiet = a.quiet || !comm.root();
-  const Coherence coherence = dist::together(comm, [&] {
+  struct Flags {
+    Coherence coherence;
+    std::optional<double> time;
+  };
+  const Flags f = dist::together(comm, [&] {
     check_method("--backend", a.backend, "--variant", a.variant);
-    const Coherence c = parse_coherence("--coherence", a.coherence);
+    const Flags flags{parse_coherence("--coherence", a.coherence), parse_time(a.time)};
     check_distinct_files({{"--scene", a.scene}, {"--rays", a.rays}}, {{"-o", a.output}});
     check_file_name("--rays", a.rays, check_ray_file_name);
     check_file_name("-o", a.output, check_hit_file_name);
     check_file_name("-o", a.output, check_output);  // every rank writes its share
-    return c;
+    return flags;
   });
   const ThreadLimit limit(a.threads);
-  const Scene scene = dist::together(comm, [&] { return load_scene_or_default(a.scene); });
+  // The scene as loaded, posed at --time before the backend is built.
+  const AnimatedScene animated = dist::together(comm, [&] {
+    AnimatedScene s = load_animated_scene_or_default(a.scene);
+    pose(s, f.time);
+    return s;
+  });
+  const Scene& scene = animated.scene;
   if (across) {  // each rank reads its own copies: they must be the same files
     std::vector<dist::InputDigest> inputs{{"--scene", a.scene, dist::scene_digest(scene)}};
     if (a.rays != "-")
@@ -73,7 +85,7 @@ int run_trace(const TraceArgs& a, const dist::Comm& comm) {
   dist::together(comm, [&] {
     with_memory_context(cat("tracing ", rays.size(), " rays"), [&] {
       hits.resize(rays.size());
-      intersect_parallel(*backend, rays, hits, coherence);
+      intersect_parallel(*backend, rays, hits, f.coherence);
     });
   });
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

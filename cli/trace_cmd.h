@@ -16,6 +16,7 @@ namespace rp::cli {
 struct TraceArgs {
   std::string scene = "default", rays, output, backend{kDefaultBackend}, variant = "default";
   std::string coherence = "incoherent";
+  std::string time;  ///< --time: "" (the rest pose) or seconds into the scene's animation
   int threads = 0;
   bool quiet = false;
 
