@@ -11,6 +11,7 @@
 #include <regex>
 
 #include "cli/args.h"
+#include "cli/frames.h"
 #include "cli/out_of_memory.h"
 #include "mpi/render_ranks.h"
 #include "mpi/same_inputs.h"
@@ -92,6 +93,25 @@ RenderSettings render_settings(const RenderArgs& a, const Resolution& res) {
   return settings;
 }
 
+/// The statistics of several frames as those of one render: rays and seconds summed.
+void add_frame(RenderStats& all, const RenderStats& frame) {
+  all.primary += frame.primary;
+  all.shadow += frame.shadow;
+  all.reflection += frame.reflection;
+  all.refraction += frame.refraction;
+  all.uniform_primary += frame.uniform_primary;
+  all.seconds += frame.seconds;
+}
+
+/// The same for what one rank did.
+void add_frame(dist::RankRender& all, const dist::RankRender& frame) {
+  all.tiles += frame.tiles;
+  all.threads = frame.threads;
+  all.seconds += frame.seconds;
+  all.handout.requests += frame.handout.requests;
+  all.handout.wait_seconds += frame.handout.wait_seconds;
+}
+
 /// A progress bar with the time left on stderr, for renders that last more than a second
 /// and only when stderr is a terminal; redrawn at most 10 times a second.
 class ProgressBar {
@@ -144,7 +164,16 @@ CLI::App* RenderArgs::add_to(CLI::App& app) {
   CLI::App* c = app.add_subcommand("render", "Render a scene (the embedded default or a file) to an image");
   add_scene_option(c, scene);
   add_up_axis_option(c, up_axis);
-  add_time_option(c, time);
+  CLI::Option* at = add_time_option(c, time);
+  CLI::Option* range =
+      c->add_option("--frames", frames,
+                    "Render frames FIRST:LAST of the animation, frame n at n / fps seconds; the run of '#' in -o "
+                    "(and --aov) is the frame number")
+          ->excludes(at);
+  c->add_option("--fps", fps, "Frames per second of --frames")
+      ->check(CLI::Range(0.001, 1000000.0))
+      ->needs(range)
+      ->capture_default_str();
   c->add_option("-o,--output", output, "Output image; format by extension (.png, .exr, ...)")->capture_default_str();
   c->add_option("--resolution", resolution, "Image size WIDTHxHEIGHT")->capture_default_str();
   add_backend_options(c, backend, variant);
@@ -184,24 +213,44 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
     Resolution res;
     RenderSettings settings;
     std::vector<PointLight> lights;
-    std::optional<double> time;  ///< --time
+    std::optional<double> time;        ///< --time
+    std::optional<FrameRange> frames;  ///< --frames
   };
   const Flags f = dist::together(comm, [&] {
     if (across && a.measure_traces)
       throw UsageError("--measure-traces: times the traces of one process; start it without mpirun");
     const Resolution res = parse_resolution(a.resolution);
-    Flags flags{res, render_settings(a, res), {}, parse_time(a.time)};
+    Flags flags{res, render_settings(a, res), {}, parse_time(a.time), std::nullopt};
     for (const std::string& l : a.lights) flags.lights.push_back(parse_light(l));
     check_method("--backend", a.backend, "--variant", a.variant);
-    if (comm.root()) {  // rank 0 writes the outputs
-      check_distinct_files({{"--scene", a.scene}}, {{"-o", a.output}, {"--aov", a.aov}});
-      check_file_name("-o", a.output, check_image_output);
-      if (!a.aov.empty()) check_file_name("--aov", a.aov, check_aov_output);
+    if (!a.frames.empty()) {
+      flags.frames = parse_frames(a.frames);
+      if (a.measure_traces) throw UsageError("--measure-traces: times the traces of one image; not with --frames");
+      check_frame_pattern("-o", a.output, *flags.frames);
+      if (!a.aov.empty()) check_frame_pattern("--aov", a.aov, *flags.frames);
+    }
+    if (comm.root()) {  // rank 0 writes the outputs (the first frame's names stand for every frame's)
+      const int64_t first = flags.frames ? flags.frames->first : 0;
+      const std::string output = frame_path(a.output, first), aov = a.aov.empty() ? "" : frame_path(a.aov, first);
+      check_distinct_files({{"--scene", a.scene}}, {{"-o", output}, {"--aov", aov}});
+      check_file_name("-o", output, check_image_output);
+      if (!aov.empty()) check_file_name("--aov", aov, check_aov_output);
     }
     return flags;
   });
   const Resolution& res = f.res;
   const ThreadLimit limit(a.threads);
+  // What is rendered: one image (at --time, or the rest pose), or each frame at frame / fps.
+  struct Shot {
+    std::optional<double> time;
+    std::string output, aov;
+  };
+  const int64_t shots = f.frames ? f.frames->count() : 1;
+  const auto shot = [&](int64_t k) {
+    if (!f.frames) return Shot{f.time, a.output, a.aov};
+    const int64_t frame = f.frames->first + k;
+    return Shot{double(frame) / a.fps, frame_path(a.output, frame), a.aov.empty() ? "" : frame_path(a.aov, frame)};
+  };
 
   // Every rank loads the scene, poses it and builds its own backend (replicated data).
   auto t = clock::now();
@@ -214,57 +263,78 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
   const Scene& scene = animated.scene;
   const double load_s = seconds_since(t);
   if (across) dist::check_same_inputs(comm, {{"--scene", a.scene, dist::scene_digest(scene, animated.animation)}});
-  dist::together(comm, [&] { pose(animated, f.time); });
-  std::optional<Camera> camera_or;
-  dist::together(comm, [&] {
-    const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())));
-    try {
-      camera_or.emplace(desc, res.width, res.height);
-    } catch (const Error& e) {
-      if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
-      throw Error(cat(a.scene, ": ", e.what()));
-    }
-  });
-  const Camera& camera = *camera_or;
+  dist::together(comm, [&] { pose(animated, shot(0).time); });
   const std::unique_ptr<Backend> backend =
       dist::together(comm, [&] { return build_backend(a.backend, a.variant, scene, a.scene); });
 
   ProgressBar bar;
-  const ProgressFn progress = quiet ? ProgressFn{} : ProgressFn(std::ref(bar));
-  RenderResult r;
+  RenderStats stats;
   std::vector<dist::RankRender> ranks;
-  if (across) {
-    std::optional<TileRenderer> tiles;
-    dist::together(comm, [&] { tiles.emplace(scene, *backend, camera, f.settings); });
-    t = clock::now();
-    dist::RenderAcross all = dist::render_across(comm, *tiles, a.tiles_per_request, progress);
-    r.image = std::move(all.image);
-    r.stats = tiles->stats(all.counts, seconds_since(t));
-    ranks = std::move(all.ranks);
-  } else {
-    r = with_memory_context(cat("rendering ", res.width, "x", res.height),
-                            [&] { return render(scene, *backend, camera, f.settings, progress); });
-  }
-  bar.finish();
-  // The render again, untimed, recording its calls to the backend (the same rays: a render
-  // depends on its inputs only), then those calls alone, twice: the second is timed.
+  double update_s = 0, write_s = 0;
   TraceLog log;
   double trace_s = 0;
-  if (a.measure_traces) {
-    with_memory_context(cat("recording the rays of ", res.width, "x", res.height), [&] {
-      return render(scene, *backend, camera, f.settings, {}, &log);
+  for (int64_t k = 0; k < shots; ++k) {
+    const Shot now = shot(k);
+    if (k > 0) {  // the next frame's pose, and the backend brought up to date
+      t = clock::now();
+      dist::together(comm, [&] {
+        pose(animated, now.time);
+        with_memory_context(cat("updating the ", a.backend, "/", a.variant, " structure"), [&] { backend->update(); });
+      });
+      update_s += seconds_since(t);
+    }
+    std::optional<Camera> camera_or;
+    dist::together(comm, [&] {
+      const CameraDesc desc = apply(a.camera, scene.camera().value_or(frame_bounds(scene.bounds(), scene.up_axis())));
+      try {
+        camera_or.emplace(desc, res.width, res.height);
+      } catch (const Error& e) {
+        if (a.camera.any()) throw UsageError(e.what());  // a placement the camera flags made impossible
+        throw Error(cat(a.scene, now.time ? cat(" at ", *now.time, " s") : "", ": ", e.what()));
+      }
     });
-    replay_traces(log, *backend);
-    trace_s = replay_traces(log, *backend);
+    const Camera& camera = *camera_or;
+    // The bar covers every frame: frame k's fraction f is (k + f) / shots of the whole.
+    const ProgressFn progress =
+        quiet ? ProgressFn{} : ProgressFn([&](double fraction) { bar((double(k) + fraction) / double(shots)); });
+    RenderResult r;
+    if (across) {
+      std::optional<TileRenderer> tiles;
+      dist::together(comm, [&] { tiles.emplace(scene, *backend, camera, f.settings); });
+      t = clock::now();
+      dist::RenderAcross all = dist::render_across(comm, *tiles, a.tiles_per_request, progress);
+      r.image = std::move(all.image);
+      r.stats = tiles->stats(all.counts, seconds_since(t));
+      if (ranks.empty()) ranks.resize(all.ranks.size());
+      for (size_t i = 0; i < all.ranks.size(); ++i) add_frame(ranks[i], all.ranks[i]);
+    } else {
+      r = with_memory_context(cat("rendering ", res.width, "x", res.height),
+                              [&] { return render(scene, *backend, camera, f.settings, progress); });
+    }
+    add_frame(stats, r.stats);
+    // The render again, untimed, recording its calls to the backend (the same rays: a render
+    // depends on its inputs only), then those calls alone, twice: the second is timed.
+    if (a.measure_traces) {
+      with_memory_context(cat("recording the rays of ", res.width, "x", res.height),
+                          [&] { return render(scene, *backend, camera, f.settings, {}, &log); });
+      replay_traces(log, *backend);
+      trace_s = replay_traces(log, *backend);
+    }
+    // Rank 0 writes the image (and the AOVs, which it traces alone: primary rays only).
+    t = clock::now();
+    dist::together(comm, [&] {
+      if (!comm.root()) return;
+      write_image(now.output, r.image);
+      if (!now.aov.empty()) write_aovs(now.aov, render_aovs(scene, *backend, camera));
+    });
+    write_s += seconds_since(t);
+    if (f.frames && !quiet) {
+      bar.finish();
+      std::fprintf(stderr, "raypack: frame %lld at %g s: wrote %s%s%s\n", (long long)(f.frames->first + k), *now.time,
+                   now.output.c_str(), now.aov.empty() ? "" : " and AOVs to ", now.aov.c_str());
+    }
   }
-  // Rank 0 writes the image (and the AOVs, which it traces alone: primary rays only).
-  t = clock::now();
-  dist::together(comm, [&] {
-    if (!comm.root()) return;
-    write_image(a.output, r.image);
-    if (!a.aov.empty()) write_aovs(a.aov, render_aovs(scene, *backend, camera));
-  });
-  const double write_s = seconds_since(t);
+  bar.finish();
   struct RankSetup {
     double load, build;
   };
@@ -272,18 +342,25 @@ int run_render(const RenderArgs& a, const dist::Comm& comm) {
       across ? dist::gather_each(comm, RankSetup{load_s, backend->info().build_seconds}) : std::vector<RankSetup>();
   if (!quiet) {
     const BackendInfo& info = backend->info();
-    const RenderStats& s = r.stats;
+    const RenderStats& s = stats;
     const std::string sampling =
         f.settings.sampler == Sampler::adaptive ? "adaptive" : std::to_string(a.spp) + " spp " + a.sampler;
-    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s%s\n", a.output.c_str(), res.width, res.height,
+    const std::string what = f.frames ? cat(shots, " frame", shots == 1 ? ", " : "s, ", shot(0).output,
+                                            shots == 1 ? "" : cat(" to ", shot(shots - 1).output))
+                                      : a.output;
+    std::fprintf(stderr, "raypack: wrote %s (%dx%d, %s) with %s/%s%s%s%s\n", what.c_str(), res.width, res.height,
                  sampling.c_str(), info.name.c_str(), info.variant.c_str(),
-                 across ? cat(" on ", comm.size(), " ranks").c_str() : "", a.aov.empty() ? "" : " and AOVs to ",
-                 a.aov.c_str());
+                 across ? cat(" on ", comm.size(), " ranks").c_str() : "",
+                 a.aov.empty() || f.frames ? "" : " and AOVs to ", f.frames ? "" : a.aov.c_str());
     std::fprintf(stderr, "raypack: %.2f Mrays/s: %llu primary, %llu shadow, %llu reflection, %llu refraction rays\n",
                  double(s.rays()) / s.seconds * 1e-6, (unsigned long long)s.primary, (unsigned long long)s.shadow,
                  (unsigned long long)s.reflection, (unsigned long long)s.refraction);
-    std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB), render %.3f s, write %.3f s\n", load_s,
-                 info.build_seconds, double(info.bytes) / (1 << 20), s.seconds, write_s);
+    char updates[64] = "";  // with --frames: the updates between frames
+    if (shots > 1)
+      std::snprintf(updates, sizeof updates, ", %lld update%s %.3f s", (long long)(shots - 1), shots == 2 ? "" : "s",
+                    update_s);
+    std::fprintf(stderr, "raypack: load %.3f s, build %.3f s (%.1f MiB)%s, render %.3f s, write %.3f s\n", load_s,
+                 info.build_seconds, double(info.bytes) / (1 << 20), updates, s.seconds, write_s);
     for (size_t k = 0; k < ranks.size(); ++k) {
       const dist::RankRender& rr = ranks[k];
       std::fprintf(stderr, "raypack: rank %zu: %llu tiles in %.3f s (%d thread%s; load %.3f s, build %.3f s", k,

@@ -1,6 +1,7 @@
 #pragma once
-// `raypack render`: a scene (the embedded default or a file) to an image, with camera, light,
-// sampler and backend flags, a progress bar and a statistics line.
+// `raypack render`: a scene (the embedded default or a file) to an image, or the frames of its
+// animation to images, with camera, light, sampler and backend flags, a progress bar and a
+// statistics line.
 
 #include <cstdint>
 #include <string>
@@ -35,6 +36,8 @@ struct RenderArgs {
   std::string scene = "default";
   std::string up_axis;  ///< --up-axis: "" (the file's), x, y or z
   std::string time;     ///< --time: "" (the rest pose) or seconds into the scene's animation
+  std::string frames;   ///< --frames: "" (one image) or FIRST:LAST
+  double fps = 24;      ///< --fps: frames per second of --frames
   std::string output = "raypack.png";
   std::string resolution = "1024x768";
   std::string backend{kDefaultBackend};
@@ -51,9 +54,11 @@ struct RenderArgs {
   CLI::App* add_to(CLI::App& app);
 };
 
-/// Renders and writes the image (and the AOVs when asked); returns the exit status. Across the
-/// ranks of `comm` when there are several: every rank renders the tiles rank 0 hands it, rank
-/// 0 writes the image and prints.
+/// Renders and writes the image (and the AOVs when asked), or with --frames each frame's;
+/// returns the exit status. Between frames the scene is posed at the next frame's time and the
+/// backend updated (Backend::update), not rebuilt. Across the ranks of `comm` when there are
+/// several: every rank poses its scene, updates its backend and renders the tiles rank 0 hands
+/// it; rank 0 writes the images and prints.
 int run_render(const RenderArgs& args, const dist::Comm& comm);
 
 }  // namespace rp::cli

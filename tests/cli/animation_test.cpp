@@ -1,7 +1,7 @@
 // An animated glTF through the raypack command: `trace --time` against a trace of the file
 // flattened by hand at that time (tests/support/animated_gltf.h: the tests' own sampling),
-// byte for byte on both backends; `info` on an animated file; and the flags and files
-// refused.
+// byte for byte on both backends; `render --frames` against still renders at each frame's
+// time; the frame names; `info` on an animated file; and the flags and files refused.
 
 #include <gtest/gtest.h>
 
@@ -75,7 +75,39 @@ TEST_F(CliAnimation, TraceAtATimeIsTheTraceOfTheFileFlattenedByHandOnEveryBacken
   }
 }
 
-TEST_F(CliAnimation, BadTimesAreOneLineErrorsBeforeAnyWork) {
+TEST_F(CliAnimation, EachFrameIsTheStillRenderAtItsTime) {
+  const std::string common = " --resolution 40x32 --spp 2 -q --scene " + scene_.string();
+  for (const std::string backend : {"simd", "embree"}) {
+    SCOPED_TRACE(backend);
+    const Result r = run_raypack("render --frames 0:3 --fps 4 --backend " + backend + common + " -o " +
+                                 (dir_ / "frame-##.exr").string());
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::vector<std::vector<float>> frames;
+    for (int k = 0; k < 4; ++k) {
+      const fs::path frame = dir_ / ("frame-0" + std::to_string(k) + ".exr"), want = dir_ / "still.exr";
+      const Result s = run_raypack("render --time " + std::to_string(k / 4.0) + " --backend " + backend + common +
+                                   " -o " + want.string());
+      ASSERT_EQ(s.status, 0) << s.output;
+      ASSERT_TRUE(fs::exists(frame)) << frame;
+      frames.push_back(rp::read_image(frame.string()).rgb);
+      EXPECT_TRUE(frames.back() == rp::read_image(want.string()).rgb) << "frame " << k;
+    }
+    EXPECT_FALSE(frames[0] == frames[1]) << "the scene does not move between frames";
+  }
+}
+
+TEST_F(CliAnimation, TheRunOfHashesInTheOutputIsTheFrameNumber) {
+  const std::string common = "render --resolution 8x8 -q --scene " + scene_.string();
+  ASSERT_EQ(run_raypack(common + " --frames 9:10 -o " + (dir_ / "f-#.png").string()).status, 0);
+  ASSERT_EQ(run_raypack(common + " --frames 3:3 -o " + (dir_ / "g-###.png").string()).status, 0);
+  ASSERT_EQ(run_raypack(common + " --frames 2:2 -o " + (dir_ / "plain.png").string()).status, 0);
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"animated.gltf", "f-10.png", "f-9.png", "g-003.png", "plain.png"}));
+}
+
+TEST_F(CliAnimation, BadTimesFramesAndNamesAreOneLineErrorsBeforeAnyWork) {
   const std::string d = dir_.string() + "/", scene = " --scene " + scene_.string();
   const std::pair<std::string, std::string> cases[] = {
       {"render --time abc -o " + d + "x.png", "--time: 'abc' is not a number of seconds (a finite number)"},
@@ -83,6 +115,19 @@ TEST_F(CliAnimation, BadTimesAreOneLineErrorsBeforeAnyWork) {
       {"trace --time nan --rays " + d + "r.csv -o " + d + "h.csv", "--time: 'nan' is not a number of seconds"},
       {"diff --time 1s", "--time: '1s' is not a number of seconds"},
       {"info --time x", "--time: 'x' is not a number of seconds"},
+      {"render --frames 0:3 -o " + d + "x.png", "-o: '" + d + "x.png' has no run of '#' to number 4 frames by"},
+      {"render --frames 0:1 -o " + d + "x-#.png --aov " + d + "a.exr",
+       "--aov: '" + d + "a.exr' has no run of '#' to number 2 frames by"},
+      {"render --frames 0:1 -o " + d + "x-#-#.png", "-o: '" + d + "x-#-#.png' has 2 runs of '#'"},
+      {"render --frames 3:1 -o " + d + "x-#.png",
+       "--frames: '3:1' is not FIRST:LAST (frame numbers, 0 <= FIRST <= LAST)"},
+      {"render --frames 1 -o " + d + "x-#.png", "--frames: '1' is not FIRST:LAST"},
+      {"render --frames a:b -o " + d + "x-#.png", "--frames: 'a:b' is not FIRST:LAST"},
+      {"render --frames 0:1 --time 2 -o " + d + "x-#.png", "--time excludes --frames"},
+      {"render --fps 30 -o " + d + "x.png", "--fps requires --frames"},
+      {"render --frames 0:1 --fps 0 -o " + d + "x-#.png", "--fps: Value 0 not in range"},
+      {"render --frames 0:1 --measure-traces -o " + d + "x-#.png",
+       "--measure-traces: times the traces of one image; not with --frames"},
   };
   for (const auto& [args, message] : cases) {
     const Result r = run_raypack(args + scene);

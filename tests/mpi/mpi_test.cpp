@@ -1,7 +1,7 @@
 // raypack across MPI ranks as a user runs it: mpirun -n 2 and -n 3 on this machine against
-// one process with the same flags. Images, hit files, diff JSON and mismatch images must be
-// the same bytes, exit statuses the same; a rank that fails or dies must end the run with one
-// line and no output. Needs Open MPI's mpirun (kMpiexec, found by CMake).
+// one process with the same flags. Images (the frames of an animation among them), hit files,
+// diff JSON and mismatch images must be the same bytes, exit statuses the same; a rank that fails or dies must end the
+// run with one line and no output. Needs Open MPI's mpirun (kMpiexec, found by CMake).
 
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "io/rayfile.h"
+#include "tests/support/animated_gltf.h"
 #include "tests/support/build_paths.h"
 #include "tests/support/sanitized.h"
 #include "tests/support/shell.h"
@@ -109,6 +110,35 @@ TEST(Mpi, RenderIsTheOneProcessImageForEverySamplerBackendAndRankCount) {
     ASSERT_EQ(r.status, 0) << args << ": " << r.output;
     EXPECT_EQ(bytes(got), bytes(want)) << args;
   }
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
+TEST(Mpi, FramesAndPosesOfAnAnimationAreTheOneProcessOnes) {
+  TempDir tmp;
+  const std::string scene = tmp / "animated.gltf";
+  rp::test::write_gltf(rp::test::animated_scene().model, scene, rp::test::GltfForm::embedded);
+  // Frames 1 to 3, each rank posing its scene and updating its backend between them.
+  for (const std::string backend : {"embree", "simd"}) {
+    const std::string args =
+        "render --resolution 48x32 -q --frames 1:3 --fps 8 --backend " + backend + " --scene " + scene;
+    Result r = one(args + " -o " + tmp / "one-#.exr");
+    ASSERT_EQ(r.status, 0) << r.output;
+    r = ranks(2, args + " -o " + tmp / "two-#.exr");
+    ASSERT_EQ(r.status, 0) << backend << ": " << r.output;
+    for (const char* frame : {"1", "2", "3"}) {
+      ASSERT_TRUE(fs::exists(tmp / ("two-" + std::string(frame) + ".exr"))) << frame;
+      EXPECT_EQ(bytes(tmp / ("two-" + std::string(frame) + ".exr")),
+                bytes(tmp / ("one-" + std::string(frame) + ".exr")))
+          << backend << ", frame " << frame;
+    }
+  }
+  // A trace at a time.
+  rp::write_rays(tmp / "rays.bin", std::vector<rp::Ray>(999, rp::Ray{{0.3f, 0.2f, 5.0f}, 0.0f, {0, 0, -1}, INFINITY}));
+  const std::string args = "trace --scene " + scene + " --time 0.3 --rays " + tmp / "rays.bin" + " -q -o ";
+  ASSERT_EQ(one(args + tmp / "one.bin").status, 0);
+  const Result r = ranks(3, args + tmp / "three.bin");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(bytes(tmp / "three.bin"), bytes(tmp / "one.bin"));
   EXPECT_TRUE(no_temporaries(tmp));
 }
 
