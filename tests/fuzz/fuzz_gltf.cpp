@@ -1,6 +1,7 @@
 /// libFuzzer target: rp::load_gltf (tinygltf 2.7's JSON and GLB parsers, then every check of
 /// io/loaders/gltf.cpp: accessors against their buffers, indices, the node hierarchy,
-/// cameras, lights, materials, external buffers by raypack's input rule).
+/// cameras, lights, materials, animations, external buffers by raypack's input rule), and
+/// the animation it returns applied before, inside and after its keyframes.
 ///
 /// The input is written as input.glb when it starts with "glTF", else as input.gltf. Beside it
 /// the scratch folder holds "valid-external.bin", the buffer the seed valid-external.gltf
@@ -31,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const bool glb = size >= 4 && std::memcmp(data, "glTF", 4) == 0;
   return rp::fuzz::run_on_file(data, size, glb ? ".glb" : ".gltf", [](const std::string& path) {
     rp::Scene scene;
-    rp::load_gltf(path, scene);
+    const rp::SceneAnimation animation = rp::load_gltf(path, scene);
+    for (const double t : {-1.0, 0.5 * animation.duration(), animation.duration() + 1.0}) animation.apply(scene, t);
     rp::fuzz::touch(scene);
   });
 }
