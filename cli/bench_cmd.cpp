@@ -396,7 +396,7 @@ int run_bench(const BenchArgs& a) {
           be["build_seconds"].get<double>(), 100.0 * be["build_spread"].get<double>(),
           be["build_seconds_first"].get<double>(), be["bytes"].get<size_t>(), be["bytes_per_prim"].get<double>());
     print_build_ratio(table, js);
-    if (a.updates) js["updates"] = bench_updates(scene, chosen, kinds, js["backends"], a, table);
+    if (a.updates) js["updates"] = bench_updates(scene, chosen, kinds, a, table);
     out["scenes"].push_back(js);
   }
   for (const auto& [name, why] : skipped) say(table, "\n%s: not run: %s\n", name.c_str(), why.c_str());
