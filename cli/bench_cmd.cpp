@@ -151,9 +151,8 @@ BuildTiming time_builds(const TraceMethod& m, const Scene& scene, double first, 
   if (runs == 0) return {first, 0.0};
   std::vector<double> secs;
   for (int i = 0; i < runs; ++i) secs.push_back(make_backend(m.backend, scene, m.options())->info().build_seconds);
-  std::sort(secs.begin(), secs.end());
-  const double med = secs[secs.size() / 2];
-  return {med, med > 0 ? (secs.back() - secs.front()) / med : 0.0};
+  const auto [median, spread] = median_spread(secs);
+  return {median, spread};
 }
 
 /// simd's default build against Embree's fastest variant in this run.

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/reference.h"
@@ -11,6 +12,13 @@
 #include "core/ray.h"
 
 namespace rp::cli {
+
+/// The median of `v` (sorted in place, not empty) and its spread, (max - min) / median.
+inline std::pair<double, double> median_spread(std::vector<double>& v) {
+  std::sort(v.begin(), v.end());
+  const double med = v[v.size() / 2];
+  return {med, med > 0 ? (v.back() - v.front()) / med : 0.0};
+}
 
 /// Timing runs until the spread of the last min_runs is below the target (or max_runs).
 struct Timing {

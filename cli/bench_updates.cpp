@@ -43,13 +43,6 @@ double seconds_of(F&& f) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-/// The median of `v` (sorted in place) and its spread, (max - min) / median.
-std::pair<double, double> median_spread(std::vector<double>& v) {
-  std::sort(v.begin(), v.end());
-  const double med = v[v.size() / 2];
-  return {med, med > 0 ? (v.back() - v.front()) / med : 0.0};
-}
-
 /// Two traces of the same rays timed in alternation (a then b, then b then a, ...), so that a
 /// shared machine's drift falls on both: the median of each and of the per-pair speed ratio
 /// a / b, with the ratios' lowest and highest.

@@ -7,7 +7,6 @@
 
 #include <atomic>
 #include <bit>
-#include <chrono>
 #include <tuple>
 #include <utility>
 
@@ -100,7 +99,6 @@ Box3f node_box(const Bvh8Node& n) {
 }  // namespace
 
 Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit) {
-  const auto start = std::chrono::steady_clock::now();
   if (bvh.empty()) return Refit::done;
   std::atomic<bool> conflict{false};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, bvh.nodes.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -137,7 +135,6 @@ Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit) {
   }
   bvh.bounds = node_box(bvh.nodes[0]);
   bvh.stats.sah_cost = build_detail::sah_cost(bvh);
-  bvh.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return bvh.stats.sah_cost > limit * bvh.stats.built_sah_cost ? Refit::rebuild : Refit::done;
 }
 
