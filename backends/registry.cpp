@@ -17,27 +17,18 @@ bool cpu_has_avx2_fma() {
   return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 }
 
+/// The scene a SceneSharingBackend owns: a base declared before the backend's, so that the
+/// scene is made first and destroyed last.
+struct SceneOwner {
+  std::shared_ptr<const Scene> scene;
+};
+
 /// A backend that shares ownership of the scene it was built over; every call goes to the
-/// backend built over that scene. The scene is declared first so that it is destroyed last.
-class SceneSharingBackend final : public Backend {
+/// backend built over that scene.
+class SceneSharingBackend final : private SceneOwner, public ForwardingBackend {
  public:
   SceneSharingBackend(std::shared_ptr<const Scene> scene, std::unique_ptr<Backend> backend)
-      : Backend(*scene), scene_(std::move(scene)), backend_(std::move(backend)) {}
-
-  const BackendInfo& info() const noexcept override { return backend_->info(); }
-
- private:
-  // The inner backend is current whenever this one is: update() goes through here.
-  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
-    backend_->intersect(rays, hits, coherence);
-  }
-  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const noexcept override {
-    backend_->occluded(rays, occluded, coherence);
-  }
-  UpdateReport apply_changes(uint64_t) override { return backend_->update(); }
-
-  std::shared_ptr<const Scene> scene_;
-  std::unique_ptr<Backend> backend_;
+      : SceneOwner{std::move(scene)}, ForwardingBackend(*SceneOwner::scene, std::move(backend)) {}
 };
 
 }  // namespace

@@ -18,11 +18,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "core/queries.h"
 #include "core/ray.h"
 #include "core/scene.h"
 
@@ -67,6 +69,20 @@ struct BackendOptions {
   double refit_limit = 1.25;
 };
 
+/// Whether `options` lets a hit of ray `ray` (index `index` of the call) through: its
+/// geometry's mask meets the ray's, and the filter, if any, accepts it. What every backend
+/// asks of each candidate hit of a query with options.
+struct HitGate {
+  const Scene& scene;
+  const TraceOptions& options;
+  const Ray& ray;
+  size_t index;
+  bool operator()(const Hit& h) const {
+    const uint32_t g = scene.geometry_of(h.prim_id);
+    return (options.mask(index) & scene.mask(g)) != 0 && (!options.filter || options.filter({ray, index, h, g}));
+  }
+};
+
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -78,8 +94,12 @@ class Backend {
   /// `coherence` picks the coherent method (packets of consecutive rays) or the incoherent one
   /// (single rays, or a ray stream that the backend may reorder internally). Throws rp::Error
   /// when the scene changed since the last update() (stale()).
+  /// A scene with geometry masks (Scene::set_mask) is traced as intersect with options does,
+  /// every ray's mask 0xffffffff.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const {
     if (!current()) throw_stale();
+    if (scene_->has_masks()) [[unlikely]]
+      return intersect(rays, hits, TraceOptions{});
     trace_closest(rays, hits, coherence);
   }
 
@@ -87,8 +107,33 @@ class Backend {
   /// Throws as intersect.
   void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const {
     if (!current()) throw_stale();
+    if (scene_->has_masks()) [[unlikely]]
+      return this->occluded(rays, occluded, TraceOptions{});
     trace_any(rays, occluded, coherence);
   }
+
+  /// The closest hit of each ray among those `options` lets through (ray masks against the
+  /// geometries' masks, then the filter; core/queries.h), as Embree's masks and filter
+  /// functions do: a rejected candidate is as if its primitive were not there at that t.
+  /// Traced ray by ray. Throws as intersect.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, const TraceOptions& options) const;
+  /// Any hit that `options` lets through.
+  void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, const TraceOptions& options) const;
+
+  /// counts[i] = the number of hits of rays[i] within [tnear, tfar] that `options` lets
+  /// through: each primitive it crosses, once per crossing (a sphere crossed twice counts 2),
+  /// what all_hits lists. 0 for an invalid ray. Throws as intersect.
+  void count_hits(std::span<const Ray> rays, std::span<uint32_t> counts, const TraceOptions& options = {}) const;
+  /// Every hit of each ray within [tnear, tfar] that `options` lets through, sorted by (t,
+  /// prim_id, instance_id); with max_per_ray > 0, the first max_per_ray of them. The same
+  /// primitive at the same t is listed once. Throws as intersect.
+  HitList all_hits(std::span<const Ray> rays, size_t max_per_ray = 0, const TraceOptions& options = {}) const;
+
+  /// The closest point of the surface to each query point (core/queries.h): triangles (world
+  /// and placed by instances), spheres, polygons and planes; among points at exactly the same
+  /// distance, the lowest (prim_id, instance_id). Throws rp::Error for a scene with quadrics,
+  /// which have no closest-point routine, and as intersect.
+  void closest_points(std::span<const PointQuery> queries, std::span<ClosestPoint> out) const;
 
   /// Brings the backend up to date with its scene's changes since it was built or last
   /// updated (Embree's rtcCommitScene): moved vertices refit their trees, moved instances
@@ -117,11 +162,65 @@ class Backend {
   /// Brings the structures from version `since` to the scene's current one (update()).
   virtual UpdateReport apply_changes(uint64_t since) = 0;
 
+  /// The queries with options (core/queries.h) of an up-to-date backend, planes excluded (the
+  /// seam adds them). trace_every appends to `out` every hit of valid ray rays[index] within [tnear, tfar] that gate()
+  /// lets through, in any order, a hit possibly more than once; closest_points_of answers valid queries of a scene
+  /// without quadrics (found: the closest triangle, sphere or polygon point, else not found).
+  virtual void trace_closest_filtered(std::span<const Ray> rays, std::span<Hit> hits,
+                                      const TraceOptions& options) const = 0;
+  virtual void trace_any_filtered(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                                  const TraceOptions& options) const = 0;
+  virtual void trace_every(std::span<const Ray> rays, size_t index, const TraceOptions& options,
+                           std::vector<Hit>& out) const = 0;
+  virtual void closest_points_of(std::span<const PointQuery> queries, std::span<ClosestPoint> out) const = 0;
+
+  /// The gate of ray r (index i of the call) under `options` (HitGate).
+  HitGate gate(const TraceOptions& options, const Ray& r, size_t i) const { return {*scene_, options, r, i}; }
+
  private:
+  friend class ForwardingBackend;
   [[noreturn]] void throw_stale() const;
 
   const Scene* scene_;
   uint64_t version_;
+};
+
+/// A backend that answers every query through another one built over the same scene (the
+/// registry's scene-sharing handle, tests' wrappers); a subclass overrides what it changes.
+/// The inner backend is current whenever this one is: update() goes through here.
+class ForwardingBackend : public Backend {
+ public:
+  const BackendInfo& info() const noexcept override { return inner_->info(); }
+
+ protected:
+  ForwardingBackend(const Scene& scene, std::unique_ptr<Backend> inner) : Backend(scene), inner_(std::move(inner)) {}
+  const Backend& inner() const { return *inner_; }
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence coherence) const noexcept override {
+    inner_->trace_closest(rays, hits, coherence);
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded, Coherence coherence) const noexcept override {
+    inner_->trace_any(rays, occluded, coherence);
+  }
+  UpdateReport apply_changes(uint64_t) override { return inner_->update(); }
+  void trace_closest_filtered(std::span<const Ray> rays, std::span<Hit> hits,
+                              const TraceOptions& options) const override {
+    inner_->trace_closest_filtered(rays, hits, options);
+  }
+  void trace_any_filtered(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                          const TraceOptions& options) const override {
+    inner_->trace_any_filtered(rays, occluded, options);
+  }
+  void trace_every(std::span<const Ray> rays, size_t index, const TraceOptions& options,
+                   std::vector<Hit>& out) const override {
+    inner_->trace_every(rays, index, options, out);
+  }
+  void closest_points_of(std::span<const PointQuery> queries, std::span<ClosestPoint> out) const override {
+    inner_->closest_points_of(queries, out);
+  }
+
+ private:
+  std::unique_ptr<Backend> inner_;
 };
 
 /// Rays a parallel batch hands each task: whole 8-ray packets, and enough work per task to

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "core/geometry/closest_point.h"
 #include "core/geometry/plane.h"
 #include "core/geometry/sphere.h"
 #include "core/surface_lanes.h"
@@ -107,6 +108,7 @@ uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
   mesh_bounds_.push_back(box);
   triangle_count_ += mesh.triangle_count();
   meshes_.push_back(std::move(mesh));
+  add_geometry(PrimKind::triangle, uint32_t(meshes_.size() - 1));
   changed(Change::added, Object::mesh, uint32_t(meshes_.size() - 1), true, false);
   mesh_version_.push_back(version_);
   mesh_uid_.push_back(next_uid_++);
@@ -145,7 +147,7 @@ uint32_t Scene::add_instance(uint32_t mesh, const Affine3f& object_to_world) {
   return uint32_t(instances_.size() - 1);
 }
 
-void Scene::add_sphere(const Sphere& s) {
+uint32_t Scene::add_sphere(const Sphere& s) {
   RP_CHECK(is_finite(s.center) && std::isfinite(s.radius) && s.radius > 0.0f, "sphere at ", show(s.center),
            " radius ", s.radius, ": needs a finite centre and radius > 0");
   RP_CHECK(in_coordinate_range(s.center - Vec3f(s.radius)) && in_coordinate_range(s.center + Vec3f(s.radius)),
@@ -153,9 +155,10 @@ void Scene::add_sphere(const Sphere& s) {
   check_material(materials_, s.material, "sphere");
   spheres_.push_back(s);
   changed(Change::added, Object::sphere, uint32_t(spheres_.size() - 1), true, false);
+  return add_geometry(PrimKind::sphere, uint32_t(spheres_.size() - 1));
 }
 
-void Scene::add_quadric(const QuadricShape& q) {
+uint32_t Scene::add_quadric(const QuadricShape& q) {
   const Box3f b = q.quadric.clip;
   RP_CHECK(!b.empty() && is_finite(b.lo) && is_finite(b.hi), "quadric: clipping box must be finite and non-empty");
   RP_CHECK(in_coordinate_range(b.lo) && in_coordinate_range(b.hi) && in_coordinate_range(q.quadric.center),
@@ -169,9 +172,10 @@ void Scene::add_quadric(const QuadricShape& q) {
   scaled.quadric = c.normalized();
   quadrics_.push_back(scaled);
   changed(Change::added, Object::quadric, uint32_t(quadrics_.size() - 1), true, false);
+  return add_geometry(PrimKind::quadric, uint32_t(quadrics_.size() - 1));
 }
 
-void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
+uint32_t Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
   RP_CHECK(vertices.size() >= 3, "polygon: needs at least 3 vertices, got ", vertices.size());
   for (const Vec3f& v : vertices) {
     RP_CHECK(is_finite(v), "polygon: non-finite vertex");
@@ -188,9 +192,10 @@ void Scene::add_polygon(std::span<const Vec3f> vertices, uint32_t material) {
   polygon_vertices_.insert(polygon_vertices_.end(), vertices.begin(), vertices.end());
   polygons_.push_back(p);
   changed(Change::added, Object::polygon, uint32_t(polygons_.size() - 1), true, false);
+  return add_geometry(PrimKind::polygon, uint32_t(polygons_.size() - 1));
 }
 
-void Scene::add_plane(const Plane& p) {
+uint32_t Scene::add_plane(const Plane& p) {
   RP_CHECK(is_finite(p.normal) && length(p.normal) > 0.0f && std::isfinite(p.d),
            "plane: needs a finite non-zero normal and finite offset");
   RP_CHECK(std::abs(p.d) / length(p.normal) <= kMaxCoordinate, "plane: its distance from the origin, ",
@@ -198,6 +203,7 @@ void Scene::add_plane(const Plane& p) {
   check_material(materials_, p.material, "plane");
   planes_.push_back(p);
   changed(Change::added, Object::plane, uint32_t(planes_.size() - 1), false, false);
+  return add_geometry(PrimKind::plane, uint32_t(planes_.size() - 1));
 }
 
 static void check_light(const PointLight& l) {
@@ -314,6 +320,7 @@ void Scene::remove_mesh(uint32_t mesh) {
   mesh_bounds_.erase(mesh_bounds_.begin() + mesh);
   mesh_version_.erase(mesh_version_.begin() + mesh);
   mesh_uid_.erase(mesh_uid_.begin() + mesh);
+  remove_geometry(PrimKind::triangle, mesh);
   triangle_count_ -= n;
   changed(Change::removed, Object::mesh, mesh, true, !instances_.empty());
 }
@@ -329,12 +336,14 @@ void Scene::remove_instance(uint32_t instance) {
 void Scene::remove_sphere(uint32_t i) {
   RP_CHECK(i < spheres_.size(), "remove_sphere: sphere ", i, " out of range (", spheres_.size(), " spheres)");
   spheres_.erase(spheres_.begin() + i);
+  remove_geometry(PrimKind::sphere, i);
   changed(Change::removed, Object::sphere, i, true, false);
 }
 
 void Scene::remove_quadric(uint32_t i) {
   RP_CHECK(i < quadrics_.size(), "remove_quadric: quadric ", i, " out of range (", quadrics_.size(), " quadrics)");
   quadrics_.erase(quadrics_.begin() + i);
+  remove_geometry(PrimKind::quadric, i);
   changed(Change::removed, Object::quadric, i, true, false);
 }
 
@@ -343,6 +352,7 @@ void Scene::remove_polygon(uint32_t i) {
   const PolygonShape gone = polygons_[i];
   polygon_vertices_.erase(polygon_vertices_.begin() + gone.first, polygon_vertices_.begin() + gone.first + gone.count);
   polygons_.erase(polygons_.begin() + i);
+  remove_geometry(PrimKind::polygon, i);
   for (PolygonShape& p : polygons_) p.first -= p.first > gone.first ? gone.count : 0;
   changed(Change::removed, Object::polygon, i, true, false);
 }
@@ -350,7 +360,68 @@ void Scene::remove_polygon(uint32_t i) {
 void Scene::remove_plane(uint32_t i) {
   RP_CHECK(i < planes_.size(), "remove_plane: plane ", i, " out of range (", planes_.size(), " planes)");
   planes_.erase(planes_.begin() + i);
+  remove_geometry(PrimKind::plane, i);
   changed(Change::removed, Object::plane, i, false, false);
+}
+
+std::vector<uint32_t>& Scene::geometry_ids(PrimKind kind) {
+  switch (kind) {
+    case PrimKind::triangle:
+      return mesh_geometry_;
+    case PrimKind::sphere:
+      return sphere_geometry_;
+    case PrimKind::quadric:
+      return quadric_geometry_;
+    case PrimKind::polygon:
+      return polygon_geometry_;
+    case PrimKind::plane:
+      return plane_geometry_;
+  }
+  return plane_geometry_;
+}
+
+uint32_t Scene::add_geometry(PrimKind kind, uint32_t index) {
+  const auto g = uint32_t(geometries_.size());
+  geometries_.push_back({kind, index, 0});
+  masks_.push_back(~0u);
+  geometry_ids(kind).push_back(g);
+  return g;
+}
+
+void Scene::remove_geometry(PrimKind kind, uint32_t index) {
+  std::vector<uint32_t>& ids = geometry_ids(kind);
+  const uint32_t g = ids[index];
+  ids.erase(ids.begin() + index);
+  masked_ -= masks_[g] != ~0u;
+  geometries_.erase(geometries_.begin() + g);
+  masks_.erase(masks_.begin() + g);
+  for (PrimLocation& at : geometries_) at.shape -= at.kind == kind && at.shape > index;
+  for (std::vector<uint32_t>* v :
+       {&mesh_geometry_, &sphere_geometry_, &quadric_geometry_, &polygon_geometry_, &plane_geometry_})
+    for (uint32_t& id : *v) id -= id > g;
+}
+
+uint32_t Scene::geometry_of(uint32_t prim_id) const {
+  const PrimLocation at = locate(prim_id);
+  switch (at.kind) {
+    case PrimKind::triangle:
+      return mesh_geometry_[at.shape];
+    case PrimKind::sphere:
+      return sphere_geometry_[at.shape];
+    case PrimKind::quadric:
+      return quadric_geometry_[at.shape];
+    case PrimKind::polygon:
+      return polygon_geometry_[at.shape];
+    case PrimKind::plane:
+      return plane_geometry_[at.shape];
+  }
+  return kInvalidId;
+}
+
+void Scene::set_mask(uint32_t g, uint32_t mask) {
+  RP_CHECK(g < geometries_.size(), "set_mask: geometry ", g, " out of range (", geometries_.size(), " geometries)");
+  masked_ += (mask != ~0u) - (masks_[g] != ~0u);
+  masks_[g] = mask;
 }
 
 PrimLocation Scene::locate_triangle(uint32_t id) const {
@@ -403,6 +474,27 @@ Intersection<float> Scene::intersect_analytic(uint32_t id, const Ray& ray) const
     }
     default: return {};
   }
+}
+
+ClosestPoint Scene::closest_on_analytic(uint32_t id, const Vec3f& p) const {
+  const PrimLocation ref = locate(id);
+  ClosestPoint out;
+  out.prim_id = id;
+  if (ref.kind == PrimKind::sphere) {
+    const Sphere& s = spheres_[ref.shape];
+    const Vec3f d = p - s.center;
+    const float len = length(d);
+    // The centre itself: every point of the sphere is as close; the one on +x.
+    out.point = len > 0.0f ? s.center + d * (s.radius / len) : s.center + Vec3f(s.radius, 0.0f, 0.0f);
+    const Vec2f uv = sphere_uv(s.center, s.radius, out.point);
+    out.u = uv.x;
+    out.v = uv.y;
+  } else {
+    const PolygonShape& g = polygons_[ref.shape];
+    out.point = closest_on_polygon(p, std::span<const Vec3f>(polygon_vertices_).subspan(g.first, g.count), g.plane);
+  }
+  out.distance = length(out.point - p);
+  return out;
 }
 
 void Scene::intersect_planes_in_order(const Ray& ray, Hit& hit) const {

@@ -13,7 +13,9 @@
 /// a hit names the placement by Hit::instance_id, the index of the instance in instances()
 /// (kNoInstance for every other primitive). Analytic primitives and planes are world-space only.
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -24,6 +26,7 @@
 #include "core/affine.h"
 #include "core/geometry/polygon.h"
 #include "core/geometry/quadric.h"
+#include "core/queries.h"
 #include "core/ray.h"
 
 namespace rp {
@@ -185,14 +188,17 @@ class Scene {
   /// kMaxInstanceScale (largest row sum of |L|), or that puts the mesh's box outside the
   /// coordinate range.
   uint32_t add_instance(uint32_t mesh, const Affine3f& object_to_world);
-  void add_sphere(const Sphere& s);
+  /// Appends a sphere; returns its geometry id (geometry_of).
+  uint32_t add_sphere(const Sphere& s);
+  /// Appends a quadric; returns its geometry id.
   /// The coefficients are stored scaled by a power of two so that the largest |A..J| lies in
   /// [1, 2): the same surface, every computed value scaled exactly, and no overflow for any
   /// valid ray (core/ray.h). The clip box must be finite and within the coordinate range.
-  void add_quadric(const QuadricShape& q);
-  /// Polygon from >= 3 coplanar vertices; convexity is detected.
-  void add_polygon(std::span<const Vec3f> vertices, uint32_t material);
-  void add_plane(const Plane& p);
+  uint32_t add_quadric(const QuadricShape& q);
+  /// Polygon from >= 3 coplanar vertices; convexity is detected. Returns its geometry id.
+  uint32_t add_polygon(std::span<const Vec3f> vertices, uint32_t material);
+  /// Appends an unbounded plane; returns its geometry id.
+  uint32_t add_plane(const Plane& p);
   /// Throws rp::Error for a position outside the coordinate range (rp::in_coordinate_range) or
   /// a negative or non-finite intensity.
   void add_light(const PointLight& l);
@@ -233,6 +239,28 @@ class Scene {
   void remove_quadric(uint32_t i);
   void remove_polygon(uint32_t i);
   void remove_plane(uint32_t i);
+
+  /// Geometries (Embree's geomID, Open3D's geometry ids): every mesh, sphere, quadric, polygon
+  /// and plane is one geometry, numbered in the order they were added (0, 1, ...); removing one
+  /// moves the later ones down by one. A triangle of an instanced mesh belongs to its mesh's
+  /// geometry in every placement (Hit::instance_id names the placement).
+  uint32_t geometry_count() const { return uint32_t(geometries_.size()); }
+  /// The geometry of primitive prim_id (< prim_count()).
+  uint32_t geometry_of(uint32_t prim_id) const;
+  /// The geometry of mesh i.
+  uint32_t mesh_geometry(uint32_t mesh) const { return mesh_geometry_[mesh]; }
+  /// What geometry g is: its kind and its index among the shapes of that kind (the mesh index
+  /// for triangles).
+  PrimLocation geometry(uint32_t g) const { return geometries_[g]; }
+  /// Sets geometry g's mask (Embree's rtcSetGeometryMask): a ray of mask m sees the geometry
+  /// only when (m & mask) != 0 (TraceOptions::masks, core/queries.h). Every geometry starts
+  /// with 0xffffffff. Masks are read while tracing, as lights are, so no backend needs an
+  /// update; as any change, it must not overlap a trace. Throws rp::Error for a geometry out of
+  /// range.
+  void set_mask(uint32_t g, uint32_t mask);
+  uint32_t mask(uint32_t g) const { return masks_[g]; }
+  /// True when some geometry's mask is not 0xffffffff.
+  bool has_masks() const { return masked_ != 0; }
 
   /// Raised by every change of the geometry (an add_*, set_vertices, set_transform, remove_*):
   /// the scene a backend at this version traced. Starts at 0.
@@ -295,6 +323,9 @@ class Scene {
   /// Closest hit of `ray` with one sphere, quadric or polygon, by the core/geometry/ routine
   /// both backends share (the stable sphere quadratic, the centred quadric, the polygon test).
   Intersection<float> intersect_analytic(uint32_t prim_id, const Ray& ray) const;
+  /// The point of sphere or polygon prim_id closest to p (a closest-point query, core/queries.h):
+  /// point, distance, u, v (a sphere's surface parameters; 0 for a polygon), prim_id.
+  ClosestPoint closest_on_analytic(uint32_t prim_id, const Vec3f& p) const;
   /// Lets the unbounded planes, which live beside every backend's structure, take `hit`
   /// when one is at least as close (t in [tnear, min(tfar, hit.t)]); planes in index order.
   /// Inline so that the per-ray call costs nothing in a scene without planes.
@@ -329,6 +360,11 @@ class Scene {
   enum class Object : uint8_t { mesh, instance, sphere, quadric, polygon, plane };
   /// Records a change: version() + 1; `layout`, `instances` raise those versions too.
   void changed(Change change, Object object, uint32_t index, bool layout, bool instances);
+  /// Numbers a new shape of `kind` (index `index` of its kind) as the next geometry.
+  uint32_t add_geometry(PrimKind kind, uint32_t index);
+  /// Removes the geometry of shape `index` of `kind`: later geometries move down by one, and
+  /// so do the later shapes of that kind.
+  void remove_geometry(PrimKind kind, uint32_t index);
 
   std::vector<Material> materials_;
   std::vector<TriangleMesh> meshes_;
@@ -343,6 +379,12 @@ class Scene {
   uint32_t last_index_ = 0;
   std::vector<Instance> instances_;
   uint64_t instanced_triangle_count_ = 0;
+  std::vector<PrimLocation> geometries_;  ///< geometry id -> kind and index of its kind
+  std::vector<uint32_t> masks_;           ///< per geometry
+  uint32_t masked_ = 0;                   ///< geometries whose mask is not 0xffffffff
+  /// Per kind (triangle: per mesh), the geometry id of each shape, indexed by PrimKind.
+  std::vector<uint32_t> mesh_geometry_, sphere_geometry_, quadric_geometry_, polygon_geometry_, plane_geometry_;
+  std::vector<uint32_t>& geometry_ids(PrimKind kind);
   std::vector<Sphere> spheres_;
   std::vector<QuadricShape> quadrics_;
   std::vector<PolygonShape> polygons_;
@@ -354,6 +396,21 @@ class Scene {
   int up_axis_ = 1;
   uint32_t triangle_count_ = 0;
 };
+
+/// Calls f(hit) for the hits of analytic primitive `id` along `r` within [tnear, tfar] in
+/// order of t (a sphere or quadric may be crossed twice), until f returns true.
+template <class F>
+bool for_each_analytic_hit(const Scene& scene, uint32_t id, const Ray& r, uint32_t inst, F&& f) {
+  Ray rest = r;
+  for (int k = 0; k < 4; ++k) {  // at most two roots, and a polygon's one hit
+    const Intersection<float> h = scene.intersect_analytic(id, rest);
+    if (!h.hit) return false;
+    if (f(Hit{h.t, id, h.u, h.v, inst})) return true;
+    rest.tnear = std::nextafter(h.t, std::numeric_limits<float>::infinity());
+    if (!(rest.tnear <= rest.tfar)) return false;
+  }
+  return false;
+}
 
 /// The embedded default scene: a procedural torus-knot mesh (>= 50k triangles), spheres,
 /// several quadrics, a non-convex polygon, a ground plane, a point and a directional light.

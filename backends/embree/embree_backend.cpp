@@ -70,7 +70,7 @@ class EmbreeBackend final : public Backend {
 
     scene_handle_ = rtcNewScene(dev);
     check(dev, "embree: rtcNewScene");
-    rtcSetSceneFlags(scene_handle_, flags_);
+    rtcSetSceneFlags(scene_handle_, scene_flags());
     rtcSetSceneBuildQuality(scene_handle_, quality_);
 
     triangle_data_.clear();
@@ -83,7 +83,7 @@ class EmbreeBackend final : public Backend {
       RTCScene c = rtcNewScene(dev);
       check(dev, "embree: rtcNewScene");
       children_.push_back(c);
-      rtcSetSceneFlags(c, flags_);
+      rtcSetSceneFlags(c, scene_flags());
       rtcSetSceneBuildQuality(c, quality_);
       RTCGeometry g = triangle_geometry(dev, in.mesh, buffer_bytes);
       rtcCommitGeometry(g);
@@ -502,6 +502,106 @@ class EmbreeBackend final : public Backend {
   }
 
   bool hits_plane(const Ray& r) const noexcept { return scene_.occluded_by_planes(r); }
+
+  /// The variant's flags, and a context filter allowed (the queries with options set one;
+  /// the others leave it null).
+  RTCSceneFlags scene_flags() const { return RTCSceneFlags(flags_ | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION); }
+
+  Numbering numbering() const { return {&scene_, &geom_base_, first_instance_geom_}; }
+
+  /// Ray `index` through rtcIntersect1 or rtcOccluded1 (`occlusion`) as a query with options
+  /// (Gated) of `mode`; true when Embree found an accepted hit.
+  bool trace_gated(std::span<const Ray> rays, size_t index, Gated& g, bool occlusion) const {
+    QueryContext q = context(rays, Coherence::incoherent);
+    q.gated = &g;
+    q.embree.filter = gated_filter;
+    g.index = index;
+    if (occlusion) {
+      RTCRay ray = to_embree(rays[index], index);
+      rtcOccluded1(scene_handle_, &q.embree, &ray);
+      return ray.tfar < 0.0f;
+    }
+    RTCRayHit rh;
+    rh.ray = to_embree(rays[index], index);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_handle_, &q.embree, &rh);
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+
+  void trace_closest_filtered(std::span<const Ray> rays, std::span<Hit> hits,
+                              const TraceOptions& options) const override {
+    simd::FlushDenormals ftz;
+    Gated g{Gated::Mode::closest, numbering(), options};
+    for (size_t i = 0; i < rays.size(); ++i) {
+      g.best = Hit{};
+      if (valid_ray(rays[i])) trace_gated(rays, i, g, false);
+      hits[i] = g.best;
+    }
+  }
+
+  void trace_any_filtered(std::span<const Ray> rays, std::span<uint8_t> out,
+                          const TraceOptions& options) const override {
+    simd::FlushDenormals ftz;
+    Gated g{Gated::Mode::any, numbering(), options};
+    for (size_t i = 0; i < rays.size(); ++i) out[i] = valid_ray(rays[i]) && trace_gated(rays, i, g, true);
+  }
+
+  void trace_every(std::span<const Ray> rays, size_t index, const TraceOptions& options,
+                   std::vector<Hit>& out) const override {
+    simd::FlushDenormals ftz;
+    Gated g{Gated::Mode::every, numbering(), options};
+    g.every = &out;
+    trace_gated(rays, index, g, false);
+  }
+
+  void closest_points_of(std::span<const PointQuery> queries, std::span<ClosestPoint> out) const override {
+    simd::FlushDenormals ftz;
+    for (size_t i = 0; i < queries.size(); ++i) {
+      out[i] = ClosestPoint{};
+      if (!valid_point_query(queries[i])) continue;
+      PointSearch search(queries[i]);
+      const Vec3f& p = search.point;
+      // Finite: Embree maps the query's sphere into instances, where an infinite radius
+      // becomes NaN bounds. Every distance within the coordinate range is below 2^32.
+      point_query(scene_handle_, p, std::min(search.radius, 0x1p32f), {numbering(), search});
+      // Embree 3.13.5 culls instances it should visit once a world primitive has shrunk the
+      // query's radius (seen: a closer instanced triangle missed for a farther floor), so each
+      // instance whose box lies within the best distance is searched through its own scene,
+      // in its object space, with a radius that bounds the world one there.
+      for (uint32_t k = 0; k < scene_.instances().size(); ++k) {
+        const Instance& in = scene_.instances()[k];
+        const MeshGeometry& mg = mesh_geometry_[in.mesh];
+        if (!mg.scene || box_distance(in.bounds, p) > search.best.distance) continue;
+        float f2 = 0.0f;  // ||world_to_object||_F^2 >= its largest stretch squared
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) f2 += in.world_to_object.m[r][c] * in.world_to_object.m[r][c];
+        const float scale = std::sqrt(f2) * 1.00001f;
+        point_query(mg.scene, in.world_to_object.point(p), std::min(search.best.distance, search.radius) * scale,
+                    {numbering(), search, k, scale});
+      }
+      out[i] = search.best;
+    }
+  }
+
+  /// rtcPointQuery of `scene` at `p` (its space) within `radius`, into the context's search.
+  static void point_query(RTCScene scene, const Vec3f& p, float radius, PointContext c) {
+    RTCPointQuery q;
+    q.x = p.x;
+    q.y = p.y;
+    q.z = p.z;
+    q.radius = std::min(radius, 0x1p100f);
+    q.time = 0.0f;
+    RTCPointQueryContext pc;
+    rtcInitPointQueryContext(&pc);
+    rtcPointQuery(scene, &q, &pc, point_callback, &c);
+  }
+
+  /// Distance from p to box b (0 inside).
+  static float box_distance(const Box3f& b, const Vec3f& p) {
+    const Vec3f d = max(max(b.lo - p, p - b.hi), Vec3f(0.0f));
+    return length(d);
+  }
 
   const Scene& scene_;
   UserData user_;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/geometry/closest_point.h"
+
 namespace rp::embree::detail {
 
 namespace {
@@ -52,9 +54,20 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
   RTCRayN* rays = RTCRayHitN_RayN(a->rayhit, a->N);
   RTCHitN* hits = RTCRayHitN_HitN(a->rayhit, a->N);
+  Gated* gated = reinterpret_cast<const QueryContext*>(a->context)->gated;
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    const Intersection<float> h = s.intersect_analytic(Kind::base(s) + a->primID, query_ray(a->context, rays, a->N, i));
+    Intersection<float> h;
+    if (gated) {  // the first crossing that the query takes, over the caller's whole interval
+      const Ray& r = caller_ray(a->context, rays, a->N, i);
+      for_each_analytic_hit(s, Kind::base(s) + a->primID, r, kNoInstance, [&](const Hit& c) {
+        if (!gated->offer(r, c)) return false;
+        h = {true, c.t, c.u, c.v};
+        return true;
+      });
+    } else {
+      h = s.intersect_analytic(Kind::base(s) + a->primID, query_ray(a->context, rays, a->N, i));
+    }
     if (!h.hit) continue;
     RTCRayN_tfar(rays, a->N, i) = h.t;
     RTCHitN_u(hits, a->N, i) = h.u;
@@ -71,10 +84,14 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
 template <typename Kind>
 void user_occluded(const RTCOccludedFunctionNArguments* a) {
   const Scene& s = *static_cast<const UserData*>(a->geometryUserPtr)->scene;
+  Gated* gated = reinterpret_cast<const QueryContext*>(a->context)->gated;
   for (unsigned i = 0; i < a->N; ++i) {
     if (a->valid[i] == 0) continue;
-    if (s.intersect_analytic(Kind::base(s) + a->primID, caller_ray(a->context, a->ray, a->N, i)).hit)
-      RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
+    const Ray& r = caller_ray(a->context, a->ray, a->N, i);
+    const bool hit = gated ? for_each_analytic_hit(s, Kind::base(s) + a->primID, r, kNoInstance,
+                                                   [&](const Hit& c) { return gated->offer(r, c); })
+                           : s.intersect_analytic(Kind::base(s) + a->primID, r).hit;
+    if (hit) RTCRayN_tfar(a->ray, a->N, i) = -std::numeric_limits<float>::infinity();
   }
 }
 
@@ -108,6 +125,47 @@ void instance_valid_filter(const RTCFilterFunctionNArguments* a) {
     Ray r;
     if (a->valid[i] != 0 && !test_ray(d, a->context, a->ray, a->N, i, r)) a->valid[i] = 0;
   }
+}
+
+void gated_filter(const RTCFilterFunctionNArguments* a) {
+  Gated& g = *reinterpret_cast<const QueryContext*>(a->context)->gated;
+  const Scene& s = *g.numbering.scene;
+  for (unsigned i = 0; i < a->N; ++i) {
+    if (a->valid[i] == 0) continue;
+    a->valid[i] = 0;
+    const Ray& r = caller_ray(a->context, a->ray, a->N, i);
+    const uint32_t inst = g.numbering.instance(RTCHitN_instID(a->hit, a->N, i, 0));
+    const uint32_t prim = g.numbering.prim_id(RTCHitN_geomID(a->hit, a->N, i), RTCHitN_primID(a->hit, a->N, i), inst);
+    const Ray tested = inst == kNoInstance ? r : object_ray(r, s.instances()[inst].world_to_object);
+    if (!valid_ray(tested)) continue;
+    const Intersection<float> h = scalar_triangle(s, prim, tested);
+    if (h.hit && g.offer(r, Hit{h.t, prim, h.u, h.v, inst})) a->valid[i] = -1;
+  }
+}
+
+bool point_callback(RTCPointQueryFunctionArguments* a) {
+  PointContext& c = *static_cast<PointContext*>(a->userPtr);
+  const Scene& s = *c.numbering.scene;
+  const uint32_t inst =
+      c.instance != kNoInstance
+          ? c.instance
+          : c.numbering.instance(a->context->instStackSize > 0 ? a->context->instID[0] : RTC_INVALID_GEOMETRY_ID);
+  const uint32_t prim = c.numbering.prim_id(a->geomID, a->primID, inst);
+  const PrimLocation at = s.locate(prim);
+  const float before = c.search.best.distance;
+  if (at.kind == PrimKind::triangle) {
+    const TriangleMesh& m = s.meshes()[at.shape];
+    const Vec3f v0 = m.vertex(at.local, 0), v1 = m.vertex(at.local, 1), v2 = m.vertex(at.local, 2);
+    if (zero_area(v0, v1, v2)) return false;
+    const SurfacePointT<float> p = closest_on_placed_triangle(
+        c.search.point, v0, v1, v2, inst == kNoInstance ? nullptr : &s.instances()[inst].object_to_world);
+    c.search.take({p.p, length(p.p - c.search.point), prim, inst, p.u, p.v});
+  } else {
+    c.search.take(s.closest_on_analytic(prim, c.search.point));
+  }
+  if (!(c.search.best.distance < before)) return false;
+  a->query->radius = c.search.best.distance * c.radius_scale;
+  return true;
 }
 
 }  // namespace rp::embree::detail

@@ -7,7 +7,11 @@
 
 #include <cstdint>
 
+#include <vector>
+
+#include "core/backend.h"
 #include "core/geometry/triangle.h"
+#include "core/queries.h"
 #include "core/ray.h"
 #include "core/scene.h"
 
@@ -43,12 +47,93 @@ struct PolygonKind {
 /// callbacks find the caller's exact ray through QueryContext and the ray's `id` (its index).
 constexpr float kBand = 0x1p-20f;
 
+/// Where the scene's primitives are in Embree's scenes: what a callback needs to name the
+/// primitive of a candidate.
+struct Numbering {
+  const Scene* scene;
+  const std::vector<uint32_t>* geom_base;  ///< the top scene's geometry -> its first prim_id
+  uint32_t first_instance_geom;            ///< instance i is the top scene's geometry this + i
+
+  /// The instance of top-scene geometry `inst_geom` (RTC_INVALID_GEOMETRY_ID: none).
+  uint32_t instance(unsigned inst_geom) const {
+    return inst_geom == RTC_INVALID_GEOMETRY_ID ? kNoInstance : inst_geom - first_instance_geom;
+  }
+  /// The prim_id of primitive `prim` of geometry `geom` (of the child scene of instance
+  /// `inst`, or of the top scene).
+  uint32_t prim_id(unsigned geom, unsigned prim, uint32_t inst) const {
+    return prim + (inst == kNoInstance ? (*geom_base)[geom] : scene->mesh_base(scene->instances()[inst].mesh));
+  }
+};
+
+/// One ray's query with options (core/queries.h) through rtcIntersect1 or rtcOccluded1: every
+/// candidate is tested again by the scalar routine over the caller's interval (triangles:
+/// Möller–Trumbore, the simd backend's default test, so t, u, v are its bits), then by the
+/// gate; the context filter (gated_filter) and the user geometries decide by `mode`.
+struct Gated {
+  enum class Mode : uint8_t {
+    closest,  ///< keep the closest that passes (best); accept it so Embree shortens the ray
+    any,      ///< accept the first that passes: Embree stops
+    every,    ///< collect every one that passes (every) and reject all: Embree goes on
+  };
+  Gated(Mode m, const Numbering& n, const TraceOptions& o) : mode(m), numbering(n), options(&o) {}
+
+  Mode mode;
+  Numbering numbering;
+  const TraceOptions* options;
+  size_t index = 0;  ///< the ray's index in the call
+  Hit best;
+  std::vector<Hit>* every = nullptr;
+
+  HitGate gate(const Ray& r) const { return {*numbering.scene, *options, r, index}; }
+  /// Decides candidate `h` (exact, of the caller's ray r): true when Embree should accept it.
+  bool offer(const Ray& r, const Hit& h) {
+    switch (mode) {
+      case Mode::every:
+        if (gate(r)(h)) every->push_back(h);
+        return false;
+      case Mode::any:
+        return gate(r)(h);
+      case Mode::closest:
+        if (best.hit() &&
+            (h.t > best.t || (h.t == best.t && (h.prim_id > best.prim_id ||
+                                                (h.prim_id == best.prim_id && h.instance_id >= best.instance_id)))))
+          return false;
+        if (!gate(r)(h)) return false;
+        best = h;
+        return true;
+    }
+    return false;
+  }
+};
+
 /// Embree's intersection context extended with the caller's rays (Embree passes the context
 /// it was given to every callback; `embree` must stay the first member).
 struct QueryContext {
   RTCIntersectContext embree;
-  const Ray* rays;  ///< the caller's rays; an Embree ray's `id` is its index here
+  const Ray* rays;         ///< the caller's rays; an Embree ray's `id` is its index here
+  Gated* gated = nullptr;  ///< a query with options (its context filter is gated_filter)
 };
+
+/// The context filter of a query with options (Gated): each triangle candidate tested again
+/// by the scalar routine, then offered.
+void gated_filter(const RTCFilterFunctionNArguments* a);
+
+/// What rtcPointQuery's callback keeps: the search and where primitives are.
+struct PointContext {
+  Numbering numbering;
+  PointSearch& search;
+  /// The instance whose child scene is queried on its own (kNoInstance: the top scene, where
+  /// Embree names the instance).
+  uint32_t instance = kNoInstance;
+  /// The query's space per world unit: the radius the callback sets is the best distance
+  /// times this (1 in the world; a bound of the instance's world_to_object stretch).
+  float radius_scale = 1.0f;
+};
+
+/// rtcPointQuery's callback (userPtr: a PointContext): the primitive's closest point, in the
+/// world, offered to the search; the query's radius shrinks to the best distance (times
+/// radius_scale).
+bool point_callback(RTCPointQueryFunctionArguments* a);
 
 /// True when t lies within kBand of an end of the caller's interval [tnear, tfar].
 inline bool in_band(const Ray& r, float t) { return t <= r.tnear * (1.0f + kBand) || t >= r.tfar * (1.0f - kBand); }

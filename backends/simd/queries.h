@@ -9,15 +9,20 @@
 /// - Closest: the closest hit by the rule of levels.h; children are visited near-first and
 ///   subtrees entered beyond the current hit are skipped.
 /// - Any: whether anything is hit within [tnear, tfar]; stops at the first hit.
+/// - GatedClosest, GatedAny, Every: single rays whose candidate hits pass a gate first (the
+///   ray's mask against the geometry's, and the caller's filter: core/queries.h), and every
+///   hit along a ray (all_hits, count_hits).
 ///
 /// A policy runs unchanged at both levels: at an instance the loops run the same policy on the
 /// object-space rays (its t is the world t), so the hits of every level meet in one state.
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <vector>
 
 #include "backends/simd/levels.h"
 #include "backends/simd/moller_trumbore.h"
@@ -242,6 +247,104 @@ struct AnyPacket {
       done |= hit;
       mask &= ~hit;
     }
+  }
+};
+
+// ---- queries whose hits pass a gate (masks and filters), and every hit ----
+
+/// Calls f(hit) for the triangles of `leaf` (read into `kb`) that the ray (set up in `kr`)
+/// hits within [tnear, tfar], nearest first (ties by prim_id), until f returns true.
+template <class Kernel, class F>
+RP_SIMD_INLINE bool each_triangle_hit(const Leaf& leaf, const typename Kernel::Block& kb,
+                                      const typename Kernel::Single& kr, float tfar, uint32_t inst, F&& f) {
+  const TriHit8 h = kr.block(kb, float8(tfar));
+  uint32_t bits = simd::movemask(h.hit) & ((1u << leaf.n) - 1);
+  if (!bits) return false;
+  alignas(32) float t[8], u[8], v[8];
+  h.t.store_aligned(t);
+  h.u.store_aligned(u);
+  h.v.store_aligned(v);
+  while (bits) {
+    int lane = std::countr_zero(bits);
+    for (uint32_t b = bits & (bits - 1); b; b &= b - 1) {
+      const int c = std::countr_zero(b);
+      if (t[c] < t[lane] || (t[c] == t[lane] && leaf.prim(uint32_t(c)) < leaf.prim(uint32_t(lane)))) lane = c;
+    }
+    bits &= ~(1u << lane);
+    if (f(Hit{t[lane], leaf.prim(uint32_t(lane)), u[lane], v[lane], inst})) return true;
+  }
+  return false;
+}
+
+/// The closest hit of one ray that `gate` lets through (a HitGate, core/backend.h).
+template <class Kernel, class Gate>
+struct GatedClosest {
+  static constexpr bool kNearFirst = true;
+  const Gate& gate;
+  Hit best;
+  float tfar;
+  GatedClosest(const Ray& r, const Gate& g) : gate(g), tfar(r.tfar) {}
+  static constexpr bool done() { return false; }
+  /// Takes `h` when it is closer (or as close and first by the rule of levels.h) and passes.
+  bool offer(const Hit& h) {
+    if (h.t > tfar || (h.t == tfar && best.hit() && !before(h.prim_id, h.instance_id, best))) return false;
+    if (!gate(h)) return false;
+    best = h;
+    tfar = h.t;
+    return true;
+  }
+  bool analytic(const Scene& scene, uint32_t id, const Ray& r) {
+    for_each_analytic_hit(scene, id, r, kNoInstance, [&](const Hit& h) { return offer(h); });
+    return false;
+  }
+  RP_SIMD_INLINE bool triangles(const Leaf& leaf, const typename Kernel::Block& kb, const typename Kernel::Single& kr,
+                                uint32_t inst) {
+    each_triangle_hit<Kernel>(leaf, kb, kr, tfar, inst, [&](const Hit& h) { return offer(h); });
+    return false;
+  }
+};
+
+/// Whether one ray hits anything that `gate` lets through.
+template <class Kernel, class Gate>
+struct GatedAny {
+  static constexpr bool kNearFirst = false;
+  const Gate& gate;
+  float tfar;
+  bool found = false;
+  GatedAny(const Ray& r, const Gate& g) : gate(g), tfar(r.tfar) {}
+  bool done() const { return found; }
+  bool analytic(const Scene& scene, uint32_t id, const Ray& r) {
+    return found = for_each_analytic_hit(scene, id, r, kNoInstance, gate);
+  }
+  RP_SIMD_INLINE bool triangles(const Leaf& leaf, const typename Kernel::Block& kb, const typename Kernel::Single& kr,
+                                uint32_t inst) {
+    return found = each_triangle_hit<Kernel>(leaf, kb, kr, tfar, inst, gate);
+  }
+};
+
+/// Every hit of one ray within [tnear, tfar] that `gate` lets through, appended to `out` (in
+/// the order of the visits; a triangle in several leaves of a spatial-split tree, more than
+/// once).
+template <class Kernel, class Gate>
+struct Every {
+  static constexpr bool kNearFirst = false;
+  const Gate& gate;
+  std::vector<Hit>& out;
+  float tfar;
+  Every(const Ray& r, const Gate& g, std::vector<Hit>& o) : gate(g), out(o), tfar(r.tfar) {}
+  static constexpr bool done() { return false; }
+  bool keep(const Hit& h) {
+    if (gate(h)) out.push_back(h);
+    return false;
+  }
+  bool analytic(const Scene& scene, uint32_t id, const Ray& r) {
+    for_each_analytic_hit(scene, id, r, kNoInstance, [&](const Hit& h) { return keep(h); });
+    return false;
+  }
+  RP_SIMD_INLINE bool triangles(const Leaf& leaf, const typename Kernel::Block& kb, const typename Kernel::Single& kr,
+                                uint32_t inst) {
+    each_triangle_hit<Kernel>(leaf, kb, kr, tfar, inst, [&](const Hit& h) { return keep(h); });
+    return false;
   }
 };
 

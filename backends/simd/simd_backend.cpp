@@ -9,6 +9,7 @@
 
 #include "backends/simd/bvh8.h"
 #include "backends/simd/large_packet.h"
+#include "backends/simd/point_query.h"
 #include "backends/simd/stream.h"
 #include "backends/simd/traversal.h"
 #include "backends/simd/watertight.h"
@@ -158,6 +159,47 @@ class SimdBackend final : public Backend {
     } else {
       for (size_t base = 0; base < rays.size(); base += 8)
         t.traversal.occluded_packet(rays.subspan(base, std::min<size_t>(8, rays.size() - base)), out.subspan(base));
+    }
+  }
+
+  void trace_closest_filtered(std::span<const Ray> rays, std::span<Hit> hits,
+                              const TraceOptions& options) const override {
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits[i] = Hit{};
+      if (!valid_ray(rays[i])) continue;
+      const HitGate g = gate(options, rays[i], i);
+      GatedClosest<Kernel, HitGate> q(rays[i], g);
+      tracers_->traversal.single(rays[i], q);
+      hits[i] = q.best;
+    }
+  }
+
+  void trace_any_filtered(std::span<const Ray> rays, std::span<uint8_t> out,
+                          const TraceOptions& options) const override {
+    for (size_t i = 0; i < rays.size(); ++i) {
+      out[i] = 0;
+      if (!valid_ray(rays[i])) continue;
+      const HitGate g = gate(options, rays[i], i);
+      GatedAny<Kernel, HitGate> q(rays[i], g);
+      tracers_->traversal.single(rays[i], q);
+      out[i] = uint8_t(q.found);
+    }
+  }
+
+  void trace_every(std::span<const Ray> rays, size_t index, const TraceOptions& options,
+                   std::vector<Hit>& out) const override {
+    const HitGate g = gate(options, rays[index], index);
+    Every<Kernel, HitGate> q(rays[index], g, out);
+    tracers_->traversal.single(rays[index], q);
+  }
+
+  void closest_points_of(std::span<const PointQuery> queries, std::span<ClosestPoint> out) const override {
+    for (size_t i = 0; i < queries.size(); ++i) {
+      out[i] = ClosestPoint{};
+      if (!valid_point_query(queries[i])) continue;
+      PointSearch s(queries[i]);
+      closest_point(bvh_, level_.tree, level_.placed, scene(), s);
+      out[i] = s.best;
     }
   }
 

@@ -56,6 +56,15 @@ class Traversal {
     return q.found;
   }
 
+  /// Valid ray `r` through the world's tree, then the instances, answering single-ray query
+  /// `q` (queries.h); planes excluded.
+  template <class Q>
+  void single(const Ray& r, Q& q) const noexcept {
+    const SingleRay sr(r);
+    if (!world_.empty()) trace_single<Kernel>(world_, r, sr, 0, q);
+    if (!q.done() && has_instances_) trace_single<Kernel>(instances_, r, sr, 0, q);
+  }
+
   /// Closest hits of up to 8 rays as one packet, the instances and planes included.
   void intersect_packet(std::span<const Ray> rays, std::span<Hit> hits) const noexcept {
     RayPacket p;

@@ -44,14 +44,13 @@ TEST(Diff, EveryBackendAgreesWithItself) {
 }
 
 /// A test double: a real backend whose answers are broken on purpose, ray by ray.
-class WrongBackend final : public Backend {
+class WrongBackend final : public ForwardingBackend {
  public:
-  WrongBackend(const Scene& scene, std::unique_ptr<Backend> real) : Backend(scene), real_(std::move(real)) {}
-  const BackendInfo& info() const noexcept override { return real_->info(); }
+  WrongBackend(const Scene& scene, std::unique_ptr<Backend> real) : ForwardingBackend(scene, std::move(real)) {}
 
  private:
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits, Coherence c) const noexcept override {
-    real_->intersect(rays, hits, c);
+    inner().intersect(rays, hits, c);
     for (size_t i = 0; i < rays.size(); ++i) {
       if (!hits[i].hit()) continue;
       switch (i % 10) {
@@ -62,12 +61,6 @@ class WrongBackend final : public Backend {
       }
     }
   }
-  void trace_any(std::span<const Ray> rays, std::span<uint8_t> o, Coherence c) const noexcept override {
-    real_->occluded(rays, o, c);
-  }
-  UpdateReport apply_changes(uint64_t) override { return real_->update(); }
-
-  std::unique_ptr<Backend> real_;
 };
 
 TEST(Diff, ADeliberatelyWrongIntersectorIsCaughtAndClassified) {

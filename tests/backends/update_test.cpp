@@ -18,20 +18,10 @@
 #include "base/error.h"
 #include "tests/support/error_of.h"
 #include "tests/support/scenes.h"
+#include "tests/support/variants.h"
 
 namespace rp {
 namespace {
-
-/// Every variant of every available backend (Embree's "dynamic" among them).
-std::vector<TraceMethod> variants() {
-  std::vector<TraceMethod> out;
-  for (const TraceMethod& m : list_methods()) {
-    bool seen = false;
-    for (const TraceMethod& o : out) seen |= o.backend == m.backend && o.variant == m.variant;
-    if (!seen) out.push_back(m);
-  }
-  return out;
-}
 
 BackendOptions options(const std::string& variant, double refit_limit = BackendOptions{}.refit_limit) {
   BackendOptions o;
@@ -146,7 +136,7 @@ std::vector<Step> steps() {
 
 TEST(Update, EveryKindOfChangeGivesTheAnswersOfAFreshBuild) {
   const std::vector<Ray> rays = test_rays();
-  for (const TraceMethod& v : variants()) {
+  for (const TraceMethod& v : test::backend_variants()) {
     Scene scene = moving_scene();
     const BackendOptions opts = options(v.variant);
     auto updated = make_backend(v.backend, scene, opts);
@@ -296,7 +286,7 @@ TEST(Update, TrianglesThatGainAreaOrSplitASharedVertexAreFound) {
                  {0, 1, 0}};                                 // 6: a copy of vertex 2
   m.indices = {0, 1, 2, 3, 4, 5, 0, 6, 1};
   const std::vector<Ray> rays = test_rays();
-  for (const TraceMethod& v : variants()) {
+  for (const TraceMethod& v : test::backend_variants()) {
     SCOPED_TRACE(v.backend + "/" + v.variant);
     Scene scene;
     scene.add_mesh(m);
