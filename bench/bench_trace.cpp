@@ -10,7 +10,9 @@
 // placed as instances of one mesh and as 16 world meshes (bench/scenes/bunnies-*.json). Rays
 // from analysis/raygen.h. BM_Pair/simd/watertight:large-vs-simd/default:large/<scene>/
 // <kind> (stream for diffuse rays): the watertight variant against the default one on the same
-// rays, as the median ratio of alternated traces (see BM_Pair).
+// rays, as the median ratio of alternated traces (see BM_Pair). BM_ClosestPoints/<backend/
+// variant>/<scene> and BM_ClosestPointsPair/simd/default-vs-embree/default/<scene>: closest
+// points around the scene (rtcPointQuery for Embree; see BM_ClosestPoints).
 //
 // Before timing, each backend's hits are compared with the reference backend's (embree):
 // a ray counts as a mismatch when the primitives differ and it is not a tie (both hit, t
@@ -19,6 +21,7 @@
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -27,12 +30,15 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <random>
 #include <thread>
 
 #include "analysis/motion.h"
 #include "analysis/raygen.h"
 #include "analysis/reference.h"
 #include "backends/registry.h"
+#include "core/geometry/closest_point.h"
+#include "core/queries.h"
 #include "core/scene.h"
 #include "io/loaders/load.h"
 
@@ -209,6 +215,28 @@ void BM_Trace(benchmark::State& state, const Method& m, const std::string& scene
   state.counters["Rays/s"] = benchmark::Counter(double(rays.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
+/// Each iteration of `state` runs run(0) and run(1), their order alternating; returns the
+/// median over the iterations of run(0)'s speed over run(1)'s (0 without iterations).
+template <class Run>
+double alternated_ratio(benchmark::State& state, Run&& run) {
+  std::vector<double> ratios;
+  int first = 0;
+  for (auto _ : state) {
+    double seconds[2];
+    for (int i = 0; i < 2; ++i) {
+      const int k = first ^ i;
+      const auto start = std::chrono::steady_clock::now();
+      run(k);
+      seconds[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    first ^= 1;
+    ratios.push_back(seconds[1] / seconds[0]);
+  }
+  if (ratios.empty()) return 0.0;
+  std::nth_element(ratios.begin(), ratios.begin() + ptrdiff_t(ratios.size() / 2), ratios.end());
+  return ratios[ratios.size() / 2];
+}
+
 /// BM_Pair/<a>-vs-<b>/<scene>/<kind>: methods a and b on the same rays, each iteration one trace
 /// of each (their order alternating), and as the counter `speed_ratio` the median over the
 /// iterations of a's speed over b's. A shared machine slows both traces of one iteration
@@ -225,21 +253,8 @@ void BM_Pair(benchmark::State& state, const Method& a, const Method& b, const st
   std::vector<Hit> hits(rays.size());
   std::vector<uint8_t> occ(rays.size());
   for (const Backend* m : methods) trace(*m, rays, hits, occ, shadow, coh);  // warm-up
-  std::vector<double> ratios;
-  int first = 0;
-  for (auto _ : state) {
-    double seconds[2];
-    for (int i = 0; i < 2; ++i) {
-      const int k = first ^ i;
-      const auto start = std::chrono::steady_clock::now();
-      trace(*methods[k], rays, hits, occ, shadow, coh);
-      seconds[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
-    first ^= 1;
-    ratios.push_back(seconds[1] / seconds[0]);
-  }
-  std::nth_element(ratios.begin(), ratios.begin() + ptrdiff_t(ratios.size() / 2), ratios.end());
-  state.counters["speed_ratio"] = ratios.empty() ? 0.0 : ratios[ratios.size() / 2];
+  state.counters["speed_ratio"] =
+      alternated_ratio(state, [&](int k) { trace(*methods[size_t(k)], rays, hits, occ, shadow, coh); });
   state.counters["rays"] = double(rays.size());
 }
 
@@ -278,6 +293,109 @@ void BM_Update(benchmark::State& state, const Method& m, const std::string& scen
   state.counters["refits"] = double(last.refits);
   state.counters["rebuilds"] = double(last.rebuilds);
   state.counters["top"] = double(last.top);
+}
+
+/// Points for closest-point queries: uniform in the scene's box grown by a tenth of its
+/// diagonal on every side (fixed seed), and for a sample of them the distance to the surface by
+/// brute force in double (triangles, world and placed; spheres; polygons' and planes' points
+/// as the scene computes them, in double).
+struct PointSet {
+  std::vector<PointQuery> points;
+  std::vector<double> sample_distance;  ///< of points[0 .. size)
+};
+
+const PointSet& point_set(const std::string& scene_name) {
+  static std::map<std::string, PointSet> cache;
+  PointSet& set = cache[scene_name];
+  if (!set.points.empty()) return set;
+  const Scene& s = fixture(scene_name).scene;
+  const Box3f b = s.bounds();
+  const Vec3f grow(0.1f * length(b.hi - b.lo));
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 100000; ++i) {
+    const Vec3f lo = b.lo - grow, size = b.hi - b.lo + grow * 2.0f;
+    set.points.push_back({{lo.x + u(rng) * size.x, lo.y + u(rng) * size.y, lo.z + u(rng) * size.z}});
+  }
+  set.sample_distance.assign(200, std::numeric_limits<double>::infinity());
+  tbb::parallel_for(size_t(0), set.sample_distance.size(), [&](size_t i) {
+    const Vec3d p(set.points[i].point);
+    double& d = set.sample_distance[i];
+    for (size_t m = 0; m < s.meshes().size(); ++m) {
+      const TriangleMesh& mesh = s.meshes()[m];
+      std::vector<Affine3d> places;
+      if (!s.is_instanced(m)) places.push_back(Affine3d());
+      for (const Instance& in : s.instances())
+        if (in.mesh == m) places.push_back(Affine3d(in.object_to_world));
+      for (const Affine3d& w : places)
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+          const Vec3d a = w.point(Vec3d(mesh.vertex(t, 0))), bb = w.point(Vec3d(mesh.vertex(t, 1))),
+                      c = w.point(Vec3d(mesh.vertex(t, 2)));
+          if (zero_area(mesh.vertex(t, 0), mesh.vertex(t, 1), mesh.vertex(t, 2))) continue;
+          d = std::min(d, length(closest_on_triangle(p, a, bb, c).p - p));
+        }
+    }
+    for (uint32_t k = s.sphere_base(); k < s.plane_base(); ++k)
+      if (s.locate(k).kind != PrimKind::quadric) d = std::min(d, double(s.closest_on_analytic(k, Vec3f(p)).distance));
+  });
+  return set;
+}
+
+/// Closest points of `set` with all threads.
+void closest_points(const Backend& b, const PointSet& set, std::vector<ClosestPoint>& out) {
+  for_each_chunk(set.points.size(), [&](size_t begin, size_t n) {
+    b.closest_points(std::span(set.points).subspan(begin, n), std::span(out).subspan(begin, n));
+  });
+}
+
+/// BM_ClosestPoints/<backend/variant>/<scene>: closest_points over 100,000 points around the
+/// scene, with all threads, as Points/s; beside it the largest error of the distance against
+/// brute force in double over a sample (max_rel_error, relative to the scene's diagonal) and
+/// the points whose answer differs from Embree's default (mismatch: another distance).
+void BM_ClosestPoints(benchmark::State& state, const Method& m, const std::string& scene_name) {
+  SceneFixture& f = fixture(scene_name);
+  if (!f.scene.quadrics().empty()) {
+    state.SkipWithError("the scene has quadrics, which have no closest-point routine");
+    return;
+  }
+  const PointSet& set = point_set(scene_name);
+  const Backend& b = *backends(f, {&m})[0];
+  std::vector<ClosestPoint> got(set.points.size()), ref(set.points.size());
+  closest_points(*f.embree, set, ref);
+  closest_points(b, set, got);  // also the warm-up
+  const Box3f box = f.scene.bounds();
+  const double diagonal = length(Vec3d(box.hi) - Vec3d(box.lo));
+  double worst = 0;
+  for (size_t i = 0; i < set.sample_distance.size(); ++i)
+    worst = std::max(worst, std::abs(double(got[i].distance) - set.sample_distance[i]) / diagonal);
+  size_t mismatch = 0;
+  for (size_t i = 0; i < got.size(); ++i) mismatch += got[i].distance != ref[i].distance;
+  state.counters["points"] = double(set.points.size());
+  state.counters["max_rel_error"] = worst;
+  state.counters["mismatch"] = double(mismatch);
+  for (auto _ : state) {
+    closest_points(b, set, got);
+    benchmark::DoNotOptimize(got.data());
+  }
+  state.counters["Points/s"] =
+      benchmark::Counter(double(set.points.size()) * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
+/// BM_ClosestPointsPair/<a>-vs-<b>/<scene>: closest points of a and b alternated on the same
+/// points, as BM_Pair; `speed_ratio` is the median of a's speed over b's.
+void BM_ClosestPointsPair(benchmark::State& state, const Method& a, const Method& b, const std::string& scene_name) {
+  SceneFixture& f = fixture(scene_name);
+  if (!f.scene.quadrics().empty()) {
+    state.SkipWithError("the scene has quadrics, which have no closest-point routine");
+    return;
+  }
+  const PointSet& set = point_set(scene_name);
+  const std::vector<const Backend*> methods = backends(f, {&a, &b});
+  std::vector<ClosestPoint> out(set.points.size());
+  for (const Backend* m : methods) closest_points(*m, set, out);  // warm-up
+  state.counters["speed_ratio"] =
+      alternated_ratio(state, [&](int k) { closest_points(*methods[size_t(k)], set, out); });
+  state.counters["points"] = double(set.points.size());
 }
 
 /// BM_Load/<file>: load_scene on a model of ../shared/scenes, with its triangle count and the
@@ -362,7 +480,15 @@ int main(int argc, char** argv) {
       if (scene.starts_with("bunnies-instanced"))
         timed(benchmark::RegisterBenchmark(("BM_Update/" + m.name() + "/" + scene + "/instances").c_str(), BM_Update, m,
                                            scene, false));
+      timed(benchmark::RegisterBenchmark(("BM_ClosestPoints/" + m.name() + "/" + scene).c_str(), BM_ClosestPoints, m,
+                                         scene));
     }
+    const std::vector<Method> variants = builds();
+    const auto simd = std::ranges::find(variants, std::string("simd/default"), &Method::name),
+               embree = std::ranges::find(variants, std::string("embree/default"), &Method::name);
+    if (simd != variants.end() && embree != variants.end())
+      timed(benchmark::RegisterBenchmark(("BM_ClosestPointsPair/simd/default-vs-embree/default/" + scene).c_str(),
+                                         BM_ClosestPointsPair, *simd, *embree, scene));
   }
   // The kernel benchmarks run AVX2+FMA code: only where the simd backend is offered.
   for (const BackendEntry& e : list_backends())
