@@ -10,12 +10,14 @@
 # A public header may include the standard library and other public headers only: raypack's
 # dependencies stay private to libraypack.so, and the package finds none of them.
 #
-# Reads RP_SOURCE_DIR (the repository), RP_STAGE_DIR (a scratch folder in the build tree) and
-# RP_INCLUDE_DIR (relative to CMAKE_INSTALL_PREFIX, the prefix being installed to).
+# Reads RP_SOURCE_DIR (the repository), RP_GENERATED_DIR (where the build made
+# raypack/version.h from include/raypack/version.h.in), RP_STAGE_DIR (a scratch folder in the
+# build tree) and RP_INCLUDE_DIR (relative to CMAKE_INSTALL_PREFIX, the prefix being installed
+# to).
 
 cmake_policy(PUSH)
 cmake_policy(VERSION 3.25)  # install scripts start with old policies (IN_LIST, among others)
-set(rp_queue include/raypack/raypack.h)
+set(rp_queue "${RP_SOURCE_DIR}/include/raypack/raypack.h")
 set(rp_headers "")
 file(REMOVE_RECURSE "${RP_STAGE_DIR}")
 while(rp_queue)
@@ -24,31 +26,46 @@ while(rp_queue)
     continue()
   endif()
   list(APPEND rp_headers ${rp_header})
-  file(READ "${RP_SOURCE_DIR}/${rp_header}" rp_text)
+  # Its path under <prefix>/include/raypack/ (the first of these folders it lies in), and the
+  # name the messages give it.
+  foreach(rp_root "${RP_SOURCE_DIR}/include/raypack/" "${RP_GENERATED_DIR}/raypack/" "${RP_SOURCE_DIR}/")
+    string(LENGTH "${rp_root}" rp_length)
+    string(SUBSTRING "${rp_header}" 0 ${rp_length} rp_head)
+    if(rp_head STREQUAL rp_root)
+      string(SUBSTRING "${rp_header}" ${rp_length} -1 rp_path)
+      break()
+    endif()
+  endforeach()
+  file(RELATIVE_PATH rp_name "${RP_SOURCE_DIR}" "${rp_header}")
+  file(READ "${rp_header}" rp_text)
   # The package finds no dependency for its consumers, so a public header may include the
   # standard library (names without '/' or '.') but no other library's header.
-  file(STRINGS "${RP_SOURCE_DIR}/${rp_header}" rp_lines REGEX "^[ \t]*#[ \t]*include[ \t]*<[^>]*[/.]")
+  file(STRINGS "${rp_header}" rp_lines REGEX "^[ \t]*#[ \t]*include[ \t]*<[^>]*[/.]")
   if(rp_lines)
     list(GET rp_lines 0 rp_line)
-    message(FATAL_ERROR "${rp_header}: ${rp_line}: a public header includes another library's header, which "
+    message(FATAL_ERROR "${rp_name}: ${rp_line}: a public header includes another library's header, which "
                         "consumers of the installed package do not have")
   endif()
-  file(STRINGS "${RP_SOURCE_DIR}/${rp_header}" rp_lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"")
+  file(STRINGS "${rp_header}" rp_lines REGEX "^[ \t]*#[ \t]*include[ \t]*\"")
   foreach(rp_line IN LISTS rp_lines)
     string(REGEX REPLACE "^[ \t]*#[ \t]*include[ \t]*\"([^\"]+)\".*" "\\1" rp_include "${rp_line}")
-    if(rp_include MATCHES "^raypack/")
-      set(rp_source include/${rp_include})
+    # "raypack/..." is include/raypack's, or the build's made header; anything else is a path
+    # from the repository's root, rewritten to lie under raypack/.
+    if(rp_include MATCHES "^raypack/" AND EXISTS "${RP_SOURCE_DIR}/include/${rp_include}")
+      set(rp_source "${RP_SOURCE_DIR}/include/${rp_include}")
+    elseif(rp_include MATCHES "^raypack/")
+      set(rp_source "${RP_GENERATED_DIR}/${rp_include}")
     else()
-      set(rp_source ${rp_include})
+      set(rp_source "${RP_SOURCE_DIR}/${rp_include}")
       string(REPLACE "\"${rp_include}\"" "\"raypack/${rp_include}\"" rp_text "${rp_text}")
     endif()
-    if(NOT EXISTS "${RP_SOURCE_DIR}/${rp_source}")
-      message(FATAL_ERROR "${rp_header} includes \"${rp_include}\", which is neither a header of include/ nor one "
-                          "from the repository root: a public header may include only those and the standard library")
+    if(NOT EXISTS "${rp_source}")
+      message(FATAL_ERROR "${rp_name} includes \"${rp_include}\", which is neither a header of include/ (or one the "
+                          "build made there) nor one from the repository root: a public header may include only "
+                          "those and the standard library")
     endif()
-    list(APPEND rp_queue ${rp_source})
+    list(APPEND rp_queue "${rp_source}")
   endforeach()
-  string(REGEX REPLACE "^include/raypack/" "" rp_path "${rp_header}")
   file(WRITE "${RP_STAGE_DIR}/raypack/${rp_path}" "${rp_text}")
 endwhile()
 file(INSTALL "${RP_STAGE_DIR}/raypack" DESTINATION "${CMAKE_INSTALL_PREFIX}/${RP_INCLUDE_DIR}")

@@ -5,6 +5,6 @@
 
 namespace rp {
 
-const char* version() noexcept { return RAYPACK_VERSION; }
+const char* version() noexcept { return RAYPACK_VERSION_STRING; }
 
 }  // namespace rp

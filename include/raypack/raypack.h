@@ -22,7 +22,8 @@
 ///   (analysis/diff.h), ray sets (analysis/raygen.h);
 /// - images: rp::render with a Camera (render/render.h, render/camera.h),
 ///   rp::write_image (render/image_io.h);
-/// - rp::version() (raypack/version.h).
+/// - versions: RAYPACK_VERSION_MAJOR, _MINOR, _PATCH and RAYPACK_VERSION_STRING, the headers'
+///   version at compile time, and rp::version(), the library's at run time (raypack/version.h).
 ///
 /// Hit convention: a hit counts only for tnear <= t <= tfar (both ends closed); directions
 /// are never normalized (t is in units of the direction's length); a miss is Hit{}:
