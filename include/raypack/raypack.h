@@ -50,9 +50,10 @@
 /// what() is one line naming the file, value or name at fault; tracing calls throw only for a
 /// backend whose scene changed since its last update().
 /// Threads: a backend and a Reference may be queried from many threads at once; a scene's
-/// changes and Backend::update() must not overlap tracing; the *_parallel functions, render
-/// and Reference::intersect over spans use
-/// TBB's threads (limit them with a tbb::task_arena or tbb::global_control).
+/// changes and Backend::update() must not overlap tracing; the *_parallel functions, render,
+/// Reference over spans and the backends' builds use every core unless an rp::ThreadLimit
+/// is alive (`const rp::ThreadLimit limit(1);`), and rp::max_threads() says how many they
+/// may use (core/thread_limit.h).
 
 #include "analysis/diff.h"
 #include "analysis/raygen.h"
@@ -62,6 +63,7 @@
 #include "core/backend.h"
 #include "core/ray.h"
 #include "core/scene.h"
+#include "core/thread_limit.h"
 #include "io/loaders/load.h"
 #include "io/rayfile.h"
 #include "raypack/version.h"
