@@ -138,10 +138,6 @@ void say(std::FILE* out, const char* format, ...) {
   va_end(args);
 }
 
-ThreadLimit::ThreadLimit(int threads) {
-  if (threads > 0) limit_.emplace(tbb::global_control::max_allowed_parallelism, size_t(threads));
-}
-
 void check_method(const std::string& backend_flag, const std::string& backend, const std::string& variant_flag,
                   const std::string& variant) {
   if (const std::optional<MethodProblem> p = rp::check_method(backend, variant))

@@ -3,8 +3,6 @@
 // mean the same in every subcommand (-t/--threads, -q/--quiet, --backend/--variant), and the
 // parsers of values that several subcommands take (points, coherence).
 
-#include <tbb/global_control.h>
-
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -16,6 +14,7 @@
 #include "base/math.h"
 #include "core/backend.h"
 #include "core/scene.h"
+#include "core/thread_limit.h"
 #include "io/loaders/animation.h"
 #include "io/output_file.h"
 
@@ -62,7 +61,8 @@ std::optional<double> parse_time(const std::string& time);
 /// --backend and --variant: a backend by name and its variant (see `raypack backends`).
 void add_backend_options(CLI::App* app, std::string& backend, std::string& variant);
 
-/// -t,--threads: worker threads (0 = all cores), bound to `threads`.
+/// -t,--threads: worker threads (0 = all cores), bound to `threads`; a command holds
+/// rp::ThreadLimit(threads) while it works (core/thread_limit.h).
 void add_threads_option(CLI::App* app, int& threads);
 
 /// -q,--quiet: print nothing on success (results still go to the files asked for).
@@ -70,15 +70,6 @@ void add_quiet_flag(CLI::App* app, bool& quiet);
 
 /// printf to `out`, or nothing when `out` is null (a command run with -q).
 __attribute__((format(printf, 2, 3))) void say(std::FILE* out, const char* format, ...);
-
-/// The worker-thread limit of one command run (0: all cores), held while this lives.
-class ThreadLimit {
- public:
-  explicit ThreadLimit(int threads);
-
- private:
-  std::optional<tbb::global_control> limit_;
-};
 
 /// Throws UsageError naming `backend_flag` or `variant_flag` (the flags as the user gave them,
 /// e.g. -b and --variant-b) when the registry cannot build backend/variant here.

@@ -14,7 +14,6 @@
 #include <sstream>
 #include <thread>
 
-#include <tbb/global_control.h>
 #include <tbb/info.h>
 
 #include "analysis/diff.h"
@@ -29,6 +28,7 @@
 #include "cli/build_info.h"
 #include "cli/pareto.h"
 #include "cli/plot.h"
+#include "core/thread_limit.h"
 #include "io/input_file.h"
 #include "io/json_text.h"
 #include "io/loaders/load.h"
@@ -287,7 +287,7 @@ int run_bench(const BenchArgs& a) {
   const std::optional<int> up = parse_up_axis(a.up_axis);
   for (const std::string& k : a.kinds)
     usage(k == "primary" || k == "shadow" || k == "diffuse", "bench: --kind '", k, "' is not one of primary, shadow, diffuse");
-  const size_t threads = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  const size_t threads = size_t(max_threads());
 
   std::vector<std::pair<std::string, std::string>> skipped;
   std::vector<TraceMethod> chosen;

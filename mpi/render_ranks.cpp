@@ -1,8 +1,6 @@
 #include "mpi/render_ranks.h"
 
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <array>
 #include <chrono>
@@ -12,6 +10,7 @@
 #include <utility>
 
 #include "base/error.h"
+#include "core/thread_limit.h"
 
 namespace rp::dist {
 
@@ -49,8 +48,7 @@ Part render_part(const Comm& comm, const TileRenderer& tiles, int per_request, c
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   Part part;
-  part.rank.threads = int(std::min<size_t>(size_t(tbb::this_task_arena::max_concurrency()),
-                                           tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+  part.rank.threads = max_threads();
   const std::unique_ptr<TileSource> source = comm.hand_out({tiles.tile_count(), per_request});
   const Scattered order(tiles.tile_count());
   std::mutex mutex;
