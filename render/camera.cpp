@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "render/camera_lanes.h"
 
 namespace rp {
 

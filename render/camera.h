@@ -2,15 +2,12 @@
 /// Cameras that turn image positions into primary rays: the lecture notes' pinhole, a cylindrical
 /// panorama, an equidistant fisheye and a thin lens for depth of field.
 
-#include <algorithm>
-#include <limits>
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
 #include <utility>
 
-#include "base/lanes.h"
-#include "base/trig.h"
 #include "core/ray.h"
 #include "core/scene.h"
 
@@ -61,27 +58,6 @@ class Camera {
   /// CPUs ray by ray. The spans have one size.
   void generate_rays(std::span<const float> px, std::span<const float> py, const Vec2f* lens, std::span<Ray> out) const;
 
-  /// The ray of generate() in lanes (base/lanes.h): through image positions (px, py), with
-  /// lens positions (lx, ly) for the thin lens. One lane for generate(), eight for
-  /// generate_rays, the same operations (branches taken as selects), so the same bits.
-  template <class F>
-  void ray_lanes(const F& px, const F& py, const F& lx, const F& ly, Vec3<F>& org, F& tnear, Vec3<F>& dir,
-                 F& tfar) const;
-
-  /// The pinhole direction through image position (px, py), in lanes (base/lanes.h).
-  template <class F>
-  Vec3<F> pinhole_direction(const F& px, const F& py) const {
-    const auto [sx, sy] = screen(px, py);
-    const Vec3<F> w(F(w_.x), F(w_.y), F(w_.z)), u(F(u_.x), F(u_.y), F(u_.z)), v(F(v_.x), F(v_.y), F(v_.z));
-    return unit(w + u * (sx * F(xm_)) + v * (sy * F(ym_)));
-  }
-
-  /// Image position (px, py) as screen coordinates in [-1, 1], y up, in lanes.
-  template <class F>
-  std::pair<F, F> screen(const F& px, const F& py) const {
-    return {px / F(float(width_)) * F(2.0f) - F(1.0f), F(1.0f) - py / F(float(height_)) * F(2.0f)};
-  }
-
   /// The image position whose ray has direction `dir` (pinhole, panoramic, fisheye), or
   /// nothing when no pixel sees it: the inverse of generate(), used to test the mappings.
   std::optional<Vec2f> project(const Vec3f& dir) const;
@@ -93,6 +69,16 @@ class Camera {
  private:
   /// generate_rays on an AVX2+FMA CPU (camera8.cpp): the first n - n % 8 rays, 8 at a time.
   void rays8(const float* px, const float* py, const Vec2f* lens, size_t n, Ray* out) const;
+
+  /// The ray of generate() in lanes: one lane for generate(), eight for rays8. Defined, with
+  /// the two below, in render/camera_lanes.h, which only camera.cpp and camera8.cpp include.
+  template <class F>
+  void ray_lanes(const F& px, const F& py, const F& lx, const F& ly, Vec3<F>& org, F& tnear, Vec3<F>& dir,
+                 F& tfar) const;
+  template <class F>
+  Vec3<F> pinhole_direction(const F& px, const F& py) const;
+  template <class F>
+  std::pair<F, F> screen(const F& px, const F& py) const;
 
   Vec3f eye_, u_, v_, w_;
   float xm_, ym_;  ///< half extents of the image window at distance 1: aspect*tan(fov/2), tan(fov/2)
@@ -107,58 +93,5 @@ class Camera {
 /// +y). The eye is kept within the coordinate range (a scene that fills the range is seen
 /// from its edge).
 CameraDesc frame_bounds(const Box3f& bounds, int up_axis = 1, float vfov_degrees = 40.0f);
-
-template <class F>
-void Camera::ray_lanes(const F& px, const F& py, const F& lx, const F& ly, Vec3<F>& org, F& tnear, Vec3<F>& dir,
-                       F& tfar) const {
-  using L = Lanes<F>;
-  const Vec3<F> eye(F(eye_.x), F(eye_.y), F(eye_.z)), w(F(w_.x), F(w_.y), F(w_.z));
-  const Vec3<F> u(F(u_.x), F(u_.y), F(u_.z)), v(F(v_.x), F(v_.y), F(v_.z));
-  org = eye;
-  tnear = F(0.0f);
-  tfar = F(std::numeric_limits<float>::infinity());
-  switch (model_) {
-    case CameraModel::pinhole:
-      dir = pinhole_direction<F>(px, py);
-      return;
-    case CameraModel::panoramic: {
-      const auto [sx, sy] = screen(px, py);
-      F s, c;
-      sincos_lanes(sx * F(float(kPi)), s, c);
-      dir = unit(w * c + u * s + v * (sy * F(ym_)));
-      return;
-    }
-    case CameraModel::fisheye: {
-      const F circle(0.5f * float(std::min(width_, height_)));
-      const F x = (px - F(0.5f * float(width_))) / circle, y = (F(0.5f * float(height_)) - py) / circle;
-      const F r = L::sqrt(x * x + y * y);
-      F st, ct, sp, cp;
-      sincos_lanes(r * F(fisheye_half_), st, ct);
-      sincos_lanes(atan2_lanes(y, x), sp, cp);
-      const auto outside = r > F(1.0f);  // outside the image circle: no ray (tnear 1 > tfar 0)
-      dir = select<F>(outside, w, unit(w * ct + (u * cp + v * sp) * st));
-      tnear = L::select(outside, F(1.0f), tnear);
-      tfar = L::select(outside, F(0.0f), tfar);
-      return;
-    }
-    case CameraModel::thin_lens: {
-      dir = pinhole_direction<F>(px, py);
-      if (aperture_ == 0.0f) return;
-      const Vec3<F> focus_point = eye + dir * (F(focus_) / dot(dir, w));
-      // Concentric square-to-disk mapping (Shirley and Chiu 1997).
-      const F a = F(2.0f) * lx - F(1.0f), b = F(2.0f) * ly - F(1.0f);
-      const auto centre = a == F(0.0f) && b == F(0.0f), wide = L::abs(a) > L::abs(b);
-      const F r = L::select(centre, F(0.0f), L::select(wide, a, b));
-      const F t = L::select(
-          centre, F(0.0f),
-          L::select(wide, F(float(kPi) / 4.0f) * (b / a), F(float(kPi) / 2.0f) - F(float(kPi) / 4.0f) * (a / b)));
-      F s, c;
-      sincos_lanes(t, s, c);
-      org = eye + (u * c + v * s) * (r * F(aperture_));
-      dir = unit(focus_point - org);
-      return;
-    }
-  }
-}
 
 }  // namespace rp

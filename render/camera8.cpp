@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "render/camera.h"
+#include "render/camera_lanes.h"
 #include "simd/float8.h"
 #include "simd/lanes8.h"
 
