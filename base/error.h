@@ -1,22 +1,18 @@
 #pragma once
-/// The project's error type and checks.
+/// The project's error type (base/error_type.h, the public part) and checks, for raypack's
+/// own code: no public header includes this one.
 ///
 /// User and environment failures (bad flags, bad files, a failing library) throw rp::Error
 /// with a one-line message at setup time. Query paths are noexcept; only main() turns an
 /// Error into an exit status.
 
 #include <sstream>
-#include <stdexcept>
 #include <string>
 #include <utility>
 
-namespace rp {
+#include "base/error_type.h"
 
-/// A failure the user can act on; what() is one line naming the file, flag or value.
-class Error : public std::runtime_error {
- public:
-  explicit Error(const std::string& message) : std::runtime_error(message) {}
-};
+namespace rp {
 
 /// Builds a message from streamable parts: rp::cat("bad value ", x, " in ", file).
 template <typename... Parts>

@@ -59,7 +59,7 @@
 #include "analysis/raygen.h"
 #include "analysis/reference.h"
 #include "backends/registry.h"
-#include "base/error.h"
+#include "base/error_type.h"
 #include "core/backend.h"
 #include "core/ray.h"
 #include "core/scene.h"
