@@ -28,11 +28,19 @@ foreach(define "#define RAYPACK_VERSION_MAJOR ${major}" "#define RAYPACK_VERSION
     message(FATAL_ERROR "the installed raypack/version.h has no '${define}' (project version ${VERSION}): ${defines}")
   endif()
 endforeach()
-# Only the public headers: nothing of the backends' internals or of the SIMD vocabulary.
+# Only the public headers: nothing of the backends' internals or of the SIMD vocabulary, not
+# the lane arithmetic of the kernels and the camera (base/lanes.h and what it includes), and no
+# header that defines or uses the library's own checks (base/error.h's RP_CHECK and RP_DCHECK,
+# whose debug-only one would follow the consumer's NDEBUG).
 file(GLOB_RECURSE headers RELATIVE "${PREFIX}/${INCLUDEDIR}" "${PREFIX}/${INCLUDEDIR}/*")
 foreach(header IN LISTS headers)
-  if(header MATCHES "^raypack/(simd|backends/simd|backends/embree|cli|mpi)/")
+  if(header MATCHES "^raypack/(simd|backends/simd|backends/embree|cli|mpi)/"
+     OR header MATCHES "^raypack/(base/(error|lanes|pow|trig|offset)|render/camera_lanes)[.]h$")
     message(FATAL_ERROR "a private header was installed: ${header}")
+  endif()
+  file(STRINGS "${PREFIX}/${INCLUDEDIR}/${header}" checks REGEX "RP_D?CHECK")
+  if(checks)
+    message(FATAL_ERROR "the installed ${header} names the library's checks: ${checks}")
   endif()
 endforeach()
 list(LENGTH headers count)
