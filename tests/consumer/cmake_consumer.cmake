@@ -1,7 +1,9 @@
-# Package.AConsumerProjectTracesBothBackends: configures project/ in BINARY with PREFIX as its
-# CMAKE_PREFIX_PATH (as a user would), checks that find_package found the package installed
-# there, builds it and runs it (run_consumer.cmake). Run with cmake -P and -DPREFIX, -DSOURCE,
-# -DBINARY, -DCXX, -DCXX_FLAGS, -DLINKER_FLAGS, -DBUILD_TYPE.
+# Package.AConsumerProjectTracesBothBackends (project/) and
+# Package.VersionsAndThreadLimitsHoldInACMakeConsumer (api/): configures the project in
+# SOURCE in BINARY with PREFIX as its CMAKE_PREFIX_PATH (as a user would), checks that
+# find_package found the package installed there, builds it and runs its program NAME
+# (run_consumer.cmake). Run with cmake -P and -DPREFIX, -DSOURCE, -DNAME, -DBINARY, -DCXX,
+# -DCXX_FLAGS, -DLINKER_FLAGS, -DBUILD_TYPE.
 file(REMOVE_RECURSE "${BINARY}")
 execute_process(COMMAND "${CMAKE_COMMAND}" -S "${SOURCE}" -B "${BINARY}" "-DCMAKE_PREFIX_PATH=${PREFIX}"
                         "-DCMAKE_CXX_COMPILER=${CXX}" "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}"
@@ -18,6 +20,6 @@ execute_process(COMMAND "${CMAKE_COMMAND}" --build "${BINARY}" RESULT_VARIABLE s
 if(NOT status EQUAL 0)
   message(FATAL_ERROR "building the consumer project failed (${status})")
 endif()
-set(PROGRAM "${BINARY}/trace_both")
+set(PROGRAM "${BINARY}/${NAME}")
 set(ENVIRONMENT "")
 include("${CMAKE_CURRENT_LIST_DIR}/run_consumer.cmake")
