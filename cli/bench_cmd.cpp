@@ -14,7 +14,6 @@
 #include <sstream>
 #include <thread>
 
-#include <tbb/info.h>
 
 #include "analysis/diff.h"
 #include "analysis/raygen.h"

@@ -17,6 +17,9 @@
 ///   rp::Ray with an rp::Coherence hint, rp::intersect_parallel / occluded_parallel over all
 ///   cores (core/backend.h); rays, hits, the valid-ray rule and the hit convention
 ///   (core/ray.h); ray and hit files (io/rayfile.h);
+/// - queries (core/queries.h, docs/queries.md): masks and hit filters (rp::TraceOptions),
+///   Backend::all_hits and count_hits along rays, Backend::closest_points, rp::inside and
+///   rp::signed_distance; geometry ids and masks (Scene::geometry_of, Scene::set_mask);
 /// - judging: the double-precision rp::Reference (analysis/reference.h), rp::diff_hits
 ///   and its summary as a table or as the JSON of `raypack diff --json`
 ///   (analysis/diff.h), ray sets (analysis/raygen.h);
