@@ -231,10 +231,13 @@ py::array_t<bool> occluded(const BackendHandle& b, const py::handle& origins, co
 }
 
 /// Rays as the dict every ray function returns and intersect(**rays) takes: origins and
-/// directions (N, 3), tnear and tfar (N,), float32.
-py::dict ray_dict(std::span<const Ray> rays) {
-  const py::ssize_t n = py::ssize_t(rays.size());
-  py::array_t<float> org({n, py::ssize_t(3)}), dir({n, py::ssize_t(3)}), tnear(n), tfar(n);
+/// directions (..., 3), tnear and tfar (...), float32, of leading shape `shape` ((N,) unless
+/// given; its product is rays.size()).
+py::dict ray_dict(std::span<const Ray> rays, std::vector<py::ssize_t> shape = {}) {
+  if (shape.empty()) shape = {py::ssize_t(rays.size())};
+  std::vector<py::ssize_t> vectors = shape;
+  vectors.push_back(3);
+  py::array_t<float> org(vectors), dir(vectors), tnear(shape), tfar(shape);
   float *o = org.mutable_data(), *d = dir.mutable_data(), *tn = tnear.mutable_data(), *tf = tfar.mutable_data();
   for (size_t i = 0; i < rays.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
@@ -248,7 +251,7 @@ py::dict ray_dict(std::span<const Ray> rays) {
 }
 
 py::dict hit_dict(std::span<const HitRecord> records) {
-  HitArrays hits(records.size(), true);
+  HitArrays hits({py::ssize_t(records.size())}, true);
   float *t = hits.t.mutable_data(), *u = hits.u.mutable_data(), *v = hits.v.mutable_data();
   float* ng = hits.ng.mutable_data();
   uint32_t *prim = hits.prim_id.mutable_data(), *inst = hits.instance_id.mutable_data();
@@ -269,6 +272,22 @@ void save_rays(const std::filesystem::path& path, const py::handle& origins, con
   py::gil_scoped_release release;
   size_t invalid = 0;  // a ray file may hold any ray: the tracer decides what is valid
   write_rays(path.string(), rays.records(invalid));
+}
+
+/// _gather_rays: the rays and masks RayArrays reads from a call's arguments, flat, and the
+/// leading shape: what intersect, occluded and the queries trace, for the tests of the shapes.
+py::dict gathered_rays(const py::handle& origins, const py::handle& directions, const py::handle& tnear,
+                       const py::handle& tfar, const py::handle& mask) {
+  const RayArrays rays(origins, directions, tnear, tfar, mask);
+  size_t invalid = 0;
+  const std::vector<Ray> records = rays.records(invalid);
+  py::array_t<uint32_t> masks(py::ssize_t(rays.size()));
+  rays.gather_masks(0, std::span(masks.mutable_data(), rays.size()));
+  py::dict d = ray_dict(records);
+  d["mask"] = masks;
+  d["shape"] = py::tuple(py::cast(rays.shape()));
+  d["has_mask"] = rays.has_mask();
+  return d;
 }
 
 /// A backend given as a name (with its variant) or as a raypack.Backend already built, which
@@ -515,17 +534,21 @@ PYBIND11_MODULE(_raypack, m) {
             return b.backend->current();
           },
           "True when no change of the scene awaits update()")
-      .def("intersect", &intersect, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
+      .def("intersect", &intersect, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
            "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
            "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v, instance_id\n"
-           "(uint32, 0xffffffff on a miss or outside any instance) and ng (N, 3),\n"
-           "the unit geometric normal (left out with normals=False, which saves working it out).\n"
-           "origins, directions: (N, 3) or (3,); tnear, tfar: (N,) or scalars. float32 input is read in place.\n"
-           "Rays outside the valid-ray rule are misses; invalid='warn' (RuntimeWarning), 'raise' or 'miss'.\n"
-           "threads: 0 uses every core. The GIL is released while tracing.")
-      .def("occluded", &occluded, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf, "coherent"_a = false,
-           py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
-           "Any hit within [tnear, tfar]: a bool array, True where the ray is occluded. Arguments as intersect.")
+           "(uint32, 0xffffffff on a miss or outside any instance) and ng (..., 3), the unit geometric normal\n"
+           "(left out with normals=False, which saves working it out), each of the rays' leading shape (...).\n"
+           "Rays: origins and directions (..., 3), such as (N, 3) or (H, W, 3), a (3,) one shared by every ray;\n"
+           "or one array (..., 6) of origin and direction (Open3D's layout) with directions left out.\n"
+           "tnear, tfar: scalars or arrays of the leading shape; all broadcast by numpy's rule.\n"
+           "float32 input is read in place. Rays outside the valid-ray rule are misses;\n"
+           "invalid='warn' (RuntimeWarning), 'raise' or 'miss'. threads: 0 uses every core.\n"
+           "The GIL is released while tracing.")
+      .def("occluded", &occluded, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
+           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
+           "Any hit within [tnear, tfar]: a bool array of the rays' leading shape, True where the ray is\n"
+           "occluded. Arguments as intersect.")
       .def_property_readonly("name", [](const BackendHandle& b) { return b.backend->info().name; })
       .def_property_readonly("variant", [](const BackendHandle& b) { return b.backend->info().variant; })
       .def_property_readonly("scene", [](const BackendHandle& b) { return b.scene; })
@@ -580,7 +603,12 @@ PYBIND11_MODULE(_raypack, m) {
         return ray_dict(random_rays(*s.scene, count, seed).rays);
       },
       "scene"_a, "count"_a, "seed"_a = 1,
-      "`count` seeded rays from the sphere around the scene into its bounds (incoherent), as primary_rays.");
+      "`count` seeded rays from the sphere around the scene into its bounds (incoherent): a dict of\n"
+      "origins and directions (count, 3), tnear and tfar (count,).");
+  m.def("_gather_rays", &gathered_rays, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
+        "mask"_a = py::none(),
+        "For the tests: the rays intersect would trace for these arguments, flat (a dict as read_rays\n"
+        "returns, with each ray's mask), and their leading shape.");
   m.def("write_rays", &save_rays, "path"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
         "Writes a ray file (.csv, or binary: .bin, .rays) that `raypack trace --rays` reads.");
   m.def("read_rays", [](const std::filesystem::path& path) { return ray_dict(read_rays(path.string())); }, "path"_a,

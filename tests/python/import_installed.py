@@ -13,5 +13,5 @@ scene = raypack.load_scene("default")
 for name in ("embree", "simd"):
     if name in [b["name"] for b in raypack.backends() if b["available"]]:
         hits = raypack.Backend(name, scene).intersect([0, 3.4, 8.5], [0, -0.27, -1])
-        assert hits["prim_id"].tolist() == [56666], (name, hits)
+        assert hits["prim_id"].tolist() == 56666, (name, hits)
 print(f"raypack {raypack.__version__} imported from {raypack.__file__}")

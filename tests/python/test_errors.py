@@ -41,11 +41,17 @@ def test_unknown_backends_and_variants_have_the_commands_messages(scene, raypack
 def test_bad_shapes_name_the_argument(scene):
     backend = raypack.Backend("embree", scene)
     cases = [
-        (lambda: backend.intersect(np.zeros((4, 2)), np.zeros((4, 3))), "origins: shape (4, 2) is not (N, 3) or (3,)"),
-        (lambda: backend.intersect(np.zeros((4, 3)), np.zeros(3 * 4)), "directions: shape (12,) is not (N, 3) or (3,)"),
-        (lambda: backend.intersect(np.zeros(3), np.ones(3), np.zeros((2, 2))), "tnear: shape (2, 2) is not (N,) or a scalar"),
-        (lambda: backend.occluded(np.zeros((4, 3)), np.ones((5, 3))), "directions: 5 rays, but origins has 4"),
-        (lambda: backend.intersect(np.zeros(3), np.ones((5, 3)), tfar=np.ones(4)), "tfar: 4 rays, but directions has 5"),
+        (lambda: backend.intersect(np.zeros((4, 2)), np.zeros((4, 3))), "origins: shape (4, 2) is not (..., 3)"),
+        (lambda: backend.intersect(np.zeros((4, 3)), np.zeros(3 * 4)), "directions: shape (12,) is not (..., 3)"),
+        (lambda: backend.intersect(np.zeros(3), np.ones(())), "directions: shape () is not (..., 3)"),
+        (lambda: backend.intersect(np.zeros((4, 3))),
+         "rays: shape (4, 3) is not (..., 6): origin and direction (or give directions too)"),
+        (lambda: backend.occluded(np.zeros((4, 3)), np.ones((5, 3))),
+         "directions: rays of shape (5,), but origins has rays of shape (4,)"),
+        (lambda: backend.intersect(np.zeros(3), np.ones((5, 3)), tfar=np.ones(4)),
+         "tfar: rays of shape (4,), but directions has rays of shape (5,)"),
+        (lambda: backend.intersect(np.zeros((2, 5, 6)), tnear=np.zeros((3, 1))),
+         "tnear: rays of shape (3, 1), but rays has rays of shape (2, 5)"),
         (lambda: raypack.Scene.from_arrays(np.zeros((3, 2)), [[0, 1, 2]]), "vertices: shape (3, 2) is not (V, 3)"),
         (lambda: raypack.Scene.from_arrays(np.zeros((3, 3)), [0, 1, 2]), "indices: shape (3,) is not (T, 3)"),
         (lambda: raypack.Scene.from_arrays(np.zeros((3, 3)), [[0, 1, 2]], spheres=[[0, 0, 0]]),

@@ -85,9 +85,10 @@ def test_broadcast_inputs_trace_as_the_arrays_they_stand_for(scene, backend_name
     assert_same_bits(backend.intersect(origin, directions, 0.0, tfar), full)
     assert_same_bits(backend.intersect(origin[None, :], directions, np.zeros(1), tfar), full)
     assert_same_bits(backend.intersect(list(origin), directions, tfar=tfar), full)
-    one = backend.intersect(origin, directions[0], tfar=float(tfar[0]))  # a single ray: arrays of one element
-    assert one["t"].shape == (1,) and one["ng"].shape == (1, 3)
+    one = backend.intersect(origin, directions[0], tfar=float(tfar[0]))  # a single ray: leading shape ()
+    assert one["t"].shape == () and one["ng"].shape == (3,) and backend.occluded(origin, directions[0]).shape == ()
     assert one["t"].tobytes() == full["t"][:1].tobytes()
+    assert backend.intersect(origin[None, :], directions[:1])["t"].shape == (1,)  # (1, 3): one ray, shape (1,)
     empty = backend.intersect(np.zeros((0, 3)), np.zeros((0, 3)))
     assert empty["t"].shape == (0,) and empty["ng"].shape == (0, 3) and backend.occluded(empty["ng"], origin).shape == (0,)
 

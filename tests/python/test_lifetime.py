@@ -26,4 +26,4 @@ def test_results_outlive_the_backend(scene, backend_name):
     hits = backend.intersect([0, 3.4, 8.5], [0, -0.27, -1])
     del backend
     gc.collect()
-    assert hits["prim_id"].tolist() == [56666]
+    assert hits["prim_id"].tolist() == 56666
