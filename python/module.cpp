@@ -250,6 +250,50 @@ py::dict ray_dict(std::span<const Ray> rays, std::vector<py::ssize_t> shape = {}
   return py::dict("origins"_a = org, "directions"_a = dir, "tnear"_a = tnear, "tfar"_a = tfar);
 }
 
+/// primary_rays(scene, width, height): the renderer's primary rays (analysis/raygen.h), which
+/// come in its tile order, put in image order by their pixel numbers, as (height, width) rays.
+py::dict image_rays(const SceneHandle& s, int width, int height) {
+  RaySet set;
+  {
+    const auto lock = reading(s);
+    set = primary_rays(*s.scene, width, height);
+  }
+  std::vector<Ray> image(set.rays.size());
+  for (size_t k = 0; k < set.rays.size(); ++k) image[set.pixel[k]] = set.rays[k];
+  return ray_dict(image, {py::ssize_t(height), py::ssize_t(width)});
+}
+
+/// pinhole_rays: the renderer's pinhole camera (render/camera.h) through every pixel centre of
+/// a width x height image, as an (height, width, 6) float32 array of origin and direction in
+/// image order (row 0 at the top).
+py::array_t<float> pinhole_rays(int width, int height, const std::array<float, 3>& eye,
+                                const std::array<float, 3>& look_at, const std::array<float, 3>& up, float fov) {
+  const auto vec = [](const std::array<float, 3>& a) { return Vec3f(a[0], a[1], a[2]); };
+  const Camera camera(
+      CameraDesc{
+          .eye = vec(eye), .look_at = vec(look_at), .up = vec(up), .vfov_degrees = fov, .model = CameraModel::pinhole},
+      width, height);
+  py::array_t<float> out({py::ssize_t(height), py::ssize_t(width), py::ssize_t(6)});
+  float* const o = out.mutable_data();
+  const size_t w = size_t(width);
+  py::gil_scoped_release release;
+  for_each_chunk(size_t(width) * size_t(height), [&](size_t begin, size_t n) {
+    std::vector<float> px(n), py(n);
+    std::vector<Ray> rays(n);
+    for (size_t k = 0; k < n; ++k) {
+      px[k] = float((begin + k) % w) + 0.5f;
+      py[k] = float((begin + k) / w) + 0.5f;
+    }
+    camera.generate_rays(px, py, nullptr, rays);
+    for (size_t k = 0; k < n; ++k)
+      for (int a = 0; a < 3; ++a) {
+        o[6 * (begin + k) + size_t(a)] = rays[k].org[a];
+        o[6 * (begin + k) + 3 + size_t(a)] = rays[k].dir[a];
+      }
+  });
+  return out;
+}
+
 py::dict hit_dict(std::span<const HitRecord> records) {
   HitArrays hits({py::ssize_t(records.size())}, true);
   float *t = hits.t.mutable_data(), *u = hits.u.mutable_data(), *v = hits.v.mutable_data();
@@ -587,15 +631,14 @@ PYBIND11_MODULE(_raypack, m) {
         "rays_label"_a = "numpy", "threads"_a = 0,
         "The same rays through sides a and b (backend names, Backends, or 'reference') and the double-\n"
         "precision reference: the summary `raypack diff --json` writes, as a dict.");
-  m.def(
-      "primary_rays",
-      [](const SceneHandle& s, int w, int h) {
-        const auto lock = reading(s);
-        return ray_dict(primary_rays(*s.scene, w, h).rays);
-      },
-      "scene"_a, "width"_a, "height"_a,
-      "Pinhole rays through the pixel centres of the scene's camera in the renderer's order (16x16 tiles\n"
-      "of 4x2-pixel packets: trace them with coherent=True). A dict: origins, directions, tnear, tfar.");
+  m.def("primary_rays", &image_rays, "scene"_a, "width"_a, "height"_a,
+        "The rays of the scene's camera (or one framing it) through every pixel centre, as the\n"
+        "renderer makes them, in image order (row 0 at the top): a dict of origins and directions\n"
+        "(height, width, 3), tnear and tfar (height, width), so hits come as images.");
+  m.def("pinhole_rays", &pinhole_rays, "width"_a, "height"_a, "eye"_a, "look_at"_a, "up"_a, "fov"_a,
+        "The renderer's pinhole camera at eye, looking at look_at, with up and a vertical field of view\n"
+        "fov (degrees): one ray through every pixel centre, an (height, width, 6) float32 array of\n"
+        "origin and direction (unit) in image order (row 0 at the top), which intersect takes as it is.");
   m.def(
       "random_rays",
       [](const SceneHandle& s, size_t count, uint64_t seed) {

@@ -12,8 +12,9 @@ ValueError) with the one-line message of the raypack command. See README.md, "Us
 Python".
 """
 
-from ._raypack import (Backend, Error, Scene, __version__, backends, diff, load_scene, primary_rays, random_rays,
-                       read_hits, read_image, read_rays, render, write_image, write_rays)
+from ._raypack import (Backend, Error, Scene, __version__, backends, diff, load_scene, pinhole_rays, primary_rays,
+                       random_rays, read_hits, read_image, read_rays, render, write_image, write_rays)
 
-__all__ = ["Backend", "Error", "Scene", "__version__", "backends", "diff", "load_scene", "primary_rays",
-           "random_rays", "read_hits", "read_image", "read_rays", "render", "write_image", "write_rays"]
+__all__ = ["Backend", "Error", "Scene", "__version__", "backends", "diff", "load_scene", "pinhole_rays",
+           "primary_rays", "random_rays", "read_hits", "read_image", "read_rays", "render", "write_image",
+           "write_rays"]
