@@ -362,19 +362,37 @@ const Backend& backend_of(const BackendArg& arg, const std::string& variant, con
   return *built->backend;
 }
 
-/// An image as the (height, width, 3) float32 array render returns; its buffer becomes the array's.
-py::array_t<float> image_array(Image image) {
-  auto rgb = std::make_unique<std::vector<float>>(std::move(image.rgb));
-  std::vector<float>* data = rgb.get();
-  const py::capsule owner(rgb.release(), [](void* p) { delete static_cast<std::vector<float>*>(p); });
-  return py::array_t<float>({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)}, data->data(), owner);
+/// `values` as a numpy array of shape `shape` (whose product is values.size()) that takes over
+/// their buffer: nothing is copied.
+template <typename T>
+py::array_t<T> owned_array(std::vector<T> values, std::vector<py::ssize_t> shape) {
+  auto owned = std::make_unique<std::vector<T>>(std::move(values));
+  T* const data = owned->data();
+  const py::capsule owner(owned.release(), [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  return py::array_t<T>(std::move(shape), data, owner);
 }
 
-py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& backend, const std::string& variant,
-                                int width, int height, int spp, const std::string& sampler, uint64_t seed,
-                                int max_depth, std::optional<std::array<float, 3>> eye,
-                                std::optional<std::array<float, 3>> look_at, std::optional<std::array<float, 3>> up,
-                                std::optional<float> fov, int threads) {
+/// An image as the (height, width, 3) float32 array render returns; its buffer becomes the array's.
+py::array_t<float> image_array(Image image) {
+  return owned_array(std::move(image.rgb), {py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
+}
+
+/// render(..., aovs=True): the image and the primary hit through each pixel centre
+/// (render_aovs, render/render.h), each (height, width, ...) in image order.
+py::dict aov_dict(Image image, Aovs a) {
+  const py::ssize_t h = a.height, w = a.width;
+  return py::dict("rgb"_a = image_array(std::move(image)), "depth"_a = owned_array(std::move(a.depth), {h, w}),
+                  "normal"_a = owned_array(std::move(a.normal), {h, w, 3}),
+                  "shading_normal"_a = owned_array(std::move(a.shading_normal), {h, w, 3}),
+                  "uv"_a = owned_array(std::move(a.uv), {h, w, 2}),
+                  "prim_id"_a = owned_array(std::move(a.prim_id), {h, w}),
+                  "instance_id"_a = owned_array(std::move(a.instance_id), {h, w}));
+}
+
+py::object render_image(const SceneHandle& scene, const BackendArg& backend, const std::string& variant, int width,
+                        int height, int spp, const std::string& sampler, uint64_t seed, int max_depth,
+                        std::optional<std::array<float, 3>> eye, std::optional<std::array<float, 3>> look_at,
+                        std::optional<std::array<float, 3>> up, std::optional<float> fov, bool aovs, int threads) {
   RenderSettings settings{.width = width, .height = height, .spp = spp, .sampler = Sampler::stratified, .seed = seed,
                           .max_depth = max_depth, .adaptive_threshold = 0.05f, .adaptive_depth = 3};
   if (sampler == "uniform") settings.sampler = Sampler::uniform;
@@ -397,15 +415,20 @@ py::array_t<float> render_image(const SceneHandle& scene, const BackendArg& back
   std::optional<BackendHandle> built;
   const Backend& b = backend_of(backend, variant, scene, "render", built);
   Image image;
+  Aovs primary;
   // Ctrl-C stops the render between tiles (python/interrupt.h).
   interruptible(true, [&](const std::atomic<bool>& stop) {
     const ProgressFn stop_between_tiles = [&](double) {
       if (stop.load(std::memory_order_relaxed)) throw Stopped();
     };
     const auto lock = reading(scene);
-    with_threads(threads, [&] { image = render(*scene.scene, b, camera, settings, stop_between_tiles).image; });
+    with_threads(threads, [&] {
+      image = render(*scene.scene, b, camera, settings, stop_between_tiles).image;
+      if (aovs) primary = render_aovs(*scene.scene, b, camera);
+    });
   });
-  return image_array(std::move(image));
+  if (!aovs) return image_array(std::move(image));
+  return aov_dict(std::move(image), std::move(primary));
 }
 
 void save_image(const std::filesystem::path& path, const py::handle& pixels) {
@@ -621,10 +644,14 @@ PYBIND11_MODULE(_raypack, m) {
   m.def("render", &render_image, "scene"_a, "backend"_a = std::string(kDefaultBackend), "variant"_a = "default",
         py::kw_only(), "width"_a = 1024, "height"_a = 768, "spp"_a = 1, "sampler"_a = "stratified", "seed"_a = 0,
         "max_depth"_a = 3, "eye"_a = py::none(), "look_at"_a = py::none(), "up"_a = py::none(), "fov"_a = py::none(),
-        "threads"_a = 0,
+        "aovs"_a = false, "threads"_a = 0,
         "Renders as `raypack render` does: an (height, width, 3) float32 array of linear RGB, top row first.\n"
         "backend: a name or a Backend built over `scene`; the camera is the scene's (or one framing it),\n"
-        "with eye, look_at, up (x, y, z) and fov (vertical, degrees) replacing its own when given.");
+        "with eye, look_at, up (x, y, z) and fov (vertical, degrees) replacing its own when given.\n"
+        "aovs=True: a dict of that image (rgb) and the primary hit through each pixel centre, as\n"
+        "`raypack render --aov` writes them: depth (H, W; distance, inf on a miss), normal and\n"
+        "shading_normal (H, W, 3; world, unit, facing the camera, 0 on a miss), uv (H, W, 2),\n"
+        "prim_id and instance_id (H, W; uint32, 0xffffffff on a miss).");
   m.def("diff", &diff, "scene"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf, py::kw_only(),
         "a"_a = std::string(kDefaultBackend), "b"_a = "simd", "variant_a"_a = "default", "variant_b"_a = "default",
         "coherent"_a = false, "reference"_a = true, "tie_tolerance"_a = 1e-6, "t_tolerance"_a = 1e-4,

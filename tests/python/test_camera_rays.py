@@ -1,5 +1,6 @@
 """Camera rays as images: pinhole_rays against the pinhole formula of render/camera.h worked out
-in float64, primary_rays in image order against pinhole_rays of the scene's own camera."""
+in float64, primary_rays in image order against pinhole_rays of the scene's own camera, and the
+depth, normals and ids of render(aovs=True) against intersect on those rays."""
 
 import json
 
@@ -7,6 +8,7 @@ import numpy as np
 import pytest
 
 import raypack
+from conftest import MISS
 
 EYE, LOOK_AT, UP, FOV = [0.4, 1.8, 6.0], [0.1, 0.6, -0.5], [0, 1, 0], 38.0
 
@@ -71,3 +73,26 @@ def test_primary_rays_are_the_scenes_pinhole_in_image_order(camera_scene):
     assert rays["origins"].tobytes() == np.ascontiguousarray(pinhole[..., :3]).tobytes()
     assert rays["directions"].tobytes() == np.ascontiguousarray(pinhole[..., 3:]).tobytes()
 
+
+def test_render_aovs_are_the_primary_hits_of_pinhole_rays(camera_scene, backend_name):
+    width, height = 45, 31
+    backend = raypack.Backend(backend_name, camera_scene)
+    image = raypack.render(camera_scene, backend, width=width, height=height, spp=2, seed=5)
+    out = raypack.render(camera_scene, backend, width=width, height=height, spp=2, seed=5, aovs=True)
+    assert list(out) == ["rgb", "depth", "normal", "shading_normal", "uv", "prim_id", "instance_id"]
+    assert out["rgb"].tobytes() == image.tobytes()  # the image is the one render gives without aovs
+    for key, dtype, shape in [("depth", np.float32, ()), ("normal", np.float32, (3,)), ("uv", np.float32, (2,)),
+                              ("prim_id", np.uint32, ()), ("instance_id", np.uint32, ())]:
+        assert out[key].dtype == dtype and out[key].shape == (height, width) + shape, key
+    hits = backend.intersect(raypack.pinhole_rays(width, height, EYE, LOOK_AT, UP, FOV))
+    assert hits["t"].shape == (height, width)
+    miss = hits["prim_id"] == MISS
+    assert miss.any() and len(np.unique(hits["prim_id"][~miss])) == 4  # plane, sphere, both triangles
+    assert (out["prim_id"] == hits["prim_id"]).all()
+    assert (out["instance_id"] == MISS).all()
+    np.testing.assert_allclose(out["depth"][~miss], hits["t"][~miss], rtol=1e-6)  # unit directions: depth is t
+    assert np.isinf(out["depth"][miss]).all() and (out["normal"][miss] == 0).all()
+    # The geometric normal, turned towards the camera.
+    towards = np.where((np.sum(hits["ng"] * raypack.pinhole_rays(width, height, EYE, LOOK_AT, UP, FOV)[..., 3:],
+                               axis=-1) > 0)[..., None], -hits["ng"], hits["ng"])
+    np.testing.assert_allclose(out["normal"][~miss], towards[~miss], atol=1e-6)
