@@ -79,19 +79,21 @@ py::array_t<T, py::array::c_style | py::array::forcecast> table(const char* what
   return a;
 }
 
-SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, const py::handle& spheres,
-                        const py::handle& planes) {
+/// A triangle mesh named `name` from Python arrays: positions (V, 3) of `vertices` and vertex
+/// numbers (T, 3) of `triangles`, which must be integers: a float array would be truncated (2.9
+/// read as 2) and a uint64 one wrap to negative numbers, so both are refused, naming the
+/// argument as `triangles_arg`, and the values are checked.
+TriangleMesh mesh_of(std::string name, const py::handle& vertices, const char* triangles_arg,
+                     const py::handle& triangles) {
   const auto positions = table<float>("vertices", vertices, 3, "(V, 3)");  // held while v reads it
   const auto v = positions.unchecked<2>();
-  // Indices are integers: a float array would be truncated (2.9 read as 2) and a uint64 one wrap
-  // to negative numbers, so both are taken as they are and checked.
-  const py::array given = py::array::ensure(indices);
+  const py::array given = py::array::ensure(triangles);
   const char kind = given ? given.dtype().kind() : '?';
-  if (kind != 'i' && kind != 'u')
-    throw py::type_error(cat("indices: ", given ? cat("dtype ", std::string(py::str(given.dtype()))) : "this",
-                             " is not an array of integers"));
+  RP_CHECK(kind == 'i' || kind == 'u', triangles_arg, ": ",
+           given ? cat("dtype ", std::string(py::str(given.dtype()))) : std::string("this"),
+           " is not an array of integers (vertex numbers)");
   TriangleMesh mesh;
-  mesh.name = "arrays";
+  mesh.name = std::move(name);
   mesh.positions.resize(size_t(v.shape(0)));
   for (py::ssize_t i = 0; i < v.shape(0); ++i) mesh.positions[size_t(i)] = {v(i, 0), v(i, 1), v(i, 2)};
   const auto take = [&](const auto& idx) {
@@ -100,15 +102,21 @@ SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, c
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
       bool negative = false;
       if constexpr (std::is_signed_v<std::remove_cvref_t<decltype(in[i])>>) negative = in[i] < 0;
-      RP_CHECK(!negative && uint64_t(in[i]) < kInvalidId, "indices: ", in[i], " (triangle ", i / 3,
+      RP_CHECK(!negative && uint64_t(in[i]) < kInvalidId, triangles_arg, ": ", in[i], " (triangle ", i / 3,
                ") is not a vertex index");
       mesh.indices[i] = uint32_t(in[i]);
     }
   };
   if (kind == 'u')
-    take(table<uint64_t>("indices", given, 3, "(T, 3)"));
+    take(table<uint64_t>(triangles_arg, given, 3, "(T, 3)"));
   else
-    take(table<int64_t>("indices", given, 3, "(T, 3)"));
+    take(table<int64_t>(triangles_arg, given, 3, "(T, 3)"));
+  return mesh;
+}
+
+SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, const py::handle& spheres,
+                        const py::handle& planes) {
+  TriangleMesh mesh = mesh_of("arrays", vertices, "indices", indices);
   Scene scene;
   scene.add_mesh(std::move(mesh));
   if (!spheres.is_none()) {

@@ -67,11 +67,11 @@ def test_bad_shapes_name_the_argument(scene):
         assert message_of(call) == message
     with pytest.raises(TypeError, match="^origins: a str is not numbers numpy can make float32$"):
         backend.intersect("up", np.ones(3))
-    with pytest.raises(TypeError, match="^indices: dtype <U1 is not an array of integers$"):
-        raypack.Scene.from_arrays(np.eye(3), [["a", "b", "c"]])
-    # Indices are never truncated (2.9 is not vertex 2) nor wrapped (2^64-1 is not -1).
-    with pytest.raises(TypeError, match="^indices: dtype float64 is not an array of integers$"):
-        raypack.Scene.from_arrays(np.eye(3), [[0.0, 1.0, 2.9]])
+    # Indices are never truncated (2.9 is not vertex 2), not even when whole (2.0), nor wrapped (2^64-1 is not -1).
+    for indices, dtype in [([["a", "b", "c"]], "<U1"), ([[0, 1, 2.7]], "float64"), ([[0, 1, 2.0]], "float64"),
+                           (np.array([[0, 1, 2]], np.float32), "float32"), (np.ones((1, 3), bool), "bool")]:
+        assert message_of(lambda: raypack.Scene.from_arrays(np.eye(3), indices)) == (
+            f"indices: dtype {dtype} is not an array of integers (vertex numbers)")
     assert message_of(lambda: raypack.Scene.from_arrays(np.eye(3), np.array([[0, 1, 2**64 - 1]], np.uint64))) == (
         "indices: 18446744073709551615 (triangle 0) is not a vertex index")
     assert raypack.Scene.from_arrays(np.eye(3), np.array([[0, 1, 2]], np.uint16)) is not None
