@@ -37,6 +37,7 @@
 #include "io/rayfile.h"
 #include "python/interrupt.h"
 #include "python/ray_arrays.h"
+#include "python/text_signatures.h"
 #include "render/camera.h"
 #include "render/image_io.h"
 #include "render/render.h"
@@ -513,8 +514,6 @@ py::list backend_list() {
   return out;
 }
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-
 }  // namespace
 }  // namespace rp::python
 
@@ -609,7 +608,7 @@ PYBIND11_MODULE(_raypack, m) {
             return b.backend->current();
           },
           "True when no change of the scene awaits update()")
-      .def("intersect", &intersect, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
+      .def("intersect", &intersect, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, tfar_arg(),
            "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
            "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v, instance_id\n"
            "(uint32, 0xffffffff on a miss or outside any instance) and ng (..., 3), the unit geometric normal\n"
@@ -620,7 +619,7 @@ PYBIND11_MODULE(_raypack, m) {
            "float32 input is read in place. Rays outside the valid-ray rule are misses;\n"
            "invalid='warn' (RuntimeWarning), 'raise' or 'miss'. threads: 0 uses every core.\n"
            "The GIL is released while tracing.")
-      .def("occluded", &occluded, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
+      .def("occluded", &occluded, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, tfar_arg(),
            "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
            "Any hit within [tnear, tfar]: a bool array of the rays' leading shape, True where the ray is\n"
            "occluded. Arguments as intersect.")
@@ -660,7 +659,7 @@ PYBIND11_MODULE(_raypack, m) {
         "`raypack render --aov` writes them: depth (H, W; distance, inf on a miss), normal and\n"
         "shading_normal (H, W, 3; world, unit, facing the camera, 0 on a miss), uv (H, W, 2),\n"
         "prim_id and instance_id (H, W; uint32, 0xffffffff on a miss).");
-  m.def("diff", &diff, "scene"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf, py::kw_only(),
+  m.def("diff", &diff, "scene"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, tfar_arg(), py::kw_only(),
         "a"_a = std::string(kDefaultBackend), "b"_a = "simd", "variant_a"_a = "default", "variant_b"_a = "default",
         "coherent"_a = false, "reference"_a = true, "tie_tolerance"_a = 1e-6, "t_tolerance"_a = 1e-4,
         "rays_label"_a = "numpy", "threads"_a = 0,
@@ -683,11 +682,11 @@ PYBIND11_MODULE(_raypack, m) {
       "scene"_a, "count"_a, "seed"_a = 1,
       "`count` seeded rays from the sphere around the scene into its bounds (incoherent): a dict of\n"
       "origins and directions (count, 3), tnear and tfar (count,).");
-  m.def("_gather_rays", &gathered_rays, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, "tfar"_a = kInf,
+  m.def("_gather_rays", &gathered_rays, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, tfar_arg(),
         "mask"_a = py::none(),
         "For the tests: the rays intersect would trace for these arguments, flat (a dict as read_rays\n"
         "returns, with each ray's mask), and their leading shape.");
-  m.def("write_rays", &save_rays, "path"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, "tfar"_a = kInf,
+  m.def("write_rays", &save_rays, "path"_a, "origins"_a, "directions"_a, "tnear"_a = 0.0f, tfar_arg(),
         "Writes a ray file (.csv, or binary: .bin, .rays) that `raypack trace --rays` reads.");
   m.def("read_rays", [](const std::filesystem::path& path) { return ray_dict(read_rays(path.string())); }, "path"_a,
         "Reads a ray file, as the dict primary_rays returns.");
@@ -698,4 +697,6 @@ PYBIND11_MODULE(_raypack, m) {
         "Reads an image file as an (height, width, 3) float32 array, as stored (EXR: linear).");
   m.def("read_hits", [](const std::filesystem::path& path) { return hit_dict(read_hits(path.string())); }, "path"_a,
         "Reads a hit file (`raypack trace -o`), as the dict Backend.intersect returns.");
+
+  add_text_signatures(m);
 }

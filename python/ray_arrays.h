@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <shared_mutex>
 #include <span>
 #include <string>
@@ -129,6 +130,10 @@ class RayArrays {
   size_t size_ = 1;
   bool has_mask_ = false;
 };
+
+/// The tfar argument of a call that takes rays, "tfar"_a = +inf, its default written math.inf:
+/// the spelling inspect.signature can evaluate (python/text_signatures.h).
+inline py::arg_v tfar_arg() { return py::arg_v("tfar", std::numeric_limits<float>::infinity(), "math.inf"); }
 
 /// Closest hits as numpy arrays, one element per ray, each of the rays' leading shape (...):
 /// t (float32, +inf on a miss), prim_id (uint32, 0xffffffff on a miss), u, v (float32, 0 on a

@@ -12,6 +12,8 @@ ValueError) with the one-line message of the raypack command. See README.md, "Us
 Python".
 """
 
+import math  # noqa: F401 -- inspect.signature evaluates the defaults math.inf (tfar) in sys.modules
+
 from ._raypack import (Backend, Error, Scene, __version__, backends, diff, load_scene, pinhole_rays, primary_rays,
                        random_rays, read_hits, read_image, read_rays, render, write_image, write_rays)
 
