@@ -17,6 +17,7 @@ packages=(
   libtinyobjloader-dev libtinygltf-dev libgmp-dev libxxhash-dev gnuplot-nox ccache
   libopenmpi-dev openmpi-bin
   pybind11-dev python3-dev python3-numpy python3-pytest
+  python3-venv python3-setuptools python3-wheel
 )
 
 .ci/apt-install.sh setup "${packages[@]}"
