@@ -41,7 +41,8 @@ def rays_of_kind(scene, kind, count, seed):
     # The smallest image of 4x2-pixel packets with `count` pixels, its first `count` rays, as
     # `raypack diff --kind primary` makes them.
     side = max(2, math.ceil(math.sqrt(count)))
-    rays = raypack.primary_rays(scene, (side + 3) // 4 * 4, (side + 1) // 2 * 2)
+    rays = raypack.primary_rays(scene, (side + 3) // 4 * 4, (side + 1) // 2 * 2, order="tiles")
+    del rays["pixel"]
     return {key: value[:count] for key, value in rays.items()}
 
 

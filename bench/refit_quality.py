@@ -46,7 +46,8 @@ def main():
     THREADS = a.threads
     scene = raypack.load_scene(a.scene)
     rest = scene.vertices(0)
-    primary = raypack.primary_rays(scene, 512, 512)
+    primary = raypack.primary_rays(scene, 512, 512, order="tiles")  # the renderer's packets
+    del primary["pixel"]
     scattered = raypack.random_rays(scene, 1 << 18, seed=5)
     refit = raypack.Backend("simd", scene, refit_limit=float("inf"))
     built_cost = refit.stats["sah_cost"]

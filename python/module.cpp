@@ -259,13 +259,20 @@ py::dict ray_dict(std::span<const Ray> rays, std::vector<py::ssize_t> shape = {}
   return py::dict("origins"_a = org, "directions"_a = dir, "tnear"_a = tnear, "tfar"_a = tfar);
 }
 
-/// primary_rays(scene, width, height): the renderer's primary rays (analysis/raygen.h), which
-/// come in its tile order, put in image order by their pixel numbers, as (height, width) rays.
-py::dict image_rays(const SceneHandle& s, int width, int height) {
+/// primary_rays(scene, width, height, order): the renderer's primary rays (analysis/raygen.h),
+/// which come in its order (16x16 tiles of 4x2 packets): put in image order by their pixel
+/// numbers, as (height, width) rays, or with order "tiles" left in it, flat, with those numbers.
+py::dict camera_rays(const SceneHandle& s, int width, int height, const std::string& order) {
+  RP_CHECK(order == "image" || order == "tiles", "order: '", order, "' is not image or tiles");
   RaySet set;
   {
     const auto lock = reading(s);
     set = primary_rays(*s.scene, width, height);
+  }
+  if (order == "tiles") {
+    py::dict rays = ray_dict(set.rays);
+    rays["pixel"] = py::array_t<uint32_t>(py::ssize_t(set.pixel.size()), set.pixel.data());
+    return rays;
   }
   std::vector<Ray> image(set.rays.size());
   for (size_t k = 0; k < set.rays.size(); ++k) image[set.pixel[k]] = set.rays[k];
@@ -665,10 +672,13 @@ PYBIND11_MODULE(_raypack, m) {
         "rays_label"_a = "numpy", "threads"_a = 0,
         "The same rays through sides a and b (backend names, Backends, or 'reference') and the double-\n"
         "precision reference: the summary `raypack diff --json` writes, as a dict.");
-  m.def("primary_rays", &image_rays, "scene"_a, "width"_a, "height"_a,
+  m.def("primary_rays", &camera_rays, "scene"_a, "width"_a, "height"_a, py::kw_only(), "order"_a = "image",
         "The rays of the scene's camera (or one framing it) through every pixel centre, as the\n"
         "renderer makes them, in image order (row 0 at the top): a dict of origins and directions\n"
-        "(height, width, 3), tnear and tfar (height, width), so hits come as images.");
+        "(height, width, 3), tnear and tfar (height, width), so hits come as images.\n"
+        "order='tiles': flat, (N, 3) and (N,), in the renderer's order (16x16-pixel tiles of 4x2-pixel\n"
+        "packets, as `raypack diff --kind primary` traces them), with pixel (N,), uint32: each ray's\n"
+        "pixel, y * width + x (take it out before intersect(**rays)).");
   m.def("pinhole_rays", &pinhole_rays, "width"_a, "height"_a, "eye"_a, "look_at"_a, "up"_a, "fov"_a,
         "The renderer's pinhole camera at eye, looking at look_at, with up and a vertical field of view\n"
         "fov (degrees): one ray through every pixel centre, an (height, width, 6) float32 array of\n"

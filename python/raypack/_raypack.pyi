@@ -33,6 +33,11 @@ class _Rays(TypedDict):
     tfar: NDArray[np.float32]
 
 
+class _TileRays(_Rays):
+    """primary_rays(..., order='tiles'): flat, in the renderer's order, with each ray's pixel."""
+    pixel: NDArray[np.uint32]
+
+
 class _Aovs(TypedDict):
     """render(..., aovs=True): the image and the primary hit through each pixel centre."""
     rgb: NDArray[np.float32]  # (H, W, 3)
@@ -141,7 +146,10 @@ def diff(scene: Scene, origins: ArrayLike, directions: ArrayLike, tnear: ArrayLi
          a: str | Backend = 'embree', b: str | Backend = 'simd', variant_a: str = 'default',
          variant_b: str = 'default', coherent: bool = False, reference: bool = True, tie_tolerance: float = 1e-06,
          t_tolerance: float = 0.0001, rays_label: str = 'numpy', threads: int = 0) -> dict[str, Any]: ...
-def primary_rays(scene: Scene, width: int, height: int) -> _Rays: ...
+@overload
+def primary_rays(scene: Scene, width: int, height: int, *, order: Literal['image'] = 'image') -> _Rays: ...
+@overload
+def primary_rays(scene: Scene, width: int, height: int, *, order: Literal['tiles']) -> _TileRays: ...
 def pinhole_rays(width: int, height: int, eye: _Vec3, look_at: _Vec3, up: _Vec3, fov: float) -> NDArray[np.float32]: ...
 def random_rays(scene: Scene, count: int, seed: int = 1) -> _Rays: ...
 def write_rays(path: _Path, origins: ArrayLike, directions: ArrayLike, tnear: ArrayLike = 0.0,

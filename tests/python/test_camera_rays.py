@@ -72,6 +72,17 @@ def test_primary_rays_are_the_scenes_pinhole_in_image_order(camera_scene):
     pinhole = raypack.pinhole_rays(width, height, EYE, LOOK_AT, UP, FOV)
     assert rays["origins"].tobytes() == np.ascontiguousarray(pinhole[..., :3]).tobytes()
     assert rays["directions"].tobytes() == np.ascontiguousarray(pinhole[..., 3:]).tobytes()
+    # The renderer's order, flat, and each ray's pixel: the same rays, permuted.
+    tiles = raypack.primary_rays(camera_scene, width, height, order="tiles")
+    assert tiles["origins"].shape == (height * width, 3) and tiles["pixel"].dtype == np.uint32
+    assert sorted(tiles["pixel"].tolist()) == list(range(width * height))
+    assert not (tiles["pixel"] == np.arange(width * height)).all()
+    assert (tiles["pixel"][:8] == [0, 1, 2, 3, width, width + 1, width + 2, width + 3]).all()  # a 4x2 packet
+    for key in ("origins", "directions", "tnear", "tfar"):
+        flat = rays[key].reshape((width * height,) + rays[key].shape[2:])
+        assert tiles[key].tobytes() == flat[tiles["pixel"]].tobytes(), key
+    with pytest.raises(raypack.Error, match="^order: 'rows' is not image or tiles$"):
+        raypack.primary_rays(camera_scene, width, height, order="rows")
 
 
 def test_render_aovs_are_the_primary_hits_of_pinhole_rays(camera_scene, backend_name):
