@@ -135,6 +135,75 @@ SceneHandle from_arrays(const py::handle& vertices, const py::handle& indices, c
   return {std::make_shared<Scene>(std::move(scene)), "arrays"};
 }
 
+/// The scene's lock held alone, the GIL released: for calls that change the scene.
+template <typename F>
+auto changing(const SceneHandle& s, const F& change) {
+  py::gil_scoped_release release;
+  const std::unique_lock writing(*s.guard);
+  return change(*s.scene);
+}
+
+/// A (3,) vector of `what`. Throws rp::Error naming it for another shape.
+Vec3f vec3_of(const char* what, const py::handle& object) {
+  const auto a = numbers<float, py::array::c_style | py::array::forcecast>(what, object);
+  RP_CHECK(a.ndim() == 1 && a.shape(0) == 3, what, ": shape ", shape_text(a), " is not (3,)");
+  return {a.data()[0], a.data()[1], a.data()[2]};
+}
+
+/// Scene.add_triangles(vertices, triangles): a new world mesh; its geometry id.
+uint32_t add_triangles(const SceneHandle& s, const py::handle& vertices, const py::handle& triangles) {
+  TriangleMesh mesh = mesh_of("arrays", vertices, "triangles", triangles);
+  return changing(s, [&](Scene& scene) { return scene.mesh_geometry(scene.add_mesh(std::move(mesh))); });
+}
+
+uint32_t add_sphere(const SceneHandle& s, const py::handle& center, float radius) {
+  const Sphere sphere{.center = vec3_of("center", center), .radius = radius, .material = 0};
+  return changing(s, [&](Scene& scene) { return scene.add_sphere(sphere); });
+}
+
+uint32_t add_plane(const SceneHandle& s, const py::handle& normal, float d) {
+  const Plane plane{.normal = vec3_of("normal", normal), .d = d, .material = 0};
+  return changing(s, [&](Scene& scene) { return scene.add_plane(plane); });
+}
+
+uint32_t add_polygon(const SceneHandle& s, const py::handle& vertices) {
+  const auto array = table<float>("vertices", vertices, 3, "(K, 3)");
+  const std::span<const Vec3f> corners(reinterpret_cast<const Vec3f*>(array.data()), size_t(array.shape(0)));
+  return changing(s, [&](Scene& scene) { return scene.add_polygon(corners, 0); });
+}
+
+/// Scene.add_quadric(coefficients, clip_min, clip_max, *, center): A..J of
+/// A x^2 + B y^2 + C z^2 + D xy + E yz + F xz + G x + H y + I z + J = 0 about `center`, clipped
+/// to the box.
+uint32_t add_quadric(const SceneHandle& s, const py::handle& coefficients, const py::handle& clip_min,
+                     const py::handle& clip_max, const py::handle& center) {
+  const auto c = numbers<float, py::array::c_style | py::array::forcecast>("coefficients", coefficients);
+  RP_CHECK(c.ndim() == 1 && c.shape(0) == 10, "coefficients: shape ", shape_text(c), " is not (10,): A .. J");
+  const float* k = c.data();
+  QuadricShape q;
+  q.quadric = Quadricf{.A = k[0],
+                       .B = k[1],
+                       .C = k[2],
+                       .D = k[3],
+                       .E = k[4],
+                       .F = k[5],
+                       .G = k[6],
+                       .H = k[7],
+                       .I = k[8],
+                       .J = k[9],
+                       .center = vec3_of("center", center),
+                       .clip = Box3f(vec3_of("clip_min", clip_min), vec3_of("clip_max", clip_max))};
+  return changing(s, [&](Scene& scene) { return scene.add_quadric(q); });
+}
+
+/// Scene.mask(geometry), checked against the geometry count.
+uint32_t geometry_mask(const SceneHandle& s, uint32_t geometry) {
+  const auto lock = reading(s);
+  RP_CHECK(geometry < s.scene->geometry_count(), "mask: geometry ", geometry, " out of range (",
+           s.scene->geometry_count(), " geometries)");
+  return s.scene->mask(geometry);
+}
+
 /// Scene.vertices(mesh): a copy of mesh `mesh`'s positions, (V, 3) float32.
 py::array_t<float> vertices(const SceneHandle& s, uint32_t mesh) {
   const auto lock = reading(s);
@@ -149,9 +218,7 @@ py::array_t<float> vertices(const SceneHandle& s, uint32_t mesh) {
 void set_vertices(const SceneHandle& s, uint32_t mesh, const py::handle& vertices) {
   const auto array = table<float>("vertices", vertices, 3, "(V, 3)");
   const std::span<const Vec3f> p(reinterpret_cast<const Vec3f*>(array.data()), size_t(array.shape(0)));
-  py::gil_scoped_release release;
-  const std::unique_lock writing(*s.guard);
-  s.scene->set_vertices(mesh, p);
+  changing(s, [&](Scene& scene) { scene.set_vertices(mesh, p); });
 }
 
 /// Scene.transform(instance): instance `instance`'s object-to-world map as a (4, 4) float32 matrix.
@@ -179,9 +246,7 @@ void set_transform(const SceneHandle& s, uint32_t instance, const py::handle& ma
   Affine3f t;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 4; ++j) t.m[i][j] = m[4 * i + j];
-  py::gil_scoped_release release;
-  const std::unique_lock writing(*s.guard);
-  s.scene->set_transform(instance, t);
+  changing(s, [&](Scene& scene) { scene.set_transform(instance, t); });
 }
 
 BackendHandle build(const std::string& name, const SceneHandle& scene, const std::string& variant,
@@ -216,10 +281,10 @@ void report_invalid(const char* call, InvalidRays policy, size_t invalid, size_t
 }
 
 py::dict intersect(const BackendHandle& b, const py::handle& origins, const py::handle& directions,
-                   const py::handle& tnear, const py::handle& tfar, bool coherent, const std::string& invalid,
-                   bool normals, int threads) {
+                   const py::handle& tnear, const py::handle& tfar, bool coherent, const py::handle& mask,
+                   const std::string& invalid, bool normals, int threads) {
   const InvalidRays policy = parse_invalid(invalid);
-  const RayArrays rays(origins, directions, tnear, tfar);
+  const RayArrays rays(origins, directions, tnear, tfar, mask);
   size_t bad = 0;
   const HitArrays hits = trace_closest(*b.backend, *b.scene.scene, *b.scene.guard, rays,
                                        coherent ? Coherence::coherent : Coherence::incoherent, normals, threads, bad);
@@ -228,10 +293,10 @@ py::dict intersect(const BackendHandle& b, const py::handle& origins, const py::
 }
 
 py::array_t<bool> occluded(const BackendHandle& b, const py::handle& origins, const py::handle& directions,
-                           const py::handle& tnear, const py::handle& tfar, bool coherent, const std::string& invalid,
-                           int threads) {
+                           const py::handle& tnear, const py::handle& tfar, bool coherent, const py::handle& mask,
+                           const std::string& invalid, int threads) {
   const InvalidRays policy = parse_invalid(invalid);
-  const RayArrays rays(origins, directions, tnear, tfar);
+  const RayArrays rays(origins, directions, tnear, tfar, mask);
   size_t bad = 0;
   py::array_t<bool> out =
       trace_any(*b.backend, *b.scene.guard, rays, coherent ? Coherence::coherent : Coherence::incoherent, threads, bad);
@@ -311,7 +376,7 @@ py::array_t<float> pinhole_rays(int width, int height, const std::array<float, 3
 }
 
 py::dict hit_dict(std::span<const HitRecord> records) {
-  HitArrays hits({py::ssize_t(records.size())}, true);
+  HitArrays hits({py::ssize_t(records.size())}, true, false);
   float *t = hits.t.mutable_data(), *u = hits.u.mutable_data(), *v = hits.v.mutable_data();
   float* ng = hits.ng.mutable_data();
   uint32_t *prim = hits.prim_id.mutable_data(), *inst = hits.instance_id.mutable_data();
@@ -393,16 +458,26 @@ py::array_t<float> image_array(Image image) {
   return owned_array(std::move(image.rgb), {py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
 }
 
+/// The geometry of each primitive of `prim_ids` (Scene::geometry_of; kInvalidId for kInvalidId).
+std::vector<uint32_t> geometries_of(const Scene& scene, std::span<const uint32_t> prim_ids) {
+  std::vector<uint32_t> out(prim_ids.size());
+  for (size_t i = 0; i < prim_ids.size(); ++i)
+    out[i] = prim_ids[i] == kInvalidId ? kInvalidId : scene.geometry_of(prim_ids[i]);
+  return out;
+}
+
 /// render(..., aovs=True): the image and the primary hit through each pixel centre
-/// (render_aovs, render/render.h), each (height, width, ...) in image order.
-py::dict aov_dict(Image image, Aovs a) {
+/// (render_aovs, render/render.h) with the geometry of its primitive, each (height, width, ...)
+/// in image order.
+py::dict aov_dict(Image image, Aovs a, std::vector<uint32_t> geometry) {
   const py::ssize_t h = a.height, w = a.width;
   return py::dict("rgb"_a = image_array(std::move(image)), "depth"_a = owned_array(std::move(a.depth), {h, w}),
                   "normal"_a = owned_array(std::move(a.normal), {h, w, 3}),
                   "shading_normal"_a = owned_array(std::move(a.shading_normal), {h, w, 3}),
                   "uv"_a = owned_array(std::move(a.uv), {h, w, 2}),
                   "prim_id"_a = owned_array(std::move(a.prim_id), {h, w}),
-                  "instance_id"_a = owned_array(std::move(a.instance_id), {h, w}));
+                  "instance_id"_a = owned_array(std::move(a.instance_id), {h, w}),
+                  "geometry_id"_a = owned_array(std::move(geometry), {h, w}));
 }
 
 py::object render_image(const SceneHandle& scene, const BackendArg& backend, const std::string& variant, int width,
@@ -432,6 +507,7 @@ py::object render_image(const SceneHandle& scene, const BackendArg& backend, con
   const Backend& b = backend_of(backend, variant, scene, "render", built);
   Image image;
   Aovs primary;
+  std::vector<uint32_t> geometry;
   // Ctrl-C stops the render between tiles (python/interrupt.h).
   interruptible(true, [&](const std::atomic<bool>& stop) {
     const ProgressFn stop_between_tiles = [&](double) {
@@ -440,11 +516,13 @@ py::object render_image(const SceneHandle& scene, const BackendArg& backend, con
     const auto lock = reading(scene);
     with_threads(threads, [&] {
       image = render(*scene.scene, b, camera, settings, stop_between_tiles).image;
-      if (aovs) primary = render_aovs(*scene.scene, b, camera);
+      if (!aovs) return;
+      primary = render_aovs(*scene.scene, b, camera);
+      geometry = geometries_of(*scene.scene, primary.prim_id);
     });
   });
   if (!aovs) return image_array(std::move(image));
-  return aov_dict(std::move(image), std::move(primary));
+  return aov_dict(std::move(image), std::move(primary), std::move(geometry));
 }
 
 void save_image(const std::filesystem::path& path, const py::handle& pixels) {
@@ -534,9 +612,45 @@ PYBIND11_MODULE(_raypack, m) {
 
   py::class_<SceneHandle>(m, "Scene",
                           "A scene: triangle meshes, instances, analytic primitives, materials, lights and a camera.\n"
-                          "Made by load_scene() or Scene.from_arrays(); it owns copies of its data. Its meshes'\n"
-                          "vertices and its instances' transforms may change (set_vertices, set_transform); a\n"
-                          "Backend over it then raises raypack.Error until its update().")
+                          "Made by load_scene(), Scene.from_arrays(), or Scene() and its add_* calls; it owns\n"
+                          "copies of its data. Geometry may be added, its meshes' vertices and its instances'\n"
+                          "transforms may change (set_vertices, set_transform); a Backend over it then raises\n"
+                          "raypack.Error until its update().")
+      .def(py::init([] {
+             return SceneHandle{std::make_shared<Scene>(), "arrays"};
+           }),
+           "An empty scene, to fill with add_triangles, add_sphere, add_plane, add_polygon and add_quadric.")
+      .def("add_triangles", &add_triangles, "vertices"_a, "triangles"_a,
+           "Adds a triangle mesh: vertices (V, 3) floats, triangles (T, 3) integers (vertex numbers).\n"
+           "Returns its geometry id. The data is copied; Backends over the scene need update().")
+      .def("add_sphere", &add_sphere, "center"_a, "radius"_a,
+           "Adds a sphere (centre (3,), radius > 0); returns its geometry id.")
+      .def("add_plane", &add_plane, "normal"_a, "d"_a,
+           "Adds the unbounded plane n.P + d = 0 (normal (3,), not zero); returns its geometry id.")
+      .def("add_polygon", &add_polygon, "vertices"_a,
+           "Adds a planar polygon of K >= 3 coplanar vertices (K, 3), convex or not; returns its geometry id.")
+      .def("add_quadric", &add_quadric, "coefficients"_a, "clip_min"_a, "clip_max"_a, py::kw_only(),
+           "center"_a = py::make_tuple(0.0f, 0.0f, 0.0f),
+           "Adds the quadric A x^2 + B y^2 + C z^2 + D xy + E yz + F xz + G x + H y + I z + J = 0, its\n"
+           "coefficients (10,) A .. J written about `center`, clipped to the box clip_min .. clip_max\n"
+           "(finite). Returns its geometry id.")
+      .def_property_readonly(
+          "geometry_count",
+          [](const SceneHandle& s) {
+            const auto lock = reading(s);
+            return s.scene->geometry_count();
+          },
+          "Geometries: every mesh, sphere, quadric, polygon and plane, numbered 0, 1, ... in the order they were\n"
+          "added (Scene.from_arrays: the mesh, then the spheres, then the planes); the geometry_id of hits")
+      .def(
+          "set_mask",
+          [](const SceneHandle& s, uint32_t geometry, uint32_t mask) {
+            changing(s, [&](Scene& scene) { scene.set_mask(geometry, mask); });
+          },
+          "geometry"_a, "mask"_a,
+          "Sets a geometry's 32-bit mask (0xffffffff at first): a ray of mask m sees it only when\n"
+          "m & mask != 0 (intersect's mask=; Embree's rule). Takes effect at once: no update() needed.")
+      .def("mask", &geometry_mask, "geometry"_a, "A geometry's mask")
       .def_static("from_arrays", &from_arrays, "vertices"_a, "indices"_a, py::kw_only(), "spheres"_a = py::none(),
                   "planes"_a = py::none(),
                   "A scene of one triangle mesh: vertices (V, 3) floats, indices (T, 3) integers (vertex numbers);\n"
@@ -616,18 +730,21 @@ PYBIND11_MODULE(_raypack, m) {
           },
           "True when no change of the scene awaits update()")
       .def("intersect", &intersect, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, tfar_arg(),
-           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "normals"_a = true, "threads"_a = 0,
+           "coherent"_a = false, py::kw_only(), "mask"_a = py::none(), "invalid"_a = "warn", "normals"_a = true,
+           "threads"_a = 0,
            "Closest hits: a dict of numpy arrays t, prim_id (uint32, 0xffffffff on a miss), u, v, instance_id\n"
-           "(uint32, 0xffffffff on a miss or outside any instance) and ng (..., 3), the unit geometric normal\n"
-           "(left out with normals=False, which saves working it out), each of the rays' leading shape (...).\n"
+           "(uint32, 0xffffffff on a miss or outside any instance), geometry_id (uint32, 0xffffffff on a miss)\n"
+           "and ng (..., 3), the unit geometric normal (left out with normals=False, which saves working it\n"
+           "out), each of the rays' leading shape (...).\n"
            "Rays: origins and directions (..., 3), such as (N, 3) or (H, W, 3), a (3,) one shared by every ray;\n"
            "or one array (..., 6) of origin and direction (Open3D's layout) with directions left out.\n"
            "tnear, tfar: scalars or arrays of the leading shape; all broadcast by numpy's rule.\n"
+           "mask: uint32 per ray (or one for all): a ray sees a geometry when mask & Scene.mask(geometry) != 0.\n"
            "float32 input is read in place. Rays outside the valid-ray rule are misses;\n"
            "invalid='warn' (RuntimeWarning), 'raise' or 'miss'. threads: 0 uses every core.\n"
            "The GIL is released while tracing.")
       .def("occluded", &occluded, "origins"_a, "directions"_a = py::none(), "tnear"_a = 0.0f, tfar_arg(),
-           "coherent"_a = false, py::kw_only(), "invalid"_a = "warn", "threads"_a = 0,
+           "coherent"_a = false, py::kw_only(), "mask"_a = py::none(), "invalid"_a = "warn", "threads"_a = 0,
            "Any hit within [tnear, tfar]: a bool array of the rays' leading shape, True where the ray is\n"
            "occluded. Arguments as intersect.")
       .def_property_readonly("name", [](const BackendHandle& b) { return b.backend->info().name; })

@@ -18,10 +18,18 @@ namespace {
 struct ChunkBuffers {
   std::vector<Ray> rays = std::vector<Ray>(kParallelChunk);
   std::vector<Hit> hits = std::vector<Hit>(kParallelChunk);
+  std::vector<uint32_t> masks = std::vector<uint32_t>(kParallelChunk);
 };
 ChunkBuffers& chunk_buffers() {
   thread_local ChunkBuffers buffers;
   return buffers;
+}
+
+/// The masks of rays [begin, begin + n), in this thread's buffer.
+std::span<const uint32_t> chunk_masks(const RayArrays& rays, size_t begin, size_t n) {
+  const std::span<uint32_t> masks(chunk_buffers().masks.data(), n);
+  rays.gather_masks(begin, masks);
+  return masks;
 }
 
 /// Hits whose reads store() asks for at once (see prefetch_rows).
@@ -259,20 +267,21 @@ std::vector<py::ssize_t> with(std::vector<py::ssize_t> shape, std::initializer_l
 
 }  // namespace
 
-HitArrays::HitArrays(const std::vector<py::ssize_t>& shape, bool normals)
+HitArrays::HitArrays(const std::vector<py::ssize_t>& shape, bool normals, bool geometry)
     : t(shape),
       u(shape),
       v(shape),
       ng(normals ? with(shape, {3}) : std::vector<py::ssize_t>{0, 3}),
       prim_id(shape),
       instance_id(shape),
+      geometry_id(geometry ? shape : std::vector<py::ssize_t>{0}),
       t_(t.mutable_data()),
       u_(u.mutable_data()),
       v_(v.mutable_data()),
       ng_(normals ? ng.mutable_data() : nullptr),
       prim_id_(prim_id.mutable_data()),
       instance_id_(instance_id.mutable_data()),
-      normals_(normals) {}
+      geometry_id_(geometry ? geometry_id.mutable_data() : nullptr) {}
 
 void HitArrays::store(const Scene& scene, size_t begin, std::span<const Ray> rays, std::span<const Hit> hits) noexcept {
   for (size_t k = 0; k < hits.size(); ++k) {
@@ -283,7 +292,10 @@ void HitArrays::store(const Scene& scene, size_t begin, std::span<const Ray> ray
     u_[i] = hits[k].u;
     v_[i] = hits[k].v;
   }
-  if (normals_) store_normals(scene, begin, rays, hits);
+  if (geometry_id_)
+    for (size_t k = 0; k < hits.size(); ++k)
+      geometry_id_[begin + k] = hits[k].hit() ? scene.geometry_of(hits[k].prim_id) : kInvalidId;
+  if (ng_) store_normals(scene, begin, rays, hits);
 }
 
 void HitArrays::store_normals(const Scene& scene, size_t begin, std::span<const Ray> rays,
@@ -312,7 +324,8 @@ py::dict HitArrays::to_dict() const {
   d["u"] = u;
   d["v"] = v;
   d["instance_id"] = instance_id;
-  if (normals_) d["ng"] = ng;
+  if (geometry_id_) d["geometry_id"] = geometry_id;
+  if (ng_) d["ng"] = ng;
   return d;
 }
 
@@ -333,7 +346,7 @@ constexpr size_t kLongCallRays = size_t(1) << 18;
 
 HitArrays trace_closest(const Backend& backend, const Scene& scene, std::shared_mutex& guard, const RayArrays& rays,
                         Coherence coherence, bool normals, int threads, size_t& invalid) {
-  HitArrays out(rays.shape(), normals);
+  HitArrays out(rays.shape(), normals, true);
   std::atomic<size_t> bad = 0;
   interruptible(rays.size() >= kLongCallRays, [&](const std::atomic<bool>& stop) {
     const std::shared_lock reading(guard);
@@ -344,7 +357,10 @@ HitArrays trace_closest(const Backend& backend, const Scene& scene, std::shared_
         const std::span<Ray> r(b.rays.data(), n);
         const std::span<Hit> h(b.hits.data(), n);
         bad += rays.gather(begin, r);
-        backend.intersect(r, h, coherence);
+        if (rays.has_mask())
+          backend.intersect(r, h, TraceOptions{.masks = chunk_masks(rays, begin, n), .filter = {}});
+        else
+          backend.intersect(r, h, coherence);
         out.store(scene, begin, r, h);
       });
     });
@@ -366,7 +382,11 @@ py::array_t<bool> trace_any(const Backend& backend, std::shared_mutex& guard, co
         if (stop.load(std::memory_order_relaxed)) return;
         const std::span<Ray> r(chunk_buffers().rays.data(), n);
         bad += rays.gather(begin, r);
-        backend.occluded(r, std::span(occluded + begin, n), coherence);
+        if (rays.has_mask())
+          backend.occluded(r, std::span(occluded + begin, n),
+                           TraceOptions{.masks = chunk_masks(rays, begin, n), .filter = {}});
+        else
+          backend.occluded(r, std::span(occluded + begin, n), coherence);
       });
     });
   });

@@ -137,33 +137,35 @@ inline py::arg_v tfar_arg() { return py::arg_v("tfar", std::numeric_limits<float
 
 /// Closest hits as numpy arrays, one element per ray, each of the rays' leading shape (...):
 /// t (float32, +inf on a miss), prim_id (uint32, 0xffffffff on a miss), u, v (float32, 0 on a
-/// miss), instance_id (uint32, 0xffffffff on a miss and for a primitive placed by no instance)
-/// and, unless left out, ng (float32 (..., 3), the unit geometric normal as Scene::surface
-/// gives it, 0 on a miss): what `raypack trace` writes to a hit file, field for field.
+/// miss), instance_id (uint32, 0xffffffff on a miss and for a primitive placed by no instance),
+/// geometry_id (uint32, Scene::geometry_of, 0xffffffff on a miss) and, unless left out, ng
+/// (float32 (..., 3), the unit geometric normal as Scene::surface gives it, 0 on a miss): what
+/// `raypack trace` writes to a hit file, field for field, and the geometry.
 struct HitArrays {
-  /// Allocates the arrays of leading shape `shape` (needs the GIL); ng only with `normals`.
-  HitArrays(const std::vector<py::ssize_t>& shape, bool normals);
+  /// Allocates the arrays of leading shape `shape` (needs the GIL); ng only with `normals`,
+  /// geometry_id only with `geometry` (a hit file's hits have no scene to ask).
+  HitArrays(const std::vector<py::ssize_t>& shape, bool normals, bool geometry);
 
-  /// Writes hits[k] of rays[k] at index begin + k (and its normal, when asked for). Writes only
-  /// the arrays' memory: callable from any thread without the GIL, each on its own range.
+  /// Writes hits[k] of rays[k] at index begin + k (and its normal and geometry, when asked for).
+  /// Writes only the arrays' memory: callable from any thread without the GIL, each on its own
+  /// range.
   void store(const Scene& scene, size_t begin, std::span<const Ray> rays, std::span<const Hit> hits) noexcept;
 
   /// The arrays as the dict the Python module returns: keys t, prim_id, u, v, instance_id and,
-  /// unless left out, ng.
+  /// unless left out, geometry_id and ng.
   py::dict to_dict() const;
 
   py::array_t<float> t, u, v, ng;
-  py::array_t<uint32_t> prim_id, instance_id;
+  py::array_t<uint32_t> prim_id, instance_id, geometry_id;
 
  private:
   /// ng of every hit of store(), its reads asked for ahead (see ray_arrays.cpp).
   void store_normals(const Scene& scene, size_t begin, std::span<const Ray> rays, std::span<const Hit> hits) noexcept;
 
-  /// The arrays' memory, taken while the GIL is held (store runs without it); ng_ is null
-  /// when the normals are left out (normals_ false).
+  /// The arrays' memory, taken while the GIL is held (store runs without it); ng_ and
+  /// geometry_id_ are null when left out.
   float *t_, *u_, *v_, *ng_;
-  uint32_t *prim_id_, *instance_id_;
-  bool normals_;
+  uint32_t *prim_id_, *instance_id_, *geometry_id_;
 };
 
 /// Runs f() over `threads` TBB threads (0: all cores, as the command line's -t 0); throws
@@ -175,8 +177,9 @@ void with_threads(int threads, const std::function<void()>& f);
 /// batch: the same backend calls, so the same bits), the GIL released and, for a long call,
 /// stopped by Ctrl-C (python/interrupt.h); with `normals`, the
 /// geometric normals too, holding `guard` shared (the scene's: changes of the scene and
-/// backend updates hold it alone). Returns the hits and sets `invalid` to the number of rays
-/// outside the valid-ray rule.
+/// backend updates hold it alone). Rays with masks (rays.has_mask()) see only the geometries
+/// whose masks meet theirs (Backend::intersect with TraceOptions, ray by ray). Returns the hits
+/// and sets `invalid` to the number of rays outside the valid-ray rule.
 HitArrays trace_closest(const Backend& backend, const Scene& scene, std::shared_mutex& guard, const RayArrays& rays,
                         Coherence coherence, bool normals, int threads, size_t& invalid);
 

@@ -90,16 +90,17 @@ def test_render_aovs_are_the_primary_hits_of_pinhole_rays(camera_scene, backend_
     backend = raypack.Backend(backend_name, camera_scene)
     image = raypack.render(camera_scene, backend, width=width, height=height, spp=2, seed=5)
     out = raypack.render(camera_scene, backend, width=width, height=height, spp=2, seed=5, aovs=True)
-    assert list(out) == ["rgb", "depth", "normal", "shading_normal", "uv", "prim_id", "instance_id"]
+    assert list(out) == ["rgb", "depth", "normal", "shading_normal", "uv", "prim_id", "instance_id", "geometry_id"]
     assert out["rgb"].tobytes() == image.tobytes()  # the image is the one render gives without aovs
     for key, dtype, shape in [("depth", np.float32, ()), ("normal", np.float32, (3,)), ("uv", np.float32, (2,)),
-                              ("prim_id", np.uint32, ()), ("instance_id", np.uint32, ())]:
+                              ("prim_id", np.uint32, ()), ("instance_id", np.uint32, ()), ("geometry_id", np.uint32, ())]:
         assert out[key].dtype == dtype and out[key].shape == (height, width) + shape, key
     hits = backend.intersect(raypack.pinhole_rays(width, height, EYE, LOOK_AT, UP, FOV))
     assert hits["t"].shape == (height, width)
     miss = hits["prim_id"] == MISS
     assert miss.any() and len(np.unique(hits["prim_id"][~miss])) == 4  # plane, sphere, both triangles
-    assert (out["prim_id"] == hits["prim_id"]).all()
+    assert (out["prim_id"] == hits["prim_id"]).all() and (out["geometry_id"] == hits["geometry_id"]).all()
+    assert sorted(np.unique(out["geometry_id"]).tolist()) == [0, 1, 2, MISS]  # the plane, the sphere, the mesh
     assert (out["instance_id"] == MISS).all()
     np.testing.assert_allclose(out["depth"][~miss], hits["t"][~miss], rtol=1e-6)  # unit directions: depth is t
     assert np.isinf(out["depth"][miss]).all() and (out["normal"][miss] == 0).all()

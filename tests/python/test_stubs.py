@@ -114,10 +114,13 @@ def test_every_method_and_property_has_its_stub(cls):
 def test_inspect_reads_every_public_callable():
     """Classes that Python code constructs show their constructor's parameters."""
     assert str(inspect.signature(raypack.Backend)).startswith("(name, scene, variant='default', *,")
+    assert str(inspect.signature(raypack.Scene)) == "()"
     assert str(inspect.signature(raypack.Backend.intersect)) == (
-        "(self, origins, directions=None, tnear=0.0, tfar=inf, coherent=False, *, invalid='warn', normals=True, "
-        "threads=0)")
+        "(self, origins, directions=None, tnear=0.0, tfar=inf, coherent=False, *, mask=None, invalid='warn', "
+        "normals=True, threads=0)")
     assert str(inspect.signature(raypack.Backend(
         "embree", raypack.Scene.from_arrays([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])).occluded)) == (
-        "(origins, directions=None, tnear=0.0, tfar=inf, coherent=False, *, invalid='warn', threads=0)")
+        "(origins, directions=None, tnear=0.0, tfar=inf, coherent=False, *, mask=None, invalid='warn', threads=0)")
+    assert str(inspect.signature(raypack.Scene.add_quadric)) == (
+        "(self, coefficients, clip_min, clip_max, *, center=(0.0, 0.0, 0.0))")
     assert raypack.Backend.intersect.__doc__.startswith("Closest hits:")  # the signature line is not in the text

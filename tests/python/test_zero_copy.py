@@ -11,7 +11,7 @@ import pytest
 import raypack
 
 N = 200_000
-RESULTS = N * (4 + 4 + 4 + 4 + 12)  # t, prim_id, u, v, ng
+RESULTS = N * (4 + 4 + 4 + 4 + 4 + 4 + 12)  # t, prim_id, u, v, instance_id, geometry_id, ng
 CONVERTED = N * (12 + 12)  # float32 copies of origins and directions
 
 
