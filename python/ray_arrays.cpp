@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "base/error.h"
+#include "core/invalid_rays.h"
 #include "python/interrupt.h"
 
 namespace rp::python {
@@ -327,6 +328,20 @@ py::dict HitArrays::to_dict() const {
   if (geometry_id_) d["geometry_id"] = geometry_id;
   if (ng_) d["ng"] = ng;
   return d;
+}
+
+InvalidRays parse_invalid(const std::string& policy) {
+  if (policy == "warn") return InvalidRays::warn;
+  if (policy == "raise") return InvalidRays::raise;
+  RP_CHECK(policy == "miss", "invalid: '", policy, "' is not warn, raise or miss");
+  return InvalidRays::miss;
+}
+
+void report_invalid(const char* call, InvalidRays policy, size_t invalid, size_t total) {
+  if (invalid == 0 || policy == InvalidRays::miss) return;
+  const std::string message = invalid_rays_message(call, invalid, total);
+  if (policy == InvalidRays::raise) throw Error(message);
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 1) != 0) throw py::error_already_set();
 }
 
 void with_threads(int threads, const std::function<void()>& f) {

@@ -64,10 +64,15 @@ py::array_t<T, Flags> numbers(const char* what, const py::handle& object) {
 /// any strides (views, columns of a wider array, negative or zero strides); other dtypes are
 /// converted once, by numpy, to arrays the object holds until it is destroyed.
 ///
-/// Use, as intersect does (python/module.cpp):
+/// Use, chunk by chunk as intersect does (trace_closest below), or the whole batch at once:
 ///   const RayArrays rays(origins, directions, tnear, tfar, mask);  // with the GIL
-///   HitArrays hits(rays.shape(), normals);
-///   ... rays.gather(begin, span) and rays.gather_masks(begin, span), from any thread ...
+///   size_t invalid = 0;
+///   const std::vector<Ray> flat = rays.records(invalid);           // C order over rays.shape()
+///   std::vector<uint32_t> masks(rays.has_mask() ? rays.size() : 0);
+///   rays.gather_masks(0, masks);                                   // empty: no mask given
+///   py::array_t<uint32_t> counts = rays.answer<uint32_t>();         // of shape rays.shape()
+///   backend.count_hits(flat, std::span(counts.mutable_data(), rays.size()),
+///                      TraceOptions{.masks = masks, .filter = {}});
 class RayArrays {
  public:
   /// Throws rp::Error with a one-line message naming the argument for a shape that is none of
@@ -134,6 +139,20 @@ class RayArrays {
 /// The tfar argument of a call that takes rays, "tfar"_a = +inf, its default written math.inf:
 /// the spelling inspect.signature can evaluate (python/text_signatures.h).
 inline py::arg_v tfar_arg() { return py::arg_v("tfar", std::numeric_limits<float>::infinity(), "math.inf"); }
+
+/// What a call does with rays outside the valid-ray rule, which every backend reports as
+/// misses (the `invalid` argument): warn (a RuntimeWarning naming how many: the line `raypack
+/// trace` prints), raise (raypack.Error with that line) or miss (nothing more).
+enum class InvalidRays : uint8_t { warn, raise, miss };
+
+/// The policy named `policy` ("warn", "raise" or "miss"); throws rp::Error naming the argument
+/// for another name.
+InvalidRays parse_invalid(const std::string& policy);
+
+/// Applies `policy` to a call (named `call` in the message) that found `invalid` of `total` rays
+/// outside the rule: a warning (raising the warning's exception when warnings are errors), an
+/// rp::Error, or nothing. Needs the GIL.
+void report_invalid(const char* call, InvalidRays policy, size_t invalid, size_t total);
 
 /// Closest hits as numpy arrays, one element per ray, each of the rays' leading shape (...):
 /// t (float32, +inf on a miss), prim_id (uint32, 0xffffffff on a miss), u, v (float32, 0 on a
