@@ -26,6 +26,7 @@
 #include "io/rayfile.h"
 #include "python/handles.h"
 #include "python/interrupt.h"
+#include "python/queries.h"
 #include "python/ray_arrays.h"
 #include "python/scene.h"
 #include "python/text_signatures.h"
@@ -494,5 +495,6 @@ PYBIND11_MODULE(_raypack, m) {
   m.def("read_hits", [](const std::filesystem::path& path) { return hit_dict(read_hits(path.string())); }, "path"_a,
         "Reads a hit file (`raypack trace -o`), as the dict Backend.intersect returns.");
 
+  define_queries(m);
   add_text_signatures(m);
 }

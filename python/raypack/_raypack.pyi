@@ -51,6 +51,27 @@ class _Aovs(TypedDict):
     geometry_id: NDArray[np.uint32]  # (H, W)
 
 
+class _ClosestPoints(TypedDict):
+    """Backend.closest_points: each of the points' leading shape (...); nothing found: prim_id 0xffffffff."""
+    points: NDArray[np.float32]  # (..., 3), NaN where nothing is found
+    distance: NDArray[np.float32]  # inf where nothing is found
+    prim_id: NDArray[np.uint32]
+    geometry_id: NDArray[np.uint32]
+    instance_id: NDArray[np.uint32]
+    uv: NDArray[np.float32]  # (..., 2)
+
+
+class _AllHits(TypedDict):
+    """Backend.all_hits: flat arrays, sorted by ray then t."""
+    ray: NDArray[np.int64]  # the ray's index in C order over the leading shape
+    t: NDArray[np.float32]
+    prim_id: NDArray[np.uint32]
+    geometry_id: NDArray[np.uint32]
+    instance_id: NDArray[np.uint32]
+    u: NDArray[np.float32]
+    v: NDArray[np.float32]
+
+
 class _UpdateReport(TypedDict):
     seconds: float
     refits: int
@@ -129,7 +150,17 @@ class Backend:
     def occluded(self, origins: ArrayLike, directions: ArrayLike | None = None, tnear: ArrayLike = 0.0,
                  tfar: ArrayLike = math.inf, coherent: bool = False, *, mask: ArrayLike | None = None,
                  invalid: str = 'warn', threads: int = 0) -> NDArray[np.bool_]: ...
-    # Queries (python/queries.cpp): their stubs go here, with the rays' arguments as above.
+    # Queries (python/queries.cpp, docs/queries.md). Points: (..., 3), the leading shape of every answer.
+    def closest_points(self, points: ArrayLike, *, radius: float = math.inf, threads: int = 0) -> _ClosestPoints: ...
+    def distance(self, points: ArrayLike, *, threads: int = 0) -> NDArray[np.float32]: ...
+    def signed_distance(self, points: ArrayLike, *, threads: int = 0) -> NDArray[np.float32]: ...
+    def inside(self, points: ArrayLike, *, threads: int = 0) -> NDArray[np.bool_]: ...
+    def count_intersections(self, origins: ArrayLike, directions: ArrayLike | None = None, tnear: ArrayLike = 0.0,
+                            tfar: ArrayLike = math.inf, *, mask: ArrayLike | None = None, invalid: str = 'warn',
+                            threads: int = 0) -> NDArray[np.uint32]: ...
+    def all_hits(self, origins: ArrayLike, directions: ArrayLike | None = None, tnear: ArrayLike = 0.0,
+                 tfar: ArrayLike = math.inf, *, max_per_ray: int = 0, mask: ArrayLike | None = None,
+                 invalid: str = 'warn', threads: int = 0) -> _AllHits: ...
     @property
     def name(self) -> str: ...
     @property
