@@ -6,6 +6,7 @@
 /// the direction NOT renormalised), o' + t d' = W (o + t d) for every t, so a hit found at t
 /// in object space is the world ray's hit at the same t, with the same barycentrics.
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -53,6 +54,34 @@ struct Affine3 {
     T n = 0;
     for (int i = 0; i < 3; ++i) n = std::max(n, std::abs(m[i][0]) + std::abs(m[i][1]) + std::abs(m[i][2]));
     return n;
+  }
+  /// The largest factor by which the linear part stretches a vector (its largest singular
+  /// value, the spectral norm), from the largest eigenvalue of L^T L in closed form (Smith,
+  /// "Eigenvalues of a symmetric 3 x 3 matrix", CACM 4(4), 1961) in double, rounded up by
+  /// 2^-20: never below the true value.
+  T largest_stretch() const {
+    double a[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        a[i][j] =
+            double(m[0][i]) * double(m[0][j]) + double(m[1][i]) * double(m[1][j]) + double(m[2][i]) * double(m[2][j]);
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    const double q = (a[0][0] + a[1][1] + a[2][2]) / 3;
+    const double p2 =
+        (a[0][0] - q) * (a[0][0] - q) + (a[1][1] - q) * (a[1][1] - q) + (a[2][2] - q) * (a[2][2] - q) + 2 * off;
+    double largest = std::max(a[0][0], std::max(a[1][1], a[2][2]));
+    if (off > 0 && p2 > 0) {
+      const double p = std::sqrt(p2 / 6);
+      double b[3][3];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) b[i][j] = (a[i][j] - (i == j ? q : 0)) / p;
+      const double det = b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
+                         b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+                         b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+      const double phi = std::acos(std::clamp(det / 2, -1.0, 1.0)) / 3;
+      largest = std::max(largest, q + 2 * p * std::cos(phi));
+    }
+    return T(std::sqrt(largest) * (1 + 0x1p-20));
   }
   constexpr bool is_identity() const {
     for (int i = 0; i < 3; ++i)

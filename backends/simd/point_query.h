@@ -92,12 +92,10 @@ inline void closest_point(const Bvh8& world, const InstanceTree& tree, std::span
     const Placed& in = placed[i];
     if (in.mesh->empty()) return;
     const Affine3f& w2o = in.world_to_object;
-    // |object_to_world v| >= |v| / ||world_to_object||_2 >= |v| / ||world_to_object||_F: an
-    // object-space distance times that bound never exceeds the world distance.
-    float f2 = 0.0f;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) f2 += w2o.m[r][c] * w2o.m[r][c];
-    const float scale2 = 1.0f / (f2 * 1.00001f);
+    // |object_to_world v| >= |v| / (the largest stretch of world_to_object): an object-space
+    // distance over that bound never exceeds the world distance.
+    const float stretch = w2o.largest_stretch();
+    const float scale2 = 1.0f / (stretch * stretch * 1.00001f);
     const Affine3f& o2w = scene.instances()[i].object_to_world;
     walk_points(in.mesh->nodes, w2o.point(s.point), scale2, s,
                 [&](int32_t leaf) { closest_in_leaf(*in.mesh, scene, leaf, i, &o2w, s); });

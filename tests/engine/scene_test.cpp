@@ -264,3 +264,34 @@ TEST(DefaultScene, HasEveryPrimitiveKindAndAFiftyThousandTriangleMesh) {
 
 }  // namespace
 }  // namespace rp
+
+namespace rp {
+namespace {
+
+TEST(SceneInstances, TheLargestStretchBoundsEveryVectorsStretchAndIsReached) {
+  // Against the largest stretch seen over many directions (a lower bound that approaches it)
+  // and the scale of a pure scaling, on placements of every kind: uniform, uneven, mirrored,
+  // sheared.
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Affine3f> maps = {test::placement({2, 2, 2}, {0, 1, 0}, 30, {1, 2, 3}),
+                                test::placement({0.5f, 3, 0.25f}, {1, 1, 0}, 70, {0, 0, 0}),
+                                test::placement({-1, 1, 1}, {0, 0, 1}, 10, {0, 0, 0})};
+  Affine3f shear;
+  shear.m[0][1] = 4.0f;
+  maps.push_back(shear);
+  for (const Affine3f& m : maps) {
+    const double bound = m.largest_stretch();
+    double seen = 0;
+    for (int k = 0; k < 20000; ++k) {
+      const Vec3d v = normalize(Vec3d(n(rng), n(rng), n(rng)));
+      seen = std::max(seen, length(Affine3d(m).vector(v)));
+    }
+    EXPECT_GE(bound, seen);
+    EXPECT_LE(bound, seen * 1.001);
+  }
+  EXPECT_NEAR(test::placement({0.5f, 3, 0.25f}, {0, 1, 0}, 0, {0, 0, 0}).largest_stretch(), 3.0f, 1e-5f);
+}
+
+}  // namespace
+}  // namespace rp
