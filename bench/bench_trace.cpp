@@ -297,8 +297,8 @@ void BM_Update(benchmark::State& state, const Method& m, const std::string& scen
 
 /// Points for closest-point queries: uniform in the scene's box grown by a tenth of its
 /// diagonal on every side (fixed seed), and for a sample of them the distance to the surface by
-/// brute force in double (triangles, world and placed; spheres; polygons' and planes' points
-/// as the scene computes them, in double).
+/// brute force: triangles (world and placed) and planes in double, spheres' and polygons'
+/// points as the scene computes them.
 struct PointSet {
   std::vector<PointQuery> points;
   std::vector<double> sample_distance;  ///< of points[0 .. size)
@@ -337,6 +337,7 @@ const PointSet& point_set(const std::string& scene_name) {
     }
     for (uint32_t k = s.sphere_base(); k < s.plane_base(); ++k)
       if (s.locate(k).kind != PrimKind::quadric) d = std::min(d, double(s.closest_on_analytic(k, Vec3f(p)).distance));
+    for (const Plane& pl : s.planes()) d = std::min(d, std::abs(dot(Vec3d(pl.normal), p) + pl.d) / length(Vec3d(pl.normal)));
   });
   return set;
 }
