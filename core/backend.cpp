@@ -108,7 +108,7 @@ void Backend::closest_points(std::span<const PointQuery> queries, std::span<Clos
   if (!current()) throw_stale();
   RP_CHECK(out.size() == queries.size(), "closest_points: ", out.size(), " answers for ", queries.size(), " points");
   RP_CHECK(scene_->quadrics().empty(), info().name, ": closest points: the scene has ", scene_->quadrics().size(),
-           " quadric", scene_->quadrics().size() == 1 ? "" : "s", ", which have no closest-point routine");
+           " quadric", scene_->quadrics().size() == 1 ? "" : "s", " (quadrics have no closest-point routine)");
   closest_points_of(queries, out);
   for (size_t i = 0; i < queries.size(); ++i) {
     const PointQuery& q = queries[i];

@@ -231,7 +231,7 @@ TEST(Queries, ClosestPointsRefuseQuadricsAndAStaleBackend) {
     std::vector<PointQuery> q{{{0.0f, 0.0f, 0.0f}}};
     std::vector<ClosestPoint> out(1);
     EXPECT_EQ(test::error_of([&] { b->closest_points(q, out); }),
-              m.backend + ": closest points: the scene has 1 quadric, which have no closest-point routine");
+              m.backend + ": closest points: the scene has 1 quadric (quadrics have no closest-point routine)");
   }
   s.remove_quadric(0);
   const auto b = make_backend("simd", s);
