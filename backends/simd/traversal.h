@@ -29,33 +29,6 @@ class Traversal {
   const InstanceLevel<Kernel>* instances() const { return has_instances_ ? &instances_ : nullptr; }
   const Scene& scene() const { return scene_; }
 
-  /// Closest hit of one ray (a miss for an invalid one), the instances and planes included.
-  Hit intersect_single(const Ray& r) const noexcept {
-    Hit best;
-    if (!valid_ray(r)) return best;
-    const SingleRay sr(r);
-    if (!world_.empty()) {
-      ClosestSingle<Kernel> q(r, best);
-      trace_single<Kernel>(world_, r, sr, 0, q);
-    }
-    if (has_instances_) {
-      ClosestSingle<Kernel> q(r, best);
-      trace_single<Kernel>(instances_, r, sr, 0, q);
-    }
-    scene_.intersect_planes(r, best);
-    return best;
-  }
-
-  /// Any hit of one valid ray, the instances and planes included; stops at the first.
-  bool occluded_single(const Ray& r) const noexcept {
-    if (scene_.occluded_by_planes(r)) return true;
-    const SingleRay sr(r);
-    AnySingle<Kernel> q(r);
-    if (!world_.empty()) trace_single<Kernel>(world_, r, sr, 0, q);
-    if (!q.found && has_instances_) trace_single<Kernel>(instances_, r, sr, 0, q);
-    return q.found;
-  }
-
   /// Valid ray `r` through the world's tree, then the instances, answering single-ray query
   /// `q` (queries.h); planes excluded.
   template <class Q>
@@ -63,6 +36,24 @@ class Traversal {
     const SingleRay sr(r);
     if (!world_.empty()) trace_single<Kernel>(world_, r, sr, 0, q);
     if (!q.done() && has_instances_) trace_single<Kernel>(instances_, r, sr, 0, q);
+  }
+
+  /// Closest hit of one ray (a miss for an invalid one), the instances and planes included.
+  Hit intersect_single(const Ray& r) const noexcept {
+    Hit best;
+    if (!valid_ray(r)) return best;
+    ClosestSingle<Kernel> q(r, best);
+    single(r, q);
+    scene_.intersect_planes(r, best);
+    return best;
+  }
+
+  /// Any hit of one valid ray, the instances and planes included; stops at the first.
+  bool occluded_single(const Ray& r) const noexcept {
+    if (scene_.occluded_by_planes(r)) return true;
+    AnySingle<Kernel> q(r);
+    single(r, q);
+    return q.found;
   }
 
   /// Closest hits of up to 8 rays as one packet, the instances and planes included.
