@@ -67,7 +67,7 @@ Domains split_domains(const Scene& scene, int count) {
   tris.reserve(scene.triangle_count());
   Box3f all;
   for (uint32_t m = 0; m < scene.meshes().size(); ++m) {
-    const TriangleMesh& mesh = scene.meshes()[m];
+    const MeshView& mesh = scene.meshes()[m];
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       Tri tri{m, t, (mesh.vertex(t, 0) + mesh.vertex(t, 1) + mesh.vertex(t, 2)) * (1.0f / 3.0f), {}};
       for (int k = 0; k < 3; ++k) tri.bounds.extend(mesh.vertex(t, k));

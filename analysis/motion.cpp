@@ -4,7 +4,7 @@
 
 namespace rp {
 
-std::vector<Vec3f> wobbled(std::span<const Vec3f> positions, const Box3f& box, double amplitude, double phase) {
+std::vector<Vec3f> wobbled(Strided<Vec3f> positions, const Box3f& box, double amplitude, double phase) {
   const double l = box.empty() ? 0.0 : length(Vec3d(box.hi) - Vec3d(box.lo));
   std::vector<Vec3f> out(positions.begin(), positions.end());
   if (!(l > 0.0)) return out;

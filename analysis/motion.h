@@ -13,7 +13,7 @@ namespace rp {
 /// `positions` moved smoothly: p + a * L * (sin 2pi(3 y/L + phase), sin 2pi(3 z/L + phase),
 /// sin 2pi(3 x/L + phase)), L the diagonal of `box`, so neighbours move together (three waves
 /// across the box) and no vertex moves by more than sqrt(3) a L. Computed in double.
-std::vector<Vec3f> wobbled(std::span<const Vec3f> positions, const Box3f& box, double amplitude, double phase);
+std::vector<Vec3f> wobbled(Strided<Vec3f> positions, const Box3f& box, double amplitude, double phase);
 
 /// Every mesh of `scene` set to its positions in `rest` (the same scene before any motion)
 /// wobbled by `amplitude` of its box's diagonal there (Scene::set_vertices): frame `phase` of

@@ -144,7 +144,7 @@ Reference::Reference(const Scene& scene) {
   items.reserve(plane_base_);
   std::vector<std::vector<BuildItem>> mesh_items(scene.meshes().size());
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
-    const TriangleMesh& mesh = scene.meshes()[m];
+    const MeshView& mesh = scene.meshes()[m];
     std::vector<BuildItem>& to = scene.is_instanced(m) ? mesh_items[m] : items;
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       Box3f b;  // the float box of float vertices: exact

@@ -322,7 +322,7 @@ const PointSet& point_set(const std::string& scene_name) {
     const Vec3d p(set.points[i].point);
     double& d = set.sample_distance[i];
     for (size_t m = 0; m < s.meshes().size(); ++m) {
-      const TriangleMesh& mesh = s.meshes()[m];
+      const MeshView& mesh = s.meshes()[m];
       std::vector<Affine3d> places;
       if (!s.is_instanced(m)) places.push_back(Affine3d());
       for (const Instance& in : s.instances())

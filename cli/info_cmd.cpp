@@ -32,7 +32,7 @@ int run_info(const InfoArgs& a) {
   const Scene& scene = animated.scene;
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   size_t vertices = 0, with_normals = 0, with_uvs = 0;
-  for (const TriangleMesh& m : scene.meshes()) {
+  for (const MeshView& m : scene.meshes()) {
     vertices += m.positions.size();
     with_normals += !m.normals.empty();
     with_uvs += !m.uvs.empty();

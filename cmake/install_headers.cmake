@@ -35,6 +35,7 @@ set(rp_public_headers
     base/bbox.h
     base/error_type.h
     base/math.h
+    base/strided.h
     core/affine.h
     core/backend.h
     core/geometry/intersection.h

@@ -67,7 +67,7 @@ static Box3f placed_box(const Box3f& box, const Affine3f& object_to_world) {
 }
 
 /// Checks that every position is finite and within the coordinate range; `what` names the mesh.
-static void check_positions(std::span<const Vec3f> positions, const std::string& what) {
+static void check_positions(Strided<Vec3f> positions, const std::string& what) {
   for (size_t i = 0; i < positions.size(); ++i) {
     RP_CHECK(is_finite(positions[i]), what, ": vertex ", i, " has a non-finite coordinate");
     RP_CHECK(in_coordinate_range(positions[i]), what, ": vertex ", i, " ", show(positions[i]), " is outside ",
@@ -75,39 +75,113 @@ static void check_positions(std::span<const Vec3f> positions, const std::string&
   }
 }
 
-/// The box of the vertices `indices` use.
-static Box3f used_bounds(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices) {
+/// The box of the vertices the triangles use.
+static Box3f used_bounds(Strided<Vec3f> positions, Strided<TriangleIndices> triangles) {
   Box3f box;
-  for (uint32_t i : indices) box.extend(positions[i]);
+  for (const TriangleIndices& t : triangles)
+    for (uint32_t i : t) box.extend(positions[i]);
   return box;
 }
 
-uint32_t Scene::add_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), false); }
+/// The views of a TriangleMesh's arrays (its index count a multiple of 3).
+static MeshView view_of(const TriangleMesh& m) {
+  return {m.name,
+          m.positions,
+          Strided<TriangleIndices>(reinterpret_cast<const TriangleIndices*>(m.indices.data()), m.indices.size() / 3),
+          m.normals,
+          m.uvs,
+          m.face_materials,
+          m.material};
+}
 
-uint32_t Scene::add_instanced_mesh(TriangleMesh mesh) { return append_mesh(std::move(mesh), true); }
+TriangleMesh to_triangle_mesh(const MeshView& m) {
+  TriangleMesh out;
+  out.name = m.name;
+  out.material = m.material;
+  out.positions.assign(m.positions.begin(), m.positions.end());
+  out.indices.reserve(3 * size_t(m.triangle_count()));
+  for (const TriangleIndices& t : m.triangles) out.indices.insert(out.indices.end(), t.begin(), t.end());
+  out.normals.assign(m.normals.begin(), m.normals.end());
+  out.uvs.assign(m.uvs.begin(), m.uvs.end());
+  out.face_materials.assign(m.face_materials.begin(), m.face_materials.end());
+  return out;
+}
 
-uint32_t Scene::append_mesh(TriangleMesh mesh, bool instanced) {
+Scene::MeshStore::MeshStore(const MeshStore& o) : views(o.views), owned(o.owned), shared(o.shared) {
+  for (size_t i = 0; i < views.size(); ++i)
+    if (!shared[i]) view_owned(i);
+}
+
+Scene::MeshStore& Scene::MeshStore::operator=(const MeshStore& o) {
+  if (this != &o) *this = MeshStore(o);
+  return *this;
+}
+
+void Scene::MeshStore::view_owned(size_t i) { views[i] = view_of(owned[i]); }
+
+void Scene::MeshStore::erase(size_t i) {
+  views.erase(views.begin() + ptrdiff_t(i));
+  owned.erase(owned.begin() + ptrdiff_t(i));
+  shared.erase(shared.begin() + ptrdiff_t(i));
+}
+
+uint32_t Scene::add_mesh(TriangleMesh mesh) {
+  RP_CHECK(mesh.indices.size() % 3 == 0, "mesh '", mesh.name, "': index count ", mesh.indices.size(),
+           " is not a multiple of 3");
+  const MeshView view = view_of(mesh);
+  return append_mesh(view, std::move(mesh), false, false);
+}
+
+uint32_t Scene::add_instanced_mesh(TriangleMesh mesh) {
+  RP_CHECK(mesh.indices.size() % 3 == 0, "mesh '", mesh.name, "': index count ", mesh.indices.size(),
+           " is not a multiple of 3");
+  const MeshView view = view_of(mesh);
+  return append_mesh(view, std::move(mesh), false, true);
+}
+
+uint32_t Scene::add_shared_mesh(const MeshView& mesh) { return append_mesh(mesh, {}, true, false); }
+
+uint32_t Scene::add_shared_instanced_mesh(const MeshView& mesh) { return append_mesh(mesh, {}, true, true); }
+
+/// Checks that `view`'s items can be read (Strided::fits); `what` names the mesh, `array` the view.
+template <typename T>
+static void check_layout(const Strided<T>& view, const std::string& what, const char* array) {
+  RP_CHECK(view.fits(), what, ": the ", array, " buffer (", view.size(), " items at ",
+           static_cast<const void*>(view.data()), ", stride ", view.stride(), " bytes) needs a non-null start and ",
+           "stride aligned to ", alignof(T), " bytes and a stride of at least ", sizeof(T));
+}
+
+uint32_t Scene::append_mesh(const MeshView& mesh, TriangleMesh owned, bool shared, bool instanced) {
   const std::string what = "mesh '" + mesh.name + "'";
-  RP_CHECK(mesh.indices.size() % 3 == 0, what, ": index count ", mesh.indices.size(), " is not a multiple of 3");
+  check_layout(mesh.positions, what, "positions");
+  check_layout(mesh.triangles, what, "triangles");
+  check_layout(mesh.normals, what, "normals");
+  check_layout(mesh.uvs, what, "uvs");
+  check_layout(mesh.face_materials, what, "face materials");
   const size_t nv = mesh.positions.size();
   check_positions(mesh.positions, what);
-  for (size_t i = 0; i < mesh.indices.size(); ++i)
-    RP_CHECK(mesh.indices[i] < nv, what, ": triangle ", i / 3, " uses vertex ", mesh.indices[i], " of ", nv);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (uint32_t i : mesh.triangles[t]) RP_CHECK(i < nv, what, ": triangle ", t, " uses vertex ", i, " of ", nv);
   RP_CHECK(mesh.normals.empty() || mesh.normals.size() == nv, what, ": ", mesh.normals.size(),
            " normals for ", nv, " vertices");
   RP_CHECK(mesh.uvs.empty() || mesh.uvs.size() == nv, what, ": ", mesh.uvs.size(), " uvs for ", nv, " vertices");
-  RP_CHECK(mesh.face_materials.empty() || mesh.face_materials.size() == mesh.triangle_count(), what, ": ",
-           mesh.face_materials.size(), " face materials for ", mesh.triangle_count(), " triangles");
+  for (size_t i = 0; i < mesh.normals.size(); ++i)
+    RP_CHECK(is_finite(mesh.normals[i]), what, ": normal ", i, " has a non-finite coordinate");
+  RP_CHECK(mesh.face_materials.empty() || mesh.face_materials.size() == mesh.triangles.size(), what, ": ",
+           mesh.face_materials.size(), " face materials for ", mesh.triangles.size(), " triangles");
   check_material(materials_, mesh.material, what);
   for (uint32_t m : mesh.face_materials) check_material(materials_, m, what);
-  RP_CHECK(uint64_t(triangle_count_) + mesh.triangle_count() < uint64_t(kInvalidId) / 2, what,
-           ": scene exceeds ", kInvalidId / 2, " triangles");
-  const Box3f box = used_bounds(mesh.positions, mesh.indices);
+  RP_CHECK(uint64_t(triangle_count_) + mesh.triangles.size() < uint64_t(kInvalidId) / 2, what, ": scene exceeds ",
+           kInvalidId / 2, " triangles");
+  const Box3f box = used_bounds(mesh.positions, mesh.triangles);
   mesh_base_.push_back(triangle_count_);
   instanced_.push_back(uint8_t(instanced));
   mesh_bounds_.push_back(box);
   triangle_count_ += mesh.triangle_count();
-  meshes_.push_back(std::move(mesh));
+  meshes_.views.push_back(mesh);
+  meshes_.owned.push_back(std::move(owned));
+  meshes_.shared.push_back(uint8_t(shared));
+  if (!shared) meshes_.view_owned(meshes_.size() - 1);
   add_geometry(PrimKind::triangle, uint32_t(meshes_.size() - 1));
   changed(Change::added, Object::mesh, uint32_t(meshes_.size() - 1), true, false);
   mesh_version_.push_back(version_);
@@ -269,9 +343,9 @@ std::string Scene::last_change() const {
   return "";
 }
 
-void Scene::set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::span<const Vec3f> normals) {
-  RP_CHECK(mesh < meshes_.size(), "set_vertices: mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
-  TriangleMesh& m = meshes_[mesh];
+Box3f Scene::checked_vertices(uint32_t mesh, Strided<Vec3f> positions, Strided<Vec3f> normals,
+                              std::vector<std::pair<uint32_t, Box3f>>& moved) const {
+  const MeshView& m = meshes_[mesh];
   const std::string what = cat("mesh '", m.name, "' (", mesh, ")");
   RP_CHECK(positions.size() == m.positions.size(), what, ": ", positions.size(), " new positions for ",
            m.positions.size(), " vertices");
@@ -281,9 +355,8 @@ void Scene::set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::s
   for (size_t i = 0; i < normals.size(); ++i)
     RP_CHECK(is_finite(normals[i]), what, ": normal ", i, " has a non-finite coordinate");
   // Every instance's new box is checked before anything changes.
-  std::vector<Vec3f> next(positions.begin(), positions.end());
-  const Box3f box = used_bounds(next, m.indices);
-  std::vector<std::pair<uint32_t, Box3f>> moved;
+  const Box3f box = used_bounds(positions, m.triangles);
+  moved.clear();
   for (uint32_t i = 0; i < instances_.size(); ++i) {
     if (instances_[i].mesh != mesh) continue;
     const Box3f b = placed_box(box, instances_[i].object_to_world);
@@ -291,12 +364,37 @@ void Scene::set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::s
              " would place it at ", show(b.lo), " - ", show(b.hi), ", outside ", kRangeText);
     moved.emplace_back(i, b);
   }
-  m.positions = std::move(next);
-  if (!normals.empty()) m.normals.assign(normals.begin(), normals.end());
+  return box;
+}
+
+void Scene::vertices_moved(uint32_t mesh, const Box3f& box, const std::vector<std::pair<uint32_t, Box3f>>& moved) {
   mesh_bounds_[mesh] = box;
   for (const auto& [i, b] : moved) instances_[i].bounds = b;
   changed(Change::vertices, Object::mesh, mesh, false, !moved.empty());
   mesh_version_[mesh] = version_;
+}
+
+void Scene::set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::span<const Vec3f> normals) {
+  RP_CHECK(mesh < meshes_.size(), "set_vertices: mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  RP_CHECK(!meshes_.shared[mesh], "set_vertices: mesh '", meshes_[mesh].name, "' (", mesh,
+           ") is in the caller's buffers: write them and call vertices_changed");
+  std::vector<std::pair<uint32_t, Box3f>> moved;
+  const Box3f box = checked_vertices(mesh, positions, normals, moved);
+  TriangleMesh& m = meshes_.owned[mesh];
+  m.positions = std::vector<Vec3f>(positions.begin(), positions.end());  // the spans may be the mesh's own
+  if (!normals.empty()) m.normals = std::vector<Vec3f>(normals.begin(), normals.end());
+  meshes_.view_owned(mesh);
+  vertices_moved(mesh, box, moved);
+}
+
+void Scene::vertices_changed(uint32_t mesh) {
+  RP_CHECK(mesh < meshes_.size(), "vertices_changed: mesh ", mesh, " out of range (", meshes_.size(), " meshes)");
+  RP_CHECK(meshes_.shared[mesh], "vertices_changed: mesh '", meshes_[mesh].name, "' (", mesh,
+           ") is the scene's own: give it new vertices with set_vertices");
+  std::vector<std::pair<uint32_t, Box3f>> moved;
+  const MeshView& m = meshes_[mesh];
+  const Box3f box = checked_vertices(mesh, m.positions, m.normals, moved);
+  vertices_moved(mesh, box, moved);
 }
 
 void Scene::set_transform(uint32_t instance, const Affine3f& object_to_world) {
@@ -314,7 +412,7 @@ void Scene::remove_mesh(uint32_t mesh) {
   const uint32_t n = meshes_[mesh].triangle_count();
   for (size_t m = mesh + 1; m < meshes_.size(); ++m) mesh_base_[m] -= n;
   for (Instance& in : instances_) in.mesh -= in.mesh > mesh;
-  meshes_.erase(meshes_.begin() + mesh);
+  meshes_.erase(mesh);
   mesh_base_.erase(mesh_base_.begin() + mesh);
   instanced_.erase(instanced_.begin() + mesh);
   mesh_bounds_.erase(mesh_bounds_.begin() + mesh);
@@ -532,8 +630,8 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
   const PrimLocation ref = locate(hit.prim_id);
   switch (ref.kind) {
     case PrimKind::triangle: {
-      const TriangleMesh& m = meshes_[ref.shape];
-      const uint32_t* idx = &m.indices[3 * ref.local];
+      const MeshView& m = meshes_[ref.shape];
+      const TriangleIndices& idx = m.triangles[ref.local];
       const Vec3f c[3] = {m.positions[idx[0]], m.positions[idx[1]], m.positions[idx[2]]};
       const bool has_normals = !m.normals.empty();
       const Vec3f n[3] = {has_normals ? m.normals[idx[0]] : Vec3f{}, has_normals ? m.normals[idx[1]] : Vec3f{},
@@ -587,7 +685,7 @@ SurfacePoint Scene::surface(const Ray& ray, const Hit& hit) const {
 
 size_t Scene::degenerate_triangle_count() const {
   size_t n = 0;
-  for (const TriangleMesh& m : meshes_)
+  for (const MeshView& m : meshes_.views)
     for (uint32_t t = 0; t < m.triangle_count(); ++t) {
       Vec3f c = cross(m.vertex(t, 1) - m.vertex(t, 0), m.vertex(t, 2) - m.vertex(t, 0));
       n += (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f);
@@ -597,10 +695,12 @@ size_t Scene::degenerate_triangle_count() const {
 
 size_t Scene::bytes() const {
   size_t b = instances_.size() * sizeof(Instance) + mesh_bounds_.size() * sizeof(Box3f) + instanced_.size();
-  for (const TriangleMesh& m : meshes_)
-    b += m.positions.size() * sizeof(Vec3f) + m.indices.size() * sizeof(uint32_t) +
-         m.normals.size() * sizeof(Vec3f) + m.uvs.size() * sizeof(Vec2f) +
-         m.face_materials.size() * sizeof(uint32_t);
+  for (size_t i = 0; i < meshes_.size(); ++i) {
+    const MeshView& m = meshes_[i];
+    if (!meshes_.shared[i])
+      b += m.positions.size() * sizeof(Vec3f) + m.triangles.size() * sizeof(TriangleIndices) +
+           m.normals.size() * sizeof(Vec3f) + m.uvs.size() * sizeof(Vec2f) + m.face_materials.size() * sizeof(uint32_t);
+  }
   b += spheres_.size() * sizeof(Sphere) + quadrics_.size() * sizeof(QuadricShape) +
        polygons_.size() * sizeof(PolygonShape) + polygon_vertices_.size() * sizeof(Vec3f) +
        planes_.size() * sizeof(Plane) + mesh_base_.size() * sizeof(uint32_t);

@@ -13,16 +13,19 @@
 /// a hit names the placement by Hit::instance_id, the index of the instance in instances()
 /// (kNoInstance for every other primitive). Analytic primitives and planes are world-space only.
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/bbox.h"
 #include "base/math.h"
+#include "base/strided.h"
 #include "core/affine.h"
 #include "core/geometry/polygon.h"
 #include "core/geometry/quadric.h"
@@ -55,8 +58,9 @@ struct DirectionalLight {
   Vec3f irradiance{1.0f};
 };
 
-/// Indexed triangle mesh. Normals and uvs are stored only when the source has them (empty
-/// otherwise, else one per vertex); face_materials likewise (empty = `material` for all).
+/// Indexed triangle mesh that owns its arrays (what the loaders build; Scene::add_mesh takes
+/// it). Normals and uvs are stored only when the source has them (empty otherwise, else one
+/// per vertex); face_materials likewise (empty = `material` for all).
 /// Bytes: 12 per vertex + 12 per triangle, plus 12/8/4 for normals/uvs/face materials.
 struct TriangleMesh {
   std::string name;
@@ -70,6 +74,29 @@ struct TriangleMesh {
   uint32_t triangle_count() const { return uint32_t(indices.size() / 3); }
   Vec3f vertex(uint32_t tri, int corner) const { return positions[indices[3 * tri + corner]]; }
 };
+
+/// The three vertex indices of a triangle.
+using TriangleIndices = std::array<uint32_t, 3>;
+
+/// A mesh as a scene holds it (Scene::meshes): views of its arrays, which are the scene's
+/// own copy of a TriangleMesh (Scene::add_mesh) or the caller's buffers, shared without a
+/// copy (Scene::add_shared_mesh, as Embree's rtcSetSharedGeometryBuffer). The fields mean
+/// what TriangleMesh's do, a triangle's indices being one item of `triangles`.
+struct MeshView {
+  std::string name;
+  Strided<Vec3f> positions;
+  Strided<TriangleIndices> triangles;  ///< each index < positions.size()
+  Strided<Vec3f> normals;              ///< empty, or one per vertex
+  Strided<Vec2f> uvs;                  ///< empty, or one per vertex
+  Strided<uint32_t> face_materials;    ///< empty, or one per triangle
+  uint32_t material = 0;
+
+  uint32_t triangle_count() const { return uint32_t(triangles.size()); }
+  Vec3f vertex(uint32_t tri, int corner) const { return positions[triangles[tri][corner]]; }
+};
+
+/// A TriangleMesh holding a copy of `m`'s arrays.
+TriangleMesh to_triangle_mesh(const MeshView& m);
 
 struct Sphere {
   Vec3f center;
@@ -182,6 +209,32 @@ class Scene {
   /// The same checks, for a mesh in its own object space that only instances place
   /// (add_instance); returns its index. Its triangles take prim_ids as a world mesh's do.
   uint32_t add_instanced_mesh(TriangleMesh mesh);
+  /// add_mesh and add_instanced_mesh of a copy of `mesh`'s arrays (to_triangle_mesh), e.g. a
+  /// mesh of another scene.
+  uint32_t add_mesh(const MeshView& mesh) { return add_mesh(to_triangle_mesh(mesh)); }
+  uint32_t add_instanced_mesh(const MeshView& mesh) { return add_instanced_mesh(to_triangle_mesh(mesh)); }
+  /// A world mesh whose arrays stay in the caller's buffers (strided views, no copy; Embree's
+  /// shared buffers), checked as add_mesh checks a TriangleMesh, and each view for its layout
+  /// (Strided::fits: 4-byte aligned start and stride, stride at least the item's size).
+  /// Lifetime: the buffers must stay valid, and unchanged but as vertices_changed() allows,
+  /// for as long as this scene, a copy of it or a backend built over either is used; the scene
+  /// never writes them. A copy of the scene shares them too. The embree backend shares the
+  /// triangles, and the positions when their stride is 16 bytes or more (Embree reads 16
+  /// bytes at each vertex: the last position's record must then be 16 bytes long); it copies
+  /// narrower positions.
+  uint32_t add_shared_mesh(const MeshView& mesh);
+  /// As add_shared_mesh, for an instanced mesh (add_instanced_mesh).
+  uint32_t add_shared_instanced_mesh(const MeshView& mesh);
+  /// The caller has written new positions (and normals) into shared mesh i's buffers, in
+  /// place, as set_vertices gives new ones to a mesh the scene owns: checks them as
+  /// set_vertices does and raises the version, so that backends update (Backend::update).
+  /// The triangles, uvs and face materials must not change (remove the mesh and add it again).
+  /// On bad data it throws rp::Error naming the mesh and vertex, and the scene keeps its
+  /// version: backends refuse to update until the buffers are mended and this is called again.
+  /// Throws for a mesh the scene owns.
+  void vertices_changed(uint32_t mesh);
+  /// True when mesh i's arrays are the caller's (add_shared_mesh, add_shared_instanced_mesh).
+  bool is_shared(size_t i) const { return meshes_.shared[i] != 0; }
   /// Places instanced mesh `mesh` by `object_to_world`; returns the instance's id (its index
   /// in instances()). Throws rp::Error for a mesh that is not instanced, a transform that is
   /// not finite or not invertible, whose linear part or its inverse stretches by more than
@@ -225,6 +278,8 @@ class Scene {
   /// New positions for mesh i's vertices (as many as it has; same triangles). `normals`, when
   /// not empty, replaces the vertex normals too (as many; a mesh without normals takes none);
   /// empty keeps the stored ones. The boxes of the instances that place the mesh follow.
+  /// A shared mesh's buffers are the caller's to write: set_vertices refuses it
+  /// (vertices_changed).
   void set_vertices(uint32_t mesh, std::span<const Vec3f> positions, std::span<const Vec3f> normals = {});
   /// A new object_to_world for instance i, checked as add_instance checks it.
   void set_transform(uint32_t instance, const Affine3f& object_to_world);
@@ -280,7 +335,7 @@ class Scene {
   std::string last_change() const;
 
   const std::vector<Material>& materials() const { return materials_; }
-  const std::vector<TriangleMesh>& meshes() const { return meshes_; }
+  const std::vector<MeshView>& meshes() const { return meshes_.views; }
   const std::vector<Sphere>& spheres() const { return spheres_; }
   const std::vector<QuadricShape>& quadrics() const { return quadrics_; }
   const std::vector<PolygonShape>& polygons() const { return polygons_; }
@@ -343,7 +398,8 @@ class Scene {
   SurfacePoint surface(const Ray& ray, const Hit& hit) const;
   /// Number of triangles with zero area (kept: they never produce hits).
   size_t degenerate_triangle_count() const;
-  /// Bytes held by the scene's arrays (capacity excluded; what the model needs).
+  /// Bytes held by the scene's arrays (capacity excluded; what the model needs); a shared
+  /// mesh's buffers are the caller's and not counted.
   size_t bytes() const;
 
  private:
@@ -352,7 +408,6 @@ class Scene {
   SurfacePoint instance_surface(const Ray& ray, const Hit& hit) const;  ///< surface of an instance's hit
   void intersect_planes_in_order(const Ray& ray, Hit& hit) const;
   bool occluded_by_any_plane(const Ray& ray) const;
-  uint32_t append_mesh(TriangleMesh mesh, bool instanced);
   /// The instance placing `mesh` by `object_to_world`, checked (add_instance); `what` names it.
   Instance placement(uint32_t mesh, const Affine3f& object_to_world, const std::string& what) const;
   /// A change as last_change() tells it: what happened to which object.
@@ -366,8 +421,35 @@ class Scene {
   /// so do the later shapes of that kind.
   void remove_geometry(PrimKind kind, uint32_t index);
 
+  /// The meshes' views and the arrays of those the scene owns. A copy of the scene points its
+  /// views at its own copies of the owned arrays (shared meshes stay the caller's).
+  struct MeshStore {
+    std::vector<MeshView> views;
+    std::vector<TriangleMesh> owned;  ///< per mesh; empty for a shared mesh
+    std::vector<uint8_t> shared;      ///< per mesh
+
+    MeshStore() = default;
+    MeshStore(const MeshStore& o);
+    MeshStore& operator=(const MeshStore& o);
+    MeshStore(MeshStore&&) = default;  // moving a vector keeps its items where they are
+    MeshStore& operator=(MeshStore&&) = default;
+    /// Points mesh i's views at owned[i] (which a change of its arrays, or a copy, moved).
+    void view_owned(size_t i);
+    void erase(size_t i);
+    size_t size() const { return views.size(); }
+    const MeshView& operator[](size_t i) const { return views[i]; }
+  };
+  /// Checks a mesh (either kind) and appends it; `owned` is its storage (empty when shared).
+  uint32_t append_mesh(const MeshView& mesh, TriangleMesh owned, bool shared, bool instanced);
+  /// Checks `positions` and `normals` as new vertices of mesh i, the boxes of the instances
+  /// that place it included, and returns the mesh's new box; throws before anything changes.
+  Box3f checked_vertices(uint32_t mesh, Strided<Vec3f> positions, Strided<Vec3f> normals,
+                         std::vector<std::pair<uint32_t, Box3f>>& moved) const;
+  /// Records new vertices of mesh i with box `box` (set_vertices, vertices_changed).
+  void vertices_moved(uint32_t mesh, const Box3f& box, const std::vector<std::pair<uint32_t, Box3f>>& moved);
+
   std::vector<Material> materials_;
-  std::vector<TriangleMesh> meshes_;
+  MeshStore meshes_;
   std::vector<uint32_t> mesh_base_;
   std::vector<uint8_t> instanced_;  ///< per mesh: placed only by instances
   std::vector<Box3f> mesh_bounds_;  ///< per mesh, in its own coordinates

@@ -14,11 +14,14 @@ Scene transformed(const Scene& s, double scale, const Vec3d& off) {
   Scene out;
   for (size_t i = 1; i < s.materials().size(); ++i) out.add_material(s.materials()[i]);
   for (size_t i = 0; i < s.meshes().size(); ++i) {
-    TriangleMesh m = s.meshes()[i];
     if (s.is_instanced(i)) {  // stays in its object space; its instances move
-      out.add_instanced_mesh(std::move(m));
+      if (s.is_shared(i))
+        out.add_shared_instanced_mesh(s.meshes()[i]);
+      else
+        out.add_instanced_mesh(to_triangle_mesh(s.meshes()[i]));
       continue;
     }
+    TriangleMesh m = to_triangle_mesh(s.meshes()[i]);
     for (Vec3f& p : m.positions) p = P(p);
     out.add_mesh(std::move(m));
   }

@@ -39,6 +39,15 @@ class Hasher {
     raw(uint64_t(v.size()));
     if (!v.empty()) bytes(v.data(), v.size() * sizeof(T));
   }
+  /// Strided items likewise: the same values give the same hash whatever their stride.
+  template <typename T>
+  void items(const Strided<T>& v) {
+    raw(uint64_t(v.size()));
+    if (v.stride() == sizeof(T))
+      bytes(v.data(), v.size() * sizeof(T));
+    else
+      for (const T& x : v) raw(x);
+  }
   void text(const std::string& s) {
     raw(uint64_t(s.size()));
     bytes(s.data(), s.size());
@@ -69,13 +78,13 @@ void hash_scene(Hasher& h, const Scene& scene) {
       h.raw(f);
   }
   h.raw(uint64_t(scene.meshes().size()));
-  for (const TriangleMesh& m : scene.meshes()) {
+  for (const MeshView& m : scene.meshes()) {
     h.text(m.name);
-    h.array(m.positions);
-    h.array(m.indices);
-    h.array(m.normals);
-    h.array(m.uvs);
-    h.array(m.face_materials);
+    h.items(m.positions);
+    h.items(m.triangles);
+    h.items(m.normals);
+    h.items(m.uvs);
+    h.items(m.face_materials);
     h.raw(m.material);
   }
   h.array(scene.spheres());

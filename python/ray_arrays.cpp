@@ -47,15 +47,15 @@ void prefetch_rows(const Scene& scene, std::span<const Hit> hits) noexcept {
   for (const Hit& h : hits)
     if (h.prim_id < scene.triangle_count()) {
       const PrimLocation at = scene.locate(h.prim_id);
-      __builtin_prefetch(&scene.meshes()[at.shape].indices[3 * size_t(at.local)]);
+      __builtin_prefetch(&scene.meshes()[at.shape].triangles[at.local]);
     }
 }
 void prefetch_corners(const Scene& scene, std::span<const Hit> hits) noexcept {
   for (const Hit& h : hits)
     if (h.prim_id < scene.triangle_count()) {
       const PrimLocation at = scene.locate(h.prim_id);
-      const TriangleMesh& m = scene.meshes()[at.shape];
-      for (size_t k = 0; k < 3; ++k) __builtin_prefetch(&m.positions[m.indices[3 * size_t(at.local) + k]]);
+      const MeshView& m = scene.meshes()[at.shape];
+      for (const uint32_t v : m.triangles[at.local]) __builtin_prefetch(&m.positions[v]);
     }
 }
 

@@ -159,9 +159,9 @@ uint32_t geometry_mask(const SceneHandle& s, uint32_t geometry) {
 py::array_t<float> vertices(const SceneHandle& s, uint32_t mesh) {
   const auto lock = reading(s);
   RP_CHECK(mesh < s.scene->meshes().size(), "mesh ", mesh, " out of range (", s.scene->meshes().size(), " meshes)");
-  const std::vector<Vec3f>& p = s.scene->meshes()[mesh].positions;
+  const Strided<Vec3f>& p = s.scene->meshes()[mesh].positions;
   py::array_t<float> out({py::ssize_t(p.size()), py::ssize_t(3)});
-  std::copy_n(&p[0].x, 3 * p.size(), out.mutable_data());
+  std::copy(p.begin(), p.end(), reinterpret_cast<Vec3f*>(out.mutable_data()));
   return out;
 }
 

@@ -53,6 +53,24 @@ struct MeshRange {
   }
 };
 
+/// Lane l of out[k] is word k of item index[l] of `items` (3 words each).
+template <typename T>
+void gather_records3(const Strided<T>& items, const int32_t index[8], float8 out[3]) {
+  static_assert(sizeof(T) == 12);
+  simd::gather_records3(items.data(), items.stride(), items.size(), index, out);
+}
+
+/// The face materials of triangles `local`: one gather when they are contiguous, else a load
+/// per lane (a gather's scale is 1, 2, 4 or 8, and index * stride could overflow its lanes).
+int8 face_materials(const Strided<uint32_t>& materials, const int8& local) {
+  if (materials.stride() == sizeof(uint32_t))
+    return simd::gather(reinterpret_cast<const int32_t*>(materials.data()), local);
+  alignas(32) int32_t index[8], out[8];
+  local.store_aligned(index);
+  for (int l = 0; l < 8; ++l) out[l] = int32_t(materials[uint32_t(index[l])]);
+  return int8::load_aligned(out);
+}
+
 /// The lanes `lanes` of mesh `mesh` (its triangles from `begin`), gathered as vectors into
 /// `in` (every lane of it when `all`, else only those): the index triples, then each
 /// corner's position and normal, read as 16-byte records and transposed. Written in place: a
@@ -60,7 +78,7 @@ struct MeshRange {
 /// back 32 at a time, which no store can forward.
 void mesh_inputs(const Scene& scene, uint32_t mesh, uint32_t begin, const float8& prim, uint32_t lanes, bool all,
                  TriangleInputs& in) {
-  const TriangleMesh& m = scene.meshes()[mesh];
+  const MeshView& m = scene.meshes()[mesh];
   const mask8 on = simd::mask_from_bits(lanes);
   const auto put = [&](V8& to, const V8& v) { to = all ? v : select<float8>(on, v, to); };
   const int8 local =
@@ -68,14 +86,13 @@ void mesh_inputs(const Scene& scene, uint32_t mesh, uint32_t begin, const float8
   alignas(32) int32_t triangle[8], corner[3][8];
   local.store_aligned(triangle);
   float8 rows[3];
-  simd::gather_records3(reinterpret_cast<const float*>(m.indices.data()), m.triangle_count(), triangle, rows);
+  gather_records3(m.triangles, triangle, rows);
   for (int k = 0; k < 3; ++k) simd::as_int(rows[k]).store_aligned(corner[k]);
-  const uint32_t vertices = uint32_t(m.positions.size());
   for (int k = 0; k < 3; ++k) {
-    simd::gather_records3(&m.positions[0].x, vertices, corner[k], rows);
+    gather_records3(m.positions, corner[k], rows);
     put(in.c[k], {rows[0], rows[1], rows[2]});
     if (!m.normals.empty()) {
-      simd::gather_records3(&m.normals[0].x, vertices, corner[k], rows);
+      gather_records3(m.normals, corner[k], rows);
       put(in.n[k], {rows[0], rows[1], rows[2]});
     } else {
       put(in.n[k], V8(Vec3f{0.0f}));
@@ -83,9 +100,7 @@ void mesh_inputs(const Scene& scene, uint32_t mesh, uint32_t begin, const float8
   }
   const mask8 normals = simd::mask_from_bits(m.normals.empty() ? 0u : lanes);
   in.has_normals = all ? normals : (in.has_normals || normals);
-  const int8 material = m.face_materials.empty()
-                            ? int8(int32_t(m.material))
-                            : simd::gather(reinterpret_cast<const int32_t*>(m.face_materials.data()), local);
+  const int8 material = m.face_materials.empty() ? int8(int32_t(m.material)) : face_materials(m.face_materials, local);
   in.material = all ? material : simd::as_int(xsimd::select(on, simd::as_float(material), simd::as_float(in.material)));
 }
 
@@ -100,9 +115,9 @@ TriangleInputs triangle_inputs(const Scene& scene, const float8& prim, uint32_t 
   TriangleInputs in;  // one object returned (so no copy)
   if (one_triangle) {
     const uint32_t mesh = range.of(scene, first);
-    const TriangleMesh& m = scene.meshes()[mesh];
+    const MeshView& m = scene.meshes()[mesh];
     const uint32_t local = first - range.begin;
-    const uint32_t* idx = &m.indices[3 * size_t(local)];
+    const TriangleIndices& idx = m.triangles[local];
     for (int k = 0; k < 3; ++k) {
       in.c[k] = V8(m.positions[idx[k]]);
       in.n[k] = m.normals.empty() ? V8(Vec3f{0.0f}) : V8(m.normals[idx[k]]);

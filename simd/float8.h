@@ -289,14 +289,15 @@ inline void load_transposed8x8(const float* records, float8 out[8]) {
   load_records4(records + 4, out + 4, 8);
 }
 
-/// Records of 3 floats (or 3 words: bits move unchanged) in an array of `count`: lane l of
-/// out[k] is float k of record index[l]. Each record is read as 16 bytes, the last one of the
-/// array as 12, and the 8 transposed: a third of the instructions of 3 gathers, which wait
-/// on one load per lane each.
-inline void gather_records3(const float* base, uint32_t count, const int32_t index[8], float8 out[3]) {
+/// Records of 3 floats (or 3 words: bits move unchanged), `count` of them `stride` bytes
+/// apart from `base` (stride >= 12, a multiple of 4): lane l of out[k] is float k of record
+/// index[l]. Each record is read as 16 bytes (its 12 and at most the next record's first 4),
+/// the last one of the array as 12, and the 8 transposed: a third of the instructions of 3
+/// gathers, which wait on one load per lane each.
+inline void gather_records3(const void* base, size_t stride, size_t count, const int32_t index[8], float8 out[3]) {
   auto record = [&](int32_t i) {
-    const float* p = base + 3 * size_t(uint32_t(i));
-    return uint32_t(i) + 1 < count ? _mm_loadu_ps(p) : _mm_setr_ps(p[0], p[1], p[2], 0.0f);
+    const float* p = reinterpret_cast<const float*>(static_cast<const char*>(base) + stride * uint32_t(i));
+    return size_t(uint32_t(i)) + 1 < count ? _mm_loadu_ps(p) : _mm_setr_ps(p[0], p[1], p[2], 0.0f);
   };
   __m256 r[4];  // r[j] holds records index[j] and index[j + 4]
   for (int j = 0; j < 4; ++j) r[j] = _mm256_set_m128(record(index[j + 4]), record(index[j]));

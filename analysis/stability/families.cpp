@@ -177,7 +177,7 @@ void gen_needles(Family& f, uint32_t n, std::mt19937_64& rng) {
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t t = uint32_t(rng() % s.triangle_count());
     const auto ref = s.locate(t);
-    const TriangleMesh& m = s.meshes()[ref.shape];
+    const MeshView& m = s.meshes()[ref.shape];
     const Vec3d a = dvec(m.vertex(ref.local, 0)), b = dvec(m.vertex(ref.local, 1)), c = dvec(m.vertex(ref.local, 2));
     Vec3d nn = Geom{&s}.normal(t);
     if (length(nn) == 0.0) nn = Vec3d{0.0, 0.0, 1.0};  // collapsed in float: the reference decides
@@ -356,13 +356,13 @@ void gen_moved(Family& f, const Context& c, uint32_t n, std::mt19937_64& rng) {
 Topology::Topology(const Scene& s) {
   std::vector<std::pair<uint64_t, uint32_t>> keyed;  // (edge key, triangle), sorted: deterministic
   for (uint32_t m = 0; m < s.meshes().size(); ++m) {
-    const TriangleMesh& mesh = s.meshes()[m];
+    const MeshView& mesh = s.meshes()[m];
     const uint32_t base = s.mesh_base(m);
     std::vector<std::vector<uint32_t>> around(mesh.positions.size());
     keyed.clear();
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
       for (int c = 0; c < 3; ++c) {
-        const uint32_t i = mesh.indices[3 * t + c], j = mesh.indices[3 * t + (c + 1) % 3];
+        const uint32_t i = mesh.triangles[t][c], j = mesh.triangles[t][(c + 1) % 3];
         keyed.push_back({(uint64_t(std::min(i, j)) << 32) | std::max(i, j), base + t});
         around[i].push_back(base + t);
       }

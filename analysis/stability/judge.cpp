@@ -72,7 +72,7 @@ template <Intersection<float> (*Fn)(const Ray&, const Vec3f&, const Vec3f&, cons
 ScalarMethod triangle_method(const char* name) {
   return {name, PrimKind::triangle, [](const Scene& s, const Ray& r, uint32_t id) {
             const auto ref = s.locate(id);
-            const TriangleMesh& m = s.meshes()[ref.shape];
+            const MeshView& m = s.meshes()[ref.shape];
             return Fn(r, m.vertex(ref.local, 0), m.vertex(ref.local, 1), m.vertex(ref.local, 2));
           }};
 }

@@ -17,6 +17,12 @@ namespace {
 
 using namespace detail;
 
+/// True when Embree reads mesh m's positions where they are: it loads 16 bytes at each
+/// vertex, which a stride of 16 bytes or more leaves inside the vertex's own record (a shared
+/// mesh's caller promises that much of its last record, Scene::add_shared_mesh). The scene's
+/// own positions (12 bytes apart) and narrower shared ones are copied into a padded buffer.
+bool shares_positions(const MeshView& m) { return m.positions.stride() >= 16; }
+
 class EmbreeBackend final : public Backend {
  public:
   EmbreeBackend(const Scene& scene, const BackendOptions& options)
@@ -161,10 +167,11 @@ class EmbreeBackend final : public Backend {
       const MeshGeometry& mg = mesh_geometry_[m];
       if (s.mesh_version(m) <= since || !mg.scene) continue;
       RTCGeometry g = rtcGetGeometry(mg.scene, mg.id);
-      const std::vector<Vec3f>& p = s.meshes()[m].positions;
-      auto* v = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
-      check(dev, "embree: vertex buffer");
-      std::copy_n(&p[0].x, 3 * p.size(), v);
+      if (!shares_positions(s.meshes()[m])) {
+        auto* v = static_cast<Vec3f*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
+        check(dev, "embree: vertex buffer");
+        std::copy(s.meshes()[m].positions.begin(), s.meshes()[m].positions.end(), v);
+      }
       rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
       rtcCommitGeometry(g);
       check(dev, "embree: vertex update");
@@ -457,7 +464,7 @@ class EmbreeBackend final : public Backend {
   /// to `buffer_bytes`. An instanced mesh's TriangleData gets its first_instance_geom once the
   /// world's geometries are attached (the constructor).
   RTCGeometry triangle_geometry(RTCDevice dev, uint32_t m, size_t& buffer_bytes) {
-    const TriangleMesh& mesh = scene_.meshes()[m];
+    const MeshView& mesh = scene_.meshes()[m];
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
     rtcSetGeometryBuildQuality(g, geometry_quality_);
     const bool instanced = scene_.is_instanced(m);
@@ -465,14 +472,27 @@ class EmbreeBackend final : public Backend {
     rtcSetGeometryUserData(g, &triangle_data_.back());
     rtcSetGeometryOccludedFilterFunction(g, occlusion_band_filter);
     if (instanced) rtcSetGeometryIntersectFilterFunction(g, instance_valid_filter);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                           3 * sizeof(float), mesh.positions.size()));
-    auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                3 * sizeof(uint32_t), mesh.triangle_count()));
+    if (shares_positions(mesh)) {
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh.positions.data(), 0,
+                                 mesh.positions.stride(), mesh.positions.size());
+    } else {
+      auto* v = static_cast<Vec3f*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                            sizeof(Vec3f), mesh.positions.size()));
+      check(dev, "embree: vertex buffer");
+      std::copy(mesh.positions.begin(), mesh.positions.end(), v);
+      buffer_bytes += mesh.positions.size() * sizeof(Vec3f);
+    }
+    if (scene_.is_shared(m)) {
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.triangles.data(), 0,
+                                 mesh.triangles.stride(), mesh.triangle_count());
+    } else {
+      auto* idx = static_cast<TriangleIndices*>(rtcSetNewGeometryBuffer(
+          g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, sizeof(TriangleIndices), mesh.triangle_count()));
+      check(dev, "embree: index buffer");
+      std::copy(mesh.triangles.begin(), mesh.triangles.end(), idx);
+      buffer_bytes += mesh.triangle_count() * sizeof(TriangleIndices);
+    }
     check(dev, "embree: triangle buffers");
-    std::copy_n(&mesh.positions[0].x, 3 * mesh.positions.size(), v);
-    std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
-    buffer_bytes += mesh.positions.size() * 12 + mesh.indices.size() * 4;
     return g;
   }
 

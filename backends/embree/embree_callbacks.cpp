@@ -154,7 +154,7 @@ bool point_callback(RTCPointQueryFunctionArguments* a) {
   const PrimLocation at = s.locate(prim);
   const float before = c.search.best.distance;
   if (at.kind == PrimKind::triangle) {
-    const TriangleMesh& m = s.meshes()[at.shape];
+    const MeshView& m = s.meshes()[at.shape];
     const Vec3f v0 = m.vertex(at.local, 0), v1 = m.vertex(at.local, 1), v2 = m.vertex(at.local, 2);
     if (zero_area(v0, v1, v2)) return false;
     const SurfacePointT<float> p = closest_on_placed_triangle(

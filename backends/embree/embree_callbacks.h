@@ -142,7 +142,7 @@ inline bool in_band(const Ray& r, float t) { return t <= r.tnear * (1.0f + kBand
 inline Intersection<float> scalar_triangle(const Scene& s, uint32_t prim_id, const Ray& r) {
   const PrimLocation ref = s.locate(prim_id);
   if (ref.kind != PrimKind::triangle) return {};
-  const TriangleMesh& m = s.meshes()[ref.shape];
+  const MeshView& m = s.meshes()[ref.shape];
   return intersect_triangle_mt_normal(r, m.vertex(ref.local, 0), m.vertex(ref.local, 1), m.vertex(ref.local, 2));
 }
 

@@ -28,9 +28,9 @@ class TreeTriangles {
   }
 
   /// The index row of triangle `prim` and its mesh's positions.
-  std::pair<const uint32_t*, const Vec3f*> row(uint32_t prim) {
+  std::pair<const TriangleIndices*, const Strided<Vec3f>*> row(uint32_t prim) {
     if (prim - first_ >= count_) take(scene_.locate(prim).shape);
-    return {mesh_->indices.data() + 3 * size_t(prim - first_), mesh_->positions.data()};
+    return {&mesh_->triangles[prim - first_], &mesh_->positions};
   }
 
  private:
@@ -41,7 +41,7 @@ class TreeTriangles {
   }
 
   const Scene& scene_;
-  const TriangleMesh* mesh_ = nullptr;
+  const MeshView* mesh_ = nullptr;
   uint32_t first_ = 0, count_ = 0;  ///< the prim_ids of mesh_: [first_, first_ + count_)
 };
 
@@ -53,14 +53,14 @@ Box3f refit_leaf(float* words, TreeTriangles& tris, bool& conflict) {
   float* y = x + leaf.v;
   float* z = y + leaf.v;
   // The rows first, then the corners they name: the scattered reads start together.
-  const uint32_t* rows[8];
-  const Vec3f* positions[8];
+  const TriangleIndices* rows[8];
+  const Strided<Vec3f>* positions[8];
   for (uint32_t k = 0; k < leaf.n; ++k) std::tie(rows[k], positions[k]) = tris.row(leaf.prim(k));
   uint32_t written = 0;  // slots written so far, one bit each (at most 24)
   Box3f box;
   for (uint32_t k = 0; k < leaf.n; ++k)
     for (uint32_t j = 0; j < 3; ++j) {
-      const Vec3f c = positions[k][rows[k][j]];
+      const Vec3f c = (*positions[k])[(*rows[k])[j]];
       const uint32_t i = leaf.corners(j)[k];
       box.extend(c);
       if (written >> i & 1u) {
@@ -119,7 +119,7 @@ Refit refit(Bvh8& bvh, const Scene& scene, uint32_t mesh, double limit) {
   // A triangle left out for zero area that has area now is in no leaf.
   for (uint32_t id : bvh.zero_area) {
     const PrimLocation at = scene.locate(id);
-    const TriangleMesh& m = scene.meshes()[at.shape];
+    const MeshView& m = scene.meshes()[at.shape];
     const Vec3f a = m.vertex(at.local, 0), n = cross(m.vertex(at.local, 1) - a, m.vertex(at.local, 2) - a);
     if (!(n.x == 0.0f && n.y == 0.0f && n.z == 0.0f)) return Refit::rebuild;
   }

@@ -16,7 +16,7 @@ CornerSource::CornerSource(const Scene& scene, bool copy, const Selection& what)
   copy_.resize(world ? scene.plane_base() : scene.meshes()[what.mesh].triangle_count());
   for (size_t m = 0; m < scene.meshes().size(); ++m) {
     if (world ? scene.is_instanced(m) : m != what.mesh) continue;  // not in this tree: never read
-    const TriangleMesh& mesh = scene.meshes()[m];
+    const MeshView& mesh = scene.meshes()[m];
     const uint32_t base = scene.mesh_base(m) - first_;
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096),
                       [&](const tbb::blocked_range<uint32_t>& r) {
@@ -53,10 +53,10 @@ void CornerSource::gather(std::span<const uint32_t> ids, Vec3f* out) const {
     if (i + kCornersAhead < n) {
       const Triangle& t = ring[(i + kCornersAhead) % kRing];
       if (t.row)
-        for (int j = 0; j < 3; ++j) simd::prefetch(t.positions + t.row[j]);
+        for (int j = 0; j < 3; ++j) simd::prefetch(&(*t.positions)[(*t.row)[j]]);
     }
     const Triangle& t = ring[i % kRing];
-    for (int j = 0; j < 3; ++j) out[3 * i + j] = t.row ? t.positions[t.row[j]] : nan;
+    for (int j = 0; j < 3; ++j) out[3 * i + j] = t.row ? (*t.positions)[(*t.row)[j]] : nan;
   }
 }
 
@@ -108,7 +108,7 @@ Split halves(const PrimRef* base, uint32_t begin, uint32_t end, uint32_t mid, ui
 }
 
 size_t triangle_refs(const Scene& scene, size_t m, RefArray& refs, size_t at) {
-  const TriangleMesh& mesh = scene.meshes()[m];
+  const MeshView& mesh = scene.meshes()[m];
   const uint32_t base = scene.mesh_base(m);
   std::atomic<size_t> degenerate{0};
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, mesh.triangle_count(), 4096),

@@ -69,7 +69,7 @@ class CornerSource {
       return {nan, nan, nan};
     }
     const auto at = scene_.locate(prim);
-    const TriangleMesh& m = scene_.meshes()[at.shape];
+    const MeshView& m = scene_.meshes()[at.shape];
     return {m.vertex(at.local, 0), m.vertex(at.local, 1), m.vertex(at.local, 2)};
   }
 
@@ -84,14 +84,14 @@ class CornerSource {
   /// Where a primitive's corners are: its index row and its mesh's positions; no row for
   /// an analytic primitive (NaN corners).
   struct Triangle {
-    const uint32_t* row;
-    const Vec3f* positions;
+    const TriangleIndices* row;
+    const Strided<Vec3f>* positions;
   };
   Triangle triangle(uint32_t prim) const {
     if (prim >= scene_.triangle_count()) return {nullptr, nullptr};
     const PrimLocation at = scene_.locate(prim);
-    const TriangleMesh& m = scene_.meshes()[at.shape];
-    return {m.indices.data() + 3 * size_t(at.local), m.positions.data()};
+    const MeshView& m = scene_.meshes()[at.shape];
+    return {&m.triangles[at.local], &m.positions};
   }
 
   struct Record {

@@ -8,8 +8,9 @@
 ///   and rp::load_animated_scene(path) for the scene with its animation, which
 ///   SceneAnimation::apply poses at a time (io/loaders/load.h, io/loaders/animation.h);
 ///   rp::Scene built from arrays: Scene::add_mesh(TriangleMesh{
-///   .positions, .indices}), add_sphere, add_quadric, add_polygon, add_plane, lights,
-///   materials and a camera (core/scene.h);
+///   .positions, .indices}) (copied), Scene::add_shared_mesh(MeshView{.positions,
+///   .triangles}) (the caller's strided buffers, not copied), add_sphere, add_quadric,
+///   add_polygon, add_plane, lights, materials and a camera (core/scene.h);
 /// - backends: rp::list_backends() (names, variants, coherent and incoherent methods, whether
 ///   this machine runs them), rp::check_method, rp::make_backend(name, scene, options)
 ///   (backends/registry.h);
@@ -36,7 +37,11 @@
 /// the coordinate range, tnear > tfar) is a miss and never occluded, on every backend.
 ///
 /// Ownership:
-/// - a Scene owns all its data (add_* copy or move it in); load_scene returns one by value;
+/// - a Scene owns all its data (add_* copy or move it in) but for shared meshes
+///   (Scene::add_shared_mesh), whose buffers the caller keeps valid and unchanged, as for
+///   Embree's shared buffers, while the scene, a copy of it or a backend over either is used,
+///   and whose in-place changes it announces by Scene::vertices_changed; load_scene returns
+///   a scene by value;
 /// - a Backend reads the Scene it was built over for as long as it lives. Either the caller
 ///   keeps the scene alive until the backend is destroyed (make_backend(name, scene), scene an
 ///   lvalue; a temporary scene does not compile), or the backend shares it

@@ -571,7 +571,8 @@ class SceneReader {
       for (size_t i = 1; i < loaded.materials().size(); ++i)
         add(f.file_path, [&] { scene_.add_material(loaded.materials()[i]); });
     auto remap = [&](uint32_t id) { return f.override_material ? f.material : (id == 0 ? 0 : base + id); };
-    std::vector<TriangleMesh> meshes = loaded.meshes();
+    std::vector<TriangleMesh> meshes;
+    for (const MeshView& view : loaded.meshes()) meshes.push_back(to_triangle_mesh(view));
     for (TriangleMesh& mesh : meshes) {
       mesh.material = remap(mesh.material);
       if (f.override_material)

@@ -54,7 +54,7 @@ TEST(Bvh8Build, EveryPrimitiveInExactlyOneLeaf) {
       const PrimLocation r = sc.locate(id);
       bool zero_area = false;
       if (r.kind == PrimKind::triangle) {
-        const TriangleMesh& m = sc.meshes()[r.shape];
+        const MeshView& m = sc.meshes()[r.shape];
         const Vec3f n = cross(m.vertex(r.local, 1) - m.vertex(r.local, 0), m.vertex(r.local, 2) - m.vertex(r.local, 0));
         zero_area = n.x == 0 && n.y == 0 && n.z == 0;
       }
@@ -181,7 +181,7 @@ TEST(Bvh8Build, SpatialSplitsCoverEveryTriangle) {
   for (uint32_t id = 0; id < sc.triangle_count(); ++id) {
     ASSERT_FALSE(boxes[id].empty()) << "prim " << id << " in no leaf";
     split += boxes[id].size() > 1;
-    const TriangleMesh& m = sc.meshes()[0];
+    const MeshView& m = sc.meshes()[0];
     const Vec3f a = m.vertex(id, 0), b = m.vertex(id, 1), c = m.vertex(id, 2);
     for (int k = 0; k < 32; ++k) {
       float s = u(rng), r = u(rng);
@@ -230,7 +230,7 @@ TEST(Bvh8Build, NoNodeCouldAbsorbAChildNode) {
 /// Triangles only: an analytic primitive takes a leaf of its own.
 TEST(Bvh8Build, MedianRuleGivesBalancedLeaves) {
   Scene sc;
-  sc.add_mesh(test::mixed_soup(4, 5000, false).meshes()[0]);
+  sc.add_mesh(to_triangle_mesh(test::mixed_soup(4, 5000, false).meshes()[0]));
   const Bvh8 t = build(sc, {SplitRule::median, 4});
   uint32_t lo = 99, hi = 0;
   for (int32_t ref : leaves(t)) {
@@ -355,7 +355,7 @@ TEST(Bvh8Traversal, ClosestHitEqualsBruteForceOverEveryTriangle) {
       hit_count += std::isfinite(best);
       ASSERT_EQ(hits[i].t, best) << "ray " << i << (coh == Coherence::coherent ? " (packets)" : " (single)");
       if (hits[i].hit()) {
-        const TriangleMesh& mm = sc.meshes()[0];
+        const MeshView& mm = sc.meshes()[0];
         const uint32_t t = hits[i].prim_id;
         ASSERT_LT(t, mm.triangle_count());
         EXPECT_EQ(intersect_triangle_mt_normal(rays[i], mm.vertex(t, 0), mm.vertex(t, 1), mm.vertex(t, 2)).t, best);

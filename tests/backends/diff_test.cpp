@@ -67,7 +67,7 @@ TEST(Diff, ADeliberatelyWrongIntersectorIsCaughtAndClassified) {
   // A mesh only, so every hit's neighbour id (prim ^ 1) is another triangle.
   const Scene def = make_default_scene();
   Scene scene;
-  TriangleMesh knot = def.meshes()[0];
+  TriangleMesh knot = to_triangle_mesh(def.meshes()[0]);
   knot.material = 0;
   scene.add_mesh(knot);
   scene.set_camera(*def.camera());

@@ -28,7 +28,7 @@ std::vector<std::unique_ptr<Backend>> backends_of(const Domains& d) {
 
 TEST(Domains, CellsCoverTheSceneWithoutOverlapAndHoldTheTrianglesReachingIntoThem) {
   const Scene scene = test::triangle_soup(3, 1001);
-  const TriangleMesh& mesh = scene.meshes()[0];
+  const MeshView& mesh = scene.meshes()[0];
   for (int count : {1, 2, 3, 7, 16}) {
     const Domains d = split_domains(scene, count);
     ASSERT_EQ(d.cells.size(), size_t(count));

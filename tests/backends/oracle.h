@@ -46,7 +46,7 @@ inline OracleHit oracle_intersect(const Scene& s, const Ray& ray) {
     }
   };
   for (size_t m = 0; m < s.meshes().size(); ++m) {
-    const TriangleMesh& mesh = s.meshes()[m];
+    const MeshView& mesh = s.meshes()[m];
     if (s.is_instanced(m)) {
       std::vector<std::pair<uint32_t, Affine3d>> placed;  // the instances of mesh m that trace this ray
       for (uint32_t i = 0; i < s.instances().size(); ++i) {

@@ -63,7 +63,7 @@ bool own_test_hits(const Scene& s, const Ray& world, const Hit& h, bool watertig
   const PrimLocation ref = s.locate(h.prim_id);
   if (ref.kind != PrimKind::triangle) return true;
   const Ray r = h.instance_id == kNoInstance ? world : object_ray(world, s.instances()[h.instance_id].world_to_object);
-  const TriangleMesh& m = s.meshes()[ref.shape];
+  const MeshView& m = s.meshes()[ref.shape];
   const Vec3f a = m.vertex(ref.local, 0), b = m.vertex(ref.local, 1), c = m.vertex(ref.local, 2);
   return (watertight ? intersect_triangle_watertight(r, a, b, c) : intersect_triangle_mt_normal(r, a, b, c)).hit;
 }
@@ -121,7 +121,7 @@ int expect_same_answers(const Scene& scene, const Paths& paths, const std::vecto
 std::vector<Ray> shared_edge_rays(const Scene& s, const Vec3f& eye, uint32_t seed, const Affine3f& placement = {}) {
   std::mt19937 rng(seed);
   std::vector<Ray> rays;
-  const TriangleMesh& m = s.meshes()[0];
+  const MeshView& m = s.meshes()[0];
   const Affine3d to_world(placement);
   const auto vertex = [&](uint32_t t, int k) { return Vec3f(to_world.point(Vec3d(m.vertex(t, k)))); };
   for (uint32_t t = 0; t < m.triangle_count(); ++t)

@@ -61,7 +61,7 @@ struct TriangleD {
 std::vector<TriangleD> world_triangles(const Scene& s) {
   std::vector<TriangleD> out;
   for (size_t m = 0; m < s.meshes().size(); ++m) {
-    const TriangleMesh& mesh = s.meshes()[m];
+    const MeshView& mesh = s.meshes()[m];
     auto add = [&](const Affine3d* place, uint32_t inst) {
       for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
         TriangleD d{{}, s.mesh_base(m) + t, inst};
@@ -255,7 +255,7 @@ TEST(Queries, SignedDistanceHasTheWindingNumbersSignAwayFromTheSurface) {
   // winds the other way).
   s.add_instance(b, test::placement({0.5f, 0.35f, 0.45f}, {1, 1, 0}, 30.0f, {-0.7f, 0.0f, 0.0f}));
   s.add_instance(b, test::placement({-0.45f, 0.45f, 0.45f}, {0, 0, 1}, 10.0f, {0.8f, 0.0f, 0.2f}));
-  TriangleMesh world = ball.meshes()[0];
+  TriangleMesh world = to_triangle_mesh(ball.meshes()[0]);
   for (Vec3f& p : world.positions) p = p * 0.3f + Vec3f(0.0f, 1.1f, 0.0f);
   s.add_mesh(world);
   s.add_sphere({{0.0f, -1.0f, 0.0f}, 0.35f, 0});
@@ -359,7 +359,7 @@ TEST(Queries, EveryHitOfAClosedMeshComesInPairs) {
 Scene two_meshes() {
   Scene s;
   s.add_mesh(test::triangle_soup(5, 200).meshes()[0]);
-  TriangleMesh ball = test::tessellated_sphere(16, 8).meshes()[0];
+  TriangleMesh ball = to_triangle_mesh(test::tessellated_sphere(16, 8).meshes()[0]);
   for (Vec3f& p : ball.positions) p = p * 0.6f + Vec3f(0.3f, 0.2f, 0.1f);
   s.add_mesh(ball);
   return s;

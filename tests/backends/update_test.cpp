@@ -34,7 +34,7 @@ BackendOptions options(const std::string& variant, double refit_limit = BackendO
 /// a sphere, a quadric, a plane) and a closed tessellated sphere as a world mesh (mesh 3).
 Scene moving_scene() {
   Scene s = test::instanced_scene();
-  TriangleMesh ball = test::tessellated_sphere(32, 16).meshes()[0];
+  TriangleMesh ball = to_triangle_mesh(test::tessellated_sphere(32, 16).meshes()[0]);
   for (Vec3f& p : ball.positions) p = p * 0.35f + Vec3f{0.2f, 0.9f, -0.3f};
   s.add_mesh(std::move(ball));
   return s;
@@ -42,11 +42,13 @@ Scene moving_scene() {
 
 /// `mesh`'s positions moved smoothly: each vertex along a sine of its position (a moderate
 /// deformation that keeps neighbours together), scaled by `amount`.
-std::vector<Vec3f> wobbled(const TriangleMesh& mesh, float amount) {
-  std::vector<Vec3f> p = mesh.positions;
+std::vector<Vec3f> wobbled(const MeshView& mesh, float amount) {
+  std::vector<Vec3f> p(mesh.positions.begin(), mesh.positions.end());
   for (Vec3f& v : p) v = v + Vec3f{std::sin(4.0f * v.y), std::sin(3.0f * v.z), std::sin(5.0f * v.x)} * amount;
   return p;
 }
+
+std::vector<Vec3f> positions_of(const Strided<Vec3f>& p) { return {p.begin(), p.end()}; }
 
 std::vector<Ray> test_rays() {
   std::vector<Ray> rays = test::random_rays(7, 4096);
@@ -259,7 +261,7 @@ TEST(Update, ARefitPastTheLimitIsARebuild) {
   if (!std::ranges::count(available_backends(), "simd")) GTEST_SKIP() << "simd needs AVX2 and FMA";
   // Scrambling the soup's triangles over the box: every leaf's box grows to the whole box.
   Scene scene = test::triangle_soup(11, 2000);
-  std::vector<Vec3f> p = scene.meshes()[0].positions;
+  std::vector<Vec3f> p = positions_of(scene.meshes()[0].positions);
   std::mt19937 rng(3);
   std::shuffle(p.begin(), p.end(), rng);
   const std::vector<Ray> rays = test_rays();
@@ -314,13 +316,13 @@ TEST(Update, ChangesAreCheckedBeforeAnythingChanges) {
   EXPECT_EQ(
       test::error_of([&] { scene.set_vertices(3, few); }),
       "mesh 'uv_sphere' (3): 3 new positions for " + std::to_string(scene.meshes()[3].positions.size()) + " vertices");
-  std::vector<Vec3f> far = scene.meshes()[3].positions;
+  std::vector<Vec3f> far = positions_of(scene.meshes()[3].positions);
   far[7].x = 3e9f;
   EXPECT_NE(test::error_of([&] { scene.set_vertices(3, far); }).find("vertex 7"), std::string::npos);
   far[7].x = std::numeric_limits<float>::quiet_NaN();
   EXPECT_NE(test::error_of([&] { scene.set_vertices(3, far); }).find("non-finite"), std::string::npos);
   // An instanced mesh moved so far that an instance would place it outside the range.
-  std::vector<Vec3f> wide = scene.meshes()[0].positions;
+  std::vector<Vec3f> wide = positions_of(scene.meshes()[0].positions);
   wide[0] = {1e9f, 0.0f, 0.0f};  // in range, but twice that once placed
   EXPECT_NE(test::error_of([&] { scene.set_vertices(0, wide); }).find("instance 0 would place it"), std::string::npos);
   Affine3f singular;
@@ -330,8 +332,8 @@ TEST(Update, ChangesAreCheckedBeforeAnythingChanges) {
   EXPECT_NE(test::error_of([&] { scene.remove_mesh(0); }).find("placed by instance 0"), std::string::npos);
   EXPECT_NE(test::error_of([&] { scene.remove_sphere(5); }).find("out of range"), std::string::npos);
   EXPECT_EQ(scene.version(), v);  // nothing changed
-  EXPECT_EQ(scene.meshes()[3].positions, before.meshes()[3].positions);
-  EXPECT_EQ(scene.meshes()[0].positions, before.meshes()[0].positions);
+  EXPECT_EQ(positions_of(scene.meshes()[3].positions), positions_of(before.meshes()[3].positions));
+  EXPECT_EQ(positions_of(scene.meshes()[0].positions), positions_of(before.meshes()[0].positions));
   EXPECT_EQ(scene.instances()[0].bounds.hi, before.instances()[0].bounds.hi);
 }
 

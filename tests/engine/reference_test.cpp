@@ -47,7 +47,7 @@ ReferenceHit brute_force(const Scene& s, const Reference& ref, const Ray& ray) {
       best = {h.t, id, h.u, h.v, inst};
   };
   for (size_t m = 0; m < s.meshes().size(); ++m) {
-    const TriangleMesh& mesh = s.meshes()[m];
+    const MeshView& mesh = s.meshes()[m];
     if (s.is_instanced(m)) {
       for (uint32_t i = 0; i < s.instances().size(); ++i) {
         const Instance& in = s.instances()[i];
@@ -372,9 +372,9 @@ TEST(ReferenceWatertight, ClosedMeshNeverLeaksThroughSharedEdgesOrVertices) {
   // and then goes steeply inwards, so it must cross the closed surface.
   Scene s;
   s.add_mesh(quantized_uv_sphere(32, 16, {0.25f, -0.5f, 0.125f}, 1.0f));
-  const TriangleMesh& m = s.meshes()[0];
+  const MeshView& m = s.meshes()[0];
   const Reference ref(s);
-  std::vector<Vec3f> targets(m.positions);
+  std::vector<Vec3f> targets(m.positions.begin(), m.positions.end());
   for (uint32_t t = 0; t < m.triangle_count(); ++t)
     for (int c = 0; c < 3; ++c) targets.push_back((m.vertex(t, c) + m.vertex(t, (c + 1) % 3)) * 0.5f);
   const Vec3f centre{0.25f, -0.5f, 0.125f};

@@ -113,7 +113,8 @@ inline volatile size_t sink_count = 0;
 inline void touch(const Scene& scene) {
   float sum = 0.0f;
   size_t count = scene.materials().size() + scene.point_lights().size() + scene.directional_lights().size();
-  for (const TriangleMesh& m : scene.meshes()) {
+  for (const MeshView& view : scene.meshes()) {
+    const TriangleMesh m = to_triangle_mesh(view);
     for (const Vec3f& p : m.positions) sum += p.x + p.y + p.z;
     for (uint32_t i : m.indices) count += i;
     for (uint32_t i : m.face_materials) count += i;

@@ -46,7 +46,7 @@ void expect_near(const Vec3d& a, const Vec3d& b, double tolerance, const std::st
 /// mapped by each instance in double.
 std::vector<std::array<Vec3d, 3>> world_triangles(const Scene& s) {
   std::vector<std::array<Vec3d, 3>> out;
-  const auto add = [&](const TriangleMesh& m, const Affine3d& a) {
+  const auto add = [&](const MeshView& m, const Affine3d& a) {
     for (uint32_t t = 0; t < m.triangle_count(); ++t)
       out.push_back({a.point(Vec3d(m.vertex(t, 0))), a.point(Vec3d(m.vertex(t, 1))), a.point(Vec3d(m.vertex(t, 2)))});
   };
@@ -99,9 +99,10 @@ TEST(GltfLoader, TheThreeFormsOfAFileGiveTheSameScene) {
   for (const Scene* s : {&b, &c}) {
     ASSERT_EQ(s->meshes().size(), a.meshes().size());
     for (size_t m = 0; m < a.meshes().size(); ++m) {
-      EXPECT_EQ(s->meshes()[m].positions, a.meshes()[m].positions);
-      EXPECT_EQ(s->meshes()[m].indices, a.meshes()[m].indices);
-      EXPECT_EQ(s->meshes()[m].normals, a.meshes()[m].normals);
+      const TriangleMesh x = to_triangle_mesh(s->meshes()[m]), y = to_triangle_mesh(a.meshes()[m]);
+      EXPECT_EQ(x.positions, y.positions);
+      EXPECT_EQ(x.indices, y.indices);
+      EXPECT_EQ(x.normals, y.normals);
     }
     ASSERT_EQ(s->instances().size(), a.instances().size());
     for (size_t i = 0; i < a.instances().size(); ++i)
@@ -118,7 +119,7 @@ TEST(GltfLoader, NormalsMaterialsAndPrimitiveMaterialsAreKept) {
   EXPECT_EQ(red.name, "red");
   EXPECT_EQ(red.diffuse, Vec3f(0.8f, 0.1f, 0.1f));
   // "mixed": the tetrahedron's triangles green (with its emission), the loose ones the default.
-  const TriangleMesh& mixed = s.meshes()[1];
+  const TriangleMesh mixed = to_triangle_mesh(s.meshes()[1]);
   ASSERT_EQ(mixed.face_materials.size(), 6u);
   EXPECT_EQ(s.materials()[mixed.face_materials[0]].name, "green");
   EXPECT_EQ(s.materials()[mixed.face_materials[0]].emission, Vec3f(0.1f, 0.2f, 0.3f));

@@ -176,7 +176,7 @@ TEST(JsonSceneExample, QuadricsAreTheNamedConstructorsAndTheGeneralForm) {
 
 TEST(JsonSceneExample, MeshIsScaledThenRotatedThenTranslatedNormalsByTheInverseTranspose) {
   const Scene s = load_scene(kExample);
-  const TriangleMesh& m = s.meshes()[0];
+  const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
   // scale (0.8, 1.2, 0.8), 30 degrees about +y (x -> (cos, 0, -sin)), translate (1.5, 1.2, 1.5).
   const double c = std::cos(kPi / 6), sn = std::sin(kPi / 6);
   auto expected = [&](double x, double y, double z) {
@@ -284,7 +284,7 @@ TEST(JsonScene, MeshMaterialsAreAppendedAndRemappedUnlessOverridden) {
   EXPECT_EQ(s.materials()[2].name, "a");
   EXPECT_EQ(s.materials()[3].name, "b");
   ASSERT_EQ(s.meshes().size(), 2u);
-  EXPECT_EQ(s.meshes()[0].face_materials, (std::vector<uint32_t>{2, 3}));
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[0]).face_materials, (std::vector<uint32_t>{2, 3}));
   EXPECT_EQ(s.meshes()[0].positions[1], Vec3f(2, 0, 0));  // scale as one number
   EXPECT_EQ(s.meshes()[1].material, 1u);
   EXPECT_TRUE(s.meshes()[1].face_materials.empty());
@@ -326,7 +326,7 @@ TEST(JsonSceneInstances, AMeshPlacedSeveralTimesIsStoredOnceWithAnInstancePerPla
   ASSERT_EQ(s.meshes().size(), 1u);  // stored once
   EXPECT_TRUE(s.is_instanced(0));
   EXPECT_EQ(s.meshes()[0].positions[1], Vec3f(1, 0, 0));  // in the file's coordinates
-  EXPECT_EQ(s.meshes()[0].face_materials, (std::vector<uint32_t>{1, 2}));  // the file's a and b, once
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[0]).face_materials, (std::vector<uint32_t>{1, 2}));  // the file's a and b, once
   EXPECT_EQ(s.materials().size(), 3u);
   ASSERT_EQ(s.instances().size(), 3u);
   EXPECT_EQ(s.instanced_triangle_count(), 6u);
@@ -354,8 +354,8 @@ TEST(JsonSceneInstances, AMeshPlacedOnceIsBakedAsAMeshObjectIs) {
   EXPECT_TRUE(once.instances().empty());
   ASSERT_EQ(once.meshes().size(), object.meshes().size());
   EXPECT_FALSE(once.is_instanced(0));
-  EXPECT_EQ(once.meshes()[0].positions, object.meshes()[0].positions);
-  EXPECT_EQ(once.meshes()[0].normals, object.meshes()[0].normals);
+  EXPECT_EQ(to_triangle_mesh(once.meshes()[0]).positions, to_triangle_mesh(object.meshes()[0]).positions);
+  EXPECT_EQ(to_triangle_mesh(once.meshes()[0]).normals, to_triangle_mesh(object.meshes()[0]).normals);
   EXPECT_EQ(once.meshes()[0].material, 1u);
 }
 

@@ -118,7 +118,7 @@ TEST_P(RealModels, TriangleCountMatchesTheReadme) {
   EXPECT_FALSE(s.bounds().empty());
 
   size_t vertices = 0;
-  for (const TriangleMesh& m : s.meshes()) vertices += m.positions.size();
+  for (const MeshView& m : s.meshes()) vertices += m.positions.size();
   const std::string name = model.file;
   if (name == "CornellBox-Original.obj") {
     ASSERT_EQ(s.materials().size(), 9u);  // default + 8 from the MTL
@@ -138,7 +138,8 @@ TEST_P(RealModels, TriangleCountMatchesTheReadme) {
     // 68 'g' lines: 34 named groups with faces, each followed by a bare 'g' before its vertices.
     EXPECT_EQ(s.meshes().size(), 34u);
     EXPECT_EQ(s.materials().size(), 1u);
-    for (const TriangleMesh& m : s.meshes()) {
+    for (const MeshView& view : s.meshes()) {
+      const TriangleMesh m = to_triangle_mesh(view);
       EXPECT_EQ(m.normals.size(), m.positions.size());
       EXPECT_EQ(m.uvs.size(), m.positions.size());
     }

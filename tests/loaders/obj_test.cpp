@@ -31,7 +31,7 @@ using namespace rp::test;
 TEST(ObjLoader, QuadBecomesTwoTrianglesOverItsFourVertices) {
   const Scene s = obj_scene("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
   ASSERT_EQ(s.meshes().size(), 1u);
-  const TriangleMesh& m = s.meshes()[0];
+  const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
   EXPECT_EQ(m.triangle_count(), 2u);
   EXPECT_EQ(m.positions.size(), 4u);
   // A square: both diagonals are equally short, so the fan from corner 0.
@@ -44,7 +44,7 @@ TEST(ObjLoader, QuadBecomesTwoTrianglesOverItsFourVertices) {
 TEST(ObjLoader, ConvexQuadSplitsAlongItsShorterDiagonal) {
   // A rhombus whose 2-4 diagonal (length 2) is shorter than its 1-3 one (length 6).
   const Scene s = obj_scene("rhombus.obj", "v -3 0 0\nv 0 -1 0\nv 3 0 0\nv 0 1 0\nf 1 2 3 4\n");
-  EXPECT_EQ(s.meshes()[0].indices, (std::vector<uint32_t>{0, 1, 3, 1, 2, 3}));
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[0]).indices, (std::vector<uint32_t>{0, 1, 3, 1, 2, 3}));
 }
 
 /// 2D point-in-polygon by crossings (the polygon projected on the plane of axes a1, a2).
@@ -87,7 +87,7 @@ TEST(ObjLoader, NonConvexPolygonsGiveNMinusTwoTrianglesInsideThePolygon) {
         for (size_t i = 0; i < poly.size(); ++i) text += cat(" ", i + 1);
         text += "\n";
         const Scene s = obj_scene("polygon.obj", text);
-        const TriangleMesh& m = s.meshes()[0];
+        const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
         ASSERT_EQ(m.triangle_count(), poly.size() - 2);
 
         Vec3d newell{0.0};
@@ -110,7 +110,7 @@ TEST(ObjLoader, NegativeIndicesCountBackFromTheLatestVertex) {
   const Scene s = obj_scene("negative.obj",
                             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
                             "v 5 0 0\nv 6 0 0\nv 5 1 0\nf -3 -2 -1\nf 1 -6 3\n");
-  const TriangleMesh& m = s.meshes()[0];
+  const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
   ASSERT_EQ(m.triangle_count(), 3u);
   EXPECT_EQ(m.vertex(0, 1), Vec3f(1, 0, 0));
   EXPECT_EQ(m.vertex(1, 0), Vec3f(5, 0, 0));
@@ -134,7 +134,7 @@ std::string crlf(const std::string& lf) {
 void expect_same_meshes(const Scene& a, const Scene& b) {
   ASSERT_EQ(a.meshes().size(), b.meshes().size());
   for (size_t i = 0; i < a.meshes().size(); ++i) {
-    const TriangleMesh &x = a.meshes()[i], &y = b.meshes()[i];
+    const TriangleMesh x = to_triangle_mesh(a.meshes()[i]), y = to_triangle_mesh(b.meshes()[i]);
     EXPECT_EQ(x.name, y.name);
     EXPECT_EQ(x.positions, y.positions);
     EXPECT_EQ(x.indices, y.indices);
@@ -165,7 +165,7 @@ TEST(ObjLoader, OneMaterialPerMeshSetsMaterialSeveralSetFaceMaterials) {
   ASSERT_EQ(s.meshes().size(), 2u);
   EXPECT_EQ(s.meshes()[0].material, 1u);
   EXPECT_TRUE(s.meshes()[0].face_materials.empty());
-  EXPECT_EQ(s.meshes()[1].face_materials, (std::vector<uint32_t>{2, 1}));
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[1]).face_materials, (std::vector<uint32_t>{2, 1}));
 }
 
 TEST(ObjLoader, NormalsAndUvsAreKeptOnlyWhenEveryCornerHasOne) {
@@ -176,7 +176,8 @@ TEST(ObjLoader, NormalsAndUvsAreKeptOnlyWhenEveryCornerHasOne) {
                             "g normals_only\nf 1//2 2//2 3/3/2\n"
                             "g none\nf 1 2/2 3//1\n");
   ASSERT_EQ(s.meshes().size(), 4u);
-  const TriangleMesh &all = s.meshes()[0], &uvs = s.meshes()[1], &normals = s.meshes()[2], &none = s.meshes()[3];
+  const TriangleMesh all = to_triangle_mesh(s.meshes()[0]), uvs = to_triangle_mesh(s.meshes()[1]),
+                     normals = to_triangle_mesh(s.meshes()[2]), none = to_triangle_mesh(s.meshes()[3]);
   ASSERT_EQ(all.normals.size(), 3u);
   ASSERT_EQ(all.uvs.size(), 3u);
   EXPECT_EQ(all.normals[1], Vec3f(0, 0, 1));
@@ -202,7 +203,7 @@ TEST(ObjLoader, CornersWithTheSameIndexTripleShareOneVertex) {
   const Scene split = obj_scene("split.obj",
                                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nvn 0 1 0\n"
                                 "f 1//1 2//1 3//1\nf 1//2 4//2 2//2\nf 1//1 3//1 4//1\n");
-  const TriangleMesh& m = split.meshes()[0];
+  const TriangleMesh m = to_triangle_mesh(split.meshes()[0]);
   EXPECT_EQ(m.positions.size(), 7u);  // (1,1) (2,1) (3,1), then (1,2) (4,2) (2,2), then (4,1)
   EXPECT_EQ(m.indices[0], m.indices[6]);  // corner 1//1 shared by faces 1 and 3
   EXPECT_NE(m.indices[0], m.indices[3]);  // 1//1 and 1//2 differ
@@ -211,7 +212,7 @@ TEST(ObjLoader, CornersWithTheSameIndexTripleShareOneVertex) {
 
 TEST(ObjLoader, UnreferencedVerticesAreDropped) {
   const Scene s = obj_scene("unreferenced.obj", "v 0 0 0\nv 9 9 9\nv 1 0 0\nv 8 8 8\nv 0 1 0\nf 1 3 5\n");
-  const TriangleMesh& m = s.meshes()[0];
+  const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
   EXPECT_EQ(m.positions, (std::vector<Vec3f>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
   EXPECT_EQ(s.bounds(), Box3f(Vec3f(0, 0, 0), Vec3f(1, 1, 0)));
 }
@@ -248,7 +249,7 @@ TEST(ObjLoader, MtlFieldsMapToTheMaterial) {
   EXPECT_FLOAT_EQ(unset.shininess, 1.0f);
   EXPECT_FLOAT_EQ(unset.ior, 1.0f);  // Ni 0 reads as 1
   EXPECT_FLOAT_EQ(unset.opacity, 1.0f);
-  EXPECT_EQ(s.meshes()[0].face_materials, (std::vector<uint32_t>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[0]).face_materials, (std::vector<uint32_t>{1, 2, 3, 4, 5}));
 }
 
 TEST(ObjLoader, MissingMtlLoadsGeometryWithOneWarningLine) {

@@ -35,7 +35,7 @@ TEST(PlyLoader, AsciiLittleAndBigEndianCubesGiveIdenticalScenes) {
       SCOPED_TRACE(cat("layout ", int(layout), ", ", name_of(f)));
       const Scene s = ply_scene("cube.ply", cube_ply(f, layout));
       ASSERT_EQ(s.meshes().size(), 1u);
-      const TriangleMesh& m = s.meshes()[0];
+      const TriangleMesh m = to_triangle_mesh(s.meshes()[0]);
       EXPECT_EQ(m.name, "cube");
       EXPECT_EQ(m.positions, kCubeVertices);
       EXPECT_EQ(m.indices, kCubeIndices);
@@ -198,7 +198,7 @@ TEST(PlyLoader, PolygonsAreFannedAndOtherElementsSkipped) {
   w.put("ushort", 5);
   for (int i = 0; i < 5; ++i) w.put("uint", i);
   const Scene s = ply_scene("pentagon.ply", w.str());
-  EXPECT_EQ(s.meshes()[0].indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4}));
+  EXPECT_EQ(to_triangle_mesh(s.meshes()[0]).indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 3, 4}));
   EXPECT_FLOAT_EQ(s.meshes()[0].positions[1].x, float(std::cos(0.4 * kPi)));
 }
 

@@ -721,28 +721,30 @@ TEST(LoadRecords4, GivesEachLaneTheFirstFourWordsOfItsRecordAtAnyStride) {
   }
 }
 
-/// Records of 3 words in an array sized exactly (std::vector: nothing readable after it under
-/// ASan), indices hitting the first and the last record and repeating some: every lane gets
-/// its record's bits.
+/// Records of 3 words, 3 to 6 words apart, in an array that ends with the last record's third
+/// word (std::vector sized exactly: nothing readable after it under ASan), indices hitting
+/// the first and the last record and repeating some: every lane gets its record's bits.
 TEST(GatherRecords3, GivesEachLaneItsRecordsBitsUpToTheLastRecord) {
   std::mt19937 rng(82);
-  for (uint32_t count : {1u, 2u, 7u, 100u}) {
-    std::vector<uint32_t> words(3 * count);
-    for (uint32_t& b : words) b = rng();  // every bit pattern
-    for (int round = 0; round < 200; ++round) {
-      alignas(32) int32_t index[8];
-      for (int l = 0; l < 8; ++l) index[l] = int32_t(rng() % count);
-      index[round % 8] = int32_t(count - 1);
-      float8 out[3];
-      gather_records3(reinterpret_cast<const float*>(words.data()), count, index, out);
-      for (int k = 0; k < 3; ++k) {
-        alignas(32) uint32_t lanes[8];
-        std::memcpy(lanes, &out[k], 32);
-        for (int l = 0; l < 8; ++l)
-          ASSERT_EQ(lanes[l], words[3 * size_t(index[l]) + size_t(k)]) << "count " << count << " lane " << l;
+  for (uint32_t count : {1u, 2u, 7u, 100u})
+    for (size_t step : {3u, 4u, 6u}) {
+      std::vector<uint32_t> words(step * (count - 1) + 3);
+      for (uint32_t& b : words) b = rng();  // every bit pattern
+      for (int round = 0; round < 200; ++round) {
+        alignas(32) int32_t index[8];
+        for (int l = 0; l < 8; ++l) index[l] = int32_t(rng() % count);
+        index[round % 8] = int32_t(count - 1);
+        float8 out[3];
+        gather_records3(words.data(), 4 * step, count, index, out);
+        for (int k = 0; k < 3; ++k) {
+          alignas(32) uint32_t lanes[8];
+          std::memcpy(lanes, &out[k], 32);
+          for (int l = 0; l < 8; ++l)
+            ASSERT_EQ(lanes[l], words[step * size_t(index[l]) + size_t(k)])
+                << "count " << count << " stride " << 4 * step << " lane " << l;
+        }
       }
     }
-  }
 }
 
 TEST(Vec3x8, LoadAndLaneKeepEveryBit) {

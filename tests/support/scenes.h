@@ -194,8 +194,8 @@ inline Affine3f placement(const Vec3f& scale, const Vec3f& axis, float degrees, 
 inline Scene instanced_scene() {
   const Scene ball = tessellated_sphere(24, 12), soup = triangle_soup(21, 300);
   Scene s;
-  const uint32_t b = s.add_instanced_mesh(ball.meshes()[0]);
-  const uint32_t q = s.add_instanced_mesh(soup.meshes()[0]);
+  const uint32_t b = s.add_instanced_mesh(to_triangle_mesh(ball.meshes()[0]));
+  const uint32_t q = s.add_instanced_mesh(to_triangle_mesh(soup.meshes()[0]));
   s.add_instance(b, placement({0.4f, 0.4f, 0.4f}, {0, 1, 0}, 0.0f, {-0.8f, 0.6f, 0.2f}));
   s.add_instance(b, placement({0.5f, 0.25f, 0.35f}, {1, 1, 0}, 35.0f, {0.7f, 0.5f, -0.6f}));
   s.add_instance(b, placement({-0.3f, 0.3f, 0.3f}, {0, 0, 1}, 70.0f, {0.1f, -0.7f, 0.8f}));  // mirrored
@@ -223,9 +223,9 @@ inline Scene flattened(const Scene& scene) {
   for (const DirectionalLight& l : scene.directional_lights()) out.add_light(l);
   if (scene.camera()) out.set_camera(*scene.camera());
   for (size_t i = 0; i < scene.meshes().size(); ++i)
-    if (!scene.is_instanced(i)) out.add_mesh(scene.meshes()[i]);
+    if (!scene.is_instanced(i)) out.add_mesh(to_triangle_mesh(scene.meshes()[i]));
   for (const Instance& in : scene.instances()) {
-    TriangleMesh m = scene.meshes()[in.mesh];
+    TriangleMesh m = to_triangle_mesh(scene.meshes()[in.mesh]);
     const Affine3d t(in.object_to_world);
     for (Vec3f& p : m.positions) p = Vec3f(t.point(Vec3d(p)));
     m.normals.clear();

@@ -162,6 +162,57 @@ void check_limit_rules() {
   check(refused, "ThreadLimit(-1) did not throw an rp::Error naming -1");
 }
 
+/// The grid of arrays_scene() in the program's own interleaved buffer (position and a tag per
+/// vertex, 16 bytes), shared with a scene (add_shared_mesh): the scene points at the buffer,
+/// the hits equal those over the scene's copy, and a move written in place reaches an updated
+/// backend (vertices_changed).
+void check_shared_mesh() {
+  struct Vertex {
+    rp::Vec3f position;
+    uint32_t tag;
+  };
+  const rp::Scene copy = arrays_scene();
+  const rp::MeshView& grid = copy.meshes()[0];
+  std::vector<Vertex> vertices;
+  for (const rp::Vec3f& p : grid.positions) vertices.push_back({p, 7});
+  const std::vector<rp::TriangleIndices> triangles(grid.triangles.begin(), grid.triangles.end());
+  rp::Scene shared;
+  shared.add_shared_mesh({.name = "grid",
+                          .positions = {&vertices[0].position, vertices.size(), sizeof(Vertex)},
+                          .triangles = triangles,
+                          .normals = {},
+                          .uvs = {},
+                          .face_materials = {},
+                          .material = 0});
+  for (const rp::Sphere& s : copy.spheres()) shared.add_sphere(s);
+  check(shared.meshes()[0].positions.data() == &vertices[0].position, "add_shared_mesh copied the positions");
+  const rp::RaySet primary = rp::primary_rays(copy, 64, 48);
+  std::vector<rp::Hit> a(primary.rays.size()), b(primary.rays.size());
+  for (const char* name : {"embree", "simd"}) {
+    if (rp::check_method(name, "default")) continue;
+    const auto over_copy = rp::make_backend(name, copy);
+    const auto over_buffer = rp::make_backend(name, shared);
+    rp::intersect_parallel(*over_copy, primary.rays, a, rp::Coherence::coherent);
+    rp::intersect_parallel(*over_buffer, primary.rays, b, rp::Coherence::coherent);
+    check(same_bits(a, b), std::string(name) + ": other hits over the shared buffer than over the copy");
+    for (Vertex& v : vertices) v.position.z -= 0.5f;  // the program moves its grid back
+    shared.vertices_changed(0);
+    over_buffer->update();
+    rp::intersect_parallel(*over_buffer, primary.rays, b, rp::Coherence::coherent);
+    size_t on_grid = 0, farther = 0;  // the camera looks along -z: every grid hit is farther now
+    for (size_t i = 0; i < a.size(); ++i)
+      if (a[i].prim_id < grid.triangle_count() && b[i].prim_id < grid.triangle_count()) {
+        ++on_grid;
+        farther += b[i].t > a[i].t;
+      }
+    check(on_grid > 0 && farther == on_grid, std::string(name) + ": " + std::to_string(farther) + " of " +
+                                                 std::to_string(on_grid) +
+                                                 " hits on the grid farther after it moved back (vertices_changed)");
+    for (Vertex& v : vertices) v.position.z += 0.5f;
+    shared.vertices_changed(0);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,6 +223,7 @@ int main(int argc, char** argv) {
     return 77;
   }
   try {
+    check_shared_mesh();
     const rp::Scene scene = argc > 1 ? rp::load_scene(argv[1]) : arrays_scene();
     const ThreadRecorder backend(scene, rp::make_backend("embree", scene));
     const rp::RaySet primary = rp::primary_rays(scene, 256, 192);  // 12 chunks of intersect_parallel
