@@ -27,6 +27,7 @@
 #include "base/math.h"
 #include "base/strided.h"
 #include "core/affine.h"
+#include "core/geometry/intersection.h"
 #include "core/geometry/polygon.h"
 #include "core/geometry/quadric.h"
 #include "core/queries.h"
@@ -480,18 +481,12 @@ class Scene {
 };
 
 /// Calls f(hit) for the hits of analytic primitive `id` along `r` within [tnear, tfar] in
-/// order of t (a sphere or quadric may be crossed twice), until f returns true.
+/// order of t (a sphere or quadric may be crossed twice), until f returns true: for_each_root
+/// over Scene::intersect_analytic.
 template <class F>
 bool for_each_analytic_hit(const Scene& scene, uint32_t id, const Ray& r, uint32_t inst, F&& f) {
-  Ray rest = r;
-  for (int k = 0; k < 4; ++k) {  // at most two roots, and a polygon's one hit
-    const Intersection<float> h = scene.intersect_analytic(id, rest);
-    if (!h.hit) return false;
-    if (f(Hit{h.t, id, h.u, h.v, inst})) return true;
-    rest.tnear = std::nextafter(h.t, std::numeric_limits<float>::infinity());
-    if (!(rest.tnear <= rest.tfar)) return false;
-  }
-  return false;
+  const auto test = [&](const Ray& rest) { return scene.intersect_analytic(id, rest); };
+  return for_each_root(r, test, [&](const Intersection<float>& h) { return f(Hit{h.t, id, h.u, h.v, inst}); });
 }
 
 /// The embedded default scene: a procedural torus-knot mesh (>= 50k triangles), spheres,

@@ -10,6 +10,7 @@
 ///   written as "accept when the comparison holds", so a NaN fails it.
 /// - Directions are not normalized; t is in units of the direction's length.
 
+#include <cmath>
 #include <limits>
 
 #include "base/math.h"
@@ -43,6 +44,25 @@ constexpr bool in_ray_interval(const RayT<T>& r, T t) {
 template <typename T>
 constexpr Intersection<T> make_intersection(T t, T u = T(0), T v = T(0)) {
   return {true, t, u, v};
+}
+
+/// Calls f(h) for each hit h of one primitive along r within [tnear, tfar], in order of t,
+/// where test(ray) gives the primitive's closest hit of a ray (an intersect_* routine): after
+/// each hit the search goes on from the next representable t, so a sphere or quadric crossed
+/// twice gives both roots, a root is reported once (a double root too) and a triangle, polygon
+/// or plane one hit. Stops when f returns true, and then returns true. The one rule by which
+/// every query that lists hits (all_hits, count_hits, filters) finds the roots of a primitive.
+template <typename T, class Test, class F>
+bool for_each_root(const RayT<T>& r, Test&& test, F&& f) {
+  RayT<T> rest = r;
+  for (int k = 0; k < 4; ++k) {  // at most two roots, and a polygon's one hit
+    const Intersection<T> h = test(rest);
+    if (!h.hit) return false;
+    if (f(h)) return true;
+    rest.tnear = std::nextafter(h.t, std::numeric_limits<T>::infinity());
+    if (!(rest.tnear <= rest.tfar)) return false;
+  }
+  return false;
 }
 
 }  // namespace rp
