@@ -53,14 +53,18 @@ struct TraceOptions {
   bool passes_all() const { return !filter && (masks.empty() || (masks.size() == 1 && masks[0] == ~0u)); }
 };
 
-/// Every hit along some rays (Backend::all_hits): the hits of ray i are
-/// hits[offsets[i] .. offsets[i + 1]), sorted by (t, prim_id, instance_id).
-struct HitList {
+/// Every hit along some rays: the hits of ray i are hits[offsets[i] .. offsets[i + 1]),
+/// sorted by (t, prim_id, instance_id). H is rp::Hit (Backend::all_hits) or the double
+/// reference's hit (rp::ReferenceHit, analysis/reference.h).
+template <class H>
+struct HitListOf {
   std::vector<size_t> offsets;  ///< rays + 1 entries
-  std::vector<Hit> hits;
+  std::vector<H> hits;
   size_t count(size_t ray) const { return offsets[ray + 1] - offsets[ray]; }
-  std::span<const Hit> of(size_t ray) const { return {hits.data() + offsets[ray], count(ray)}; }
+  std::span<const H> of(size_t ray) const { return {hits.data() + offsets[ray], count(ray)}; }
 };
+/// Every hit along some rays, in float (Backend::all_hits).
+using HitList = HitListOf<Hit>;
 
 /// A closest-point query: the point and the largest distance of interest.
 struct PointQuery {
