@@ -49,6 +49,32 @@ inline bool closer(const Intersection<double>& h, uint32_t id, uint32_t instance
                                                       (id == best.prim_id && instance > best.instance_id))));
 }
 
+/// The closest hit (Reference::intersect), a policy of the ray walk: of each primitive its
+/// first plausible root, taken when closer().
+struct ClosestQuery {
+  ReferenceHit best;
+  /// Nothing beyond the best hit can win; a hit at exactly best.t still may (a tie).
+  double limit() const { return best.t; }
+  /// Root h of primitive id (placed by `instance`), plausible(t) its plausibility. True when
+  /// the primitive's later roots cannot matter.
+  template <class Plausible>
+  bool offer(const Intersection<double>& h, uint32_t id, uint32_t instance, Plausible&& plausible) {
+    if (!closer(h, id, instance, best)) return true;  // its later roots are farther still
+    if (!plausible(h.t)) return false;                // a phantom: a later root may be genuine
+    best = {h.t, id, h.u, h.v, instance};
+    return true;
+  }
+};
+
+/// f(i) for every i in [0, n), in parallel over TBB: what every batch call of the reference
+/// does, each item independent of the others and of the scheduling.
+template <class F>
+void each_parallel(size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i) f(i);
+  });
+}
+
 }  // namespace
 
 /// A bounded primitive (or, in the world's tree, an instance) during the build.
@@ -123,6 +149,48 @@ struct Reference::RayBoxes {
     double enter, exit;
     interval(bounds, enter, exit);
     return enter <= t && t <= exit;
+  }
+};
+
+/// A ray query's walk of one tree: the ray at the tree's level (the world's, or an instance's
+/// object space) with its slab constants; the query's state is shared by the levels.
+template <class Query>
+struct Reference::RayWalk {
+  const Reference& ref;
+  const Ray& ray;  ///< the float world ray (the valid-ray rule of instances)
+  const Rayd& r;   ///< the ray in the tree's space
+  RayBoxes rb;
+  uint32_t instance;  ///< the instance that places the tree, or kNoInstance
+  Query& q;
+
+  double limit() const { return std::min(r.tfar, q.limit()); }
+  /// A box is entered when its grown slab interval meets [tnear, limit()] (closed); the key is
+  /// its entry t.
+  bool enter(const Node& n, double& t_enter) const { return rb.hit(n, limit(), t_enter); }
+  void leaf(const LeafPrim& p) {
+    const uint32_t id = p.prim_id;
+    if (id >= ref.instance_base_) {
+      // An instance: the ray in its object space, in double, through its mesh's tree; only for
+      // a ray whose float object-space image is valid (the backends' rule).
+      const uint32_t i = id - ref.instance_base_;
+      const InstanceD& in = ref.instances_[i];
+      if (!valid_ray(object_ray(ray, in.float_world_to_object))) return;
+      const Rayd o = object_ray(r, in.world_to_object);
+      const Tree& tree = ref.mesh_trees_[in.mesh];
+      RayWalk inner{ref, ray, o, RayBoxes(o, tree.scale), i, q};
+      walk(tree, inner);
+      return;
+    }
+    // Plausibility last: the query asks for it only for hits it would keep.
+    const auto plausible = [&](double t) { return rb.contains(ref.prim_box(p), t); };
+    const auto offer = [&](const Intersection<double>& h) { return q.offer(h, id, instance, plausible); };
+    if (id < ref.sphere_base_) {
+      const Intersection<double> h = intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2]));
+      if (h.hit) offer(h);
+      return;
+    }
+    const auto test = [&](const Rayd& rest) { return ref.intersect_analytic(id, rest); };
+    for_each_root(r, test, offer);
   }
 };
 
@@ -299,66 +367,45 @@ Box3f Reference::prim_box(const LeafPrim& p) const noexcept {
   return b;
 }
 
-void Reference::intersect_prim(const Ray& ray, const Rayd& r, const RayBoxes& rb, const LeafPrim& p,
-                               uint32_t instance, ReferenceHit& best) const noexcept {
-  const uint32_t id = p.prim_id;
-  if (id >= instance_base_) {
-    // An instance: the ray in its object space, in double, through its mesh's tree; only for
-    // a ray whose float object-space image is valid (the backends' rule).
-    const uint32_t i = id - instance_base_;
-    const InstanceD& in = instances_[i];
-    if (!valid_ray(object_ray(ray, in.float_world_to_object))) return;
-    const Rayd o = object_ray(r, in.world_to_object);
-    const Tree& tree = mesh_trees_[in.mesh];
-    traverse(tree, ray, o, RayBoxes(o, tree.scale), i, best);
-    return;
-  }
-  Intersection<double> h;
-  if (id < sphere_base_) {
-    h = intersect_triangle_watertight(r, Vec3d(p.v[0]), Vec3d(p.v[1]), Vec3d(p.v[2]));
-  } else if (id < quadric_base_) {
+Intersection<double> Reference::intersect_analytic(uint32_t id, const Rayd& r) const noexcept {
+  if (id < quadric_base_) {
     const SphereD& s = spheres_[id - sphere_base_];
-    h = intersect_sphere_algebraic(r, s.center, s.radius);
-  } else if (id < polygon_base_) {
-    h = intersect_quadric(r, quadrics_[id - quadric_base_]);
-  } else {
-    const PolygonD& pd = polygons_[id - polygon_base_];
-    h = intersect_polygon<double>(r, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count),
-                                  pd.plane, pd.convex);
+    return intersect_sphere_algebraic(r, s.center, s.radius);
   }
-  // Plausibility last: it only runs for hits that would win.
-  if (closer(h, id, instance, best) && rb.contains(prim_box(p), h.t)) best = {h.t, id, h.u, h.v, instance};
+  if (id < polygon_base_) return intersect_quadric(r, quadrics_[id - quadric_base_]);
+  const PolygonD& pd = polygons_[id - polygon_base_];
+  return intersect_polygon<double>(r, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count), pd.plane,
+                                   pd.convex);
 }
 
-void Reference::traverse(const Tree& tree, const Ray& ray, const Rayd& r, const RayBoxes& rb, uint32_t instance,
-                         ReferenceHit& best) const noexcept {
-  // Near-first depth-first traversal; a box is entered when its grown slab interval meets
-  // [tnear, min(tfar, best.t)] (closed: a hit at exactly best.t may still win the tie).
+template <class Walk>
+void Reference::walk(const Tree& tree, Walk& w) {
+  // Near-first depth-first: of two children to enter, the one of the smaller key first (the
+  // left one at equal keys), the other deferred with its key and skipped when popped beyond
+  // the walk's limit then (closed: a tie at exactly the limit is still visited).
   if (tree.nodes.empty()) return;
   struct Entry {
     uint32_t node;
-    double t;
+    double key;
   };
   Entry stack[kStackSize];
   int sp = 0;
-  double t_root;
-  if (!rb.hit(tree.nodes[0], r.tfar, t_root)) return;
+  double key_root;
+  if (!w.enter(tree.nodes[0], key_root)) return;
   uint32_t ni = 0;
   for (;;) {
     const Node& n = tree.nodes[ni];
     if (n.count == 0) {
-      const double tmax = std::min(r.tfar, best.t);
-      double tl, tr;
-      const bool hl = rb.hit(tree.nodes[ni + 1], tmax, tl);
-      const bool hr = rb.hit(tree.nodes[n.index], tmax, tr);
+      double kl, kr;
+      const bool hl = w.enter(tree.nodes[ni + 1], kl);
+      const bool hr = w.enter(tree.nodes[n.index], kr);
       if (hl && hr) {
-        // Nearer child first; the left one when both enter at the same t.
         RP_DCHECK(sp < kStackSize);
-        if (tr < tl) {
-          stack[sp++] = {ni + 1, tl};
+        if (kr < kl) {
+          stack[sp++] = {ni + 1, kl};
           ni = n.index;
         } else {
-          stack[sp++] = {n.index, tr};
+          stack[sp++] = {n.index, kr};
           ni = ni + 1;
         }
         continue;
@@ -368,13 +415,12 @@ void Reference::traverse(const Tree& tree, const Ray& ray, const Rayd& r, const 
         continue;
       }
     } else {
-      for (uint32_t k = n.index; k < n.index + n.count; ++k) intersect_prim(ray, r, rb, tree.prims[k], instance, best);
+      for (uint32_t k = n.index; k < n.index + n.count; ++k) w.leaf(tree.prims[k]);
     }
-    // Next deferred child that may still hold a hit at t <= best.t.
     for (;;) {
       if (sp == 0) return;
       const Entry e = stack[--sp];
-      if (e.t <= best.t) {
+      if (e.key <= w.limit()) {
         ni = e.node;
         break;
       }
@@ -382,16 +428,22 @@ void Reference::traverse(const Tree& tree, const Ray& ray, const Rayd& r, const 
   }
 }
 
-ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
-  ReferenceHit best;
-  if (!valid_ray(ray)) return best;
+template <class Query>
+void Reference::trace(const Ray& ray, Query& q) const {
+  if (!valid_ray(ray)) return;
   const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  traverse(world_, ray, r, RayBoxes(r, world_.scale), kNoInstance, best);
-  for (uint32_t k = 0; k < planes_.size(); ++k) {
+  RayWalk<Query> w{*this, ray, r, RayBoxes(r, world_.scale), kNoInstance, q};
+  walk(world_, w);
+  for (uint32_t k = 0; k < planes_.size(); ++k) {  // unbounded: every hit plausible
     const Intersection<double> h = intersect_plane(r, planes_[k].normal, planes_[k].d);
-    if (closer(h, plane_base_ + k, kNoInstance, best)) best = {h.t, plane_base_ + k, h.u, h.v};
+    if (h.hit) q.offer(h, plane_base_ + k, kNoInstance, [](double) { return true; });
   }
-  return best;
+}
+
+ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
+  ClosestQuery q;
+  trace(ray, q);
+  return q.best;
 }
 
 bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance) const noexcept {
@@ -418,9 +470,7 @@ bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t i
 
 void Reference::intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const {
   RP_CHECK(rays.size() == hits.size(), "Reference::intersect: ", rays.size(), " rays but ", hits.size(), " hits");
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i < range.end(); ++i) hits[i] = intersect(rays[i]);
-  });
+  each_parallel(rays.size(), [&](size_t i) { hits[i] = intersect(rays[i]); });
 }
 
 size_t Reference::bytes() const {

@@ -19,7 +19,8 @@
 /// is 2^21 unit roundoffs, so every well-conditioned hit is plausible and the answer differs
 /// from the brute-force loop of tests/backends/oracle.h only where that loop returns a
 /// phantom (or, at exactly equal t, picks the other primitive of a tie).
-/// The answer is the plausible hit of smallest t; among hits at exactly the same t the
+/// The answer is the plausible hit of smallest t (a sphere or quadric is asked for its roots
+/// in order, for_each_root, until one is plausible); among hits at exactly the same t the
 /// LARGEST (prim_id, instance_id) wins. Because every primitive is tested against the full
 /// interval (not one shortened by earlier hits), this rule does not depend on the order
 /// primitives are visited in: the result is a function of the scene and the ray alone,
@@ -39,7 +40,11 @@
 /// padded (spheres, polygons, instances), traversed near-first in double with a conservative
 /// slab test (see Reference::intersect). An instance is an entry of that tree whose box is
 /// its mesh's box mapped into the world; each instanced mesh has a tree of its own, in its
-/// object space, built once. Unbounded planes are tested beside it.
+/// object space, built once. Unbounded planes are tested beside it. One loop walks every
+/// tree for every query (Reference::walk, madmann91/bvh's traversal with the query as a
+/// template policy): a query's key for a box is its entry t; each query says how far it
+/// still looks and what a leaf's primitive (an instance: its mesh's tree, walked with the same
+/// policy) does to it.
 
 #include <cstddef>
 #include <cstdint>
@@ -50,6 +55,7 @@
 #include "base/bbox.h"
 #include "base/math.h"
 #include "core/affine.h"
+#include "core/geometry/intersection.h"
 #include "core/geometry/polygon.h"
 #include "core/geometry/quadric.h"
 #include "core/ray.h"
@@ -163,12 +169,22 @@ class Reference {
   };
   struct RayBoxes;
   struct BuildItem;
+  template <class Query>
+  struct RayWalk;
 
   void build_tree(std::vector<BuildItem>& items, Tree& tree);
-  void traverse(const Tree& tree, const Ray& ray, const Rayd& r, const RayBoxes& rb, uint32_t instance,
-                ReferenceHit& best) const noexcept;
-  void intersect_prim(const Ray& ray, const Rayd& r, const RayBoxes& rb, const LeafPrim& p, uint32_t instance,
-                      ReferenceHit& best) const noexcept;
+  /// The one traversal loop: near-first and depth-first over `tree`, for any walk w (a ray
+  /// query's RayWalk). w.enter(node, key) says whether a node may hold something of interest
+  /// and gives its key (the entry t), w.limit() the key beyond which a deferred node is
+  /// skipped, w.leaf(prim) visits a leaf's primitive.
+  template <class Walk>
+  static void walk(const Tree& tree, Walk& w);
+  /// Runs ray query q (a policy: ClosestQuery in reference.cpp) over the world's
+  /// tree, the instances and the planes; nothing for an invalid ray.
+  template <class Query>
+  void trace(const Ray& ray, Query& q) const;
+  /// The closest hit of sphere, quadric or polygon `id` along r (its core/geometry routine).
+  Intersection<double> intersect_analytic(uint32_t id, const Rayd& r) const noexcept;
   /// The BVH box of bounded primitive p (its t-interval decides plausibility).
   Box3f prim_box(const LeafPrim& p) const noexcept;
 

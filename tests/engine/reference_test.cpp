@@ -24,6 +24,7 @@
 #include "core/scene.h"
 #include "core/scene_transform.h"
 #include "tests/backends/oracle.h"
+#include "tests/engine/reference_brute_force.h"
 #include "tests/support/grid_scenes.h"
 #include "tests/support/scenes.h"
 
@@ -32,60 +33,13 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 using test::box_mesh;
+using test::brute_force;
 using test::grid_and_random_rays;
 using test::mesh_of;
 using test::quantized_uv_sphere;
 using test::random_scene;
 using test::signed_zero;
 using test::uniform_vec;
-
-/// Brute force with the reference's documented rule: every primitive tested against the
-/// whole [tnear, tfar] by the double routine (an instance's triangles against the ray taken
-/// into its object space by the double inverse of its transform, where its float image is
-/// valid), phantom hits dropped (Reference::plausible), smallest t, ties to the larger
-/// (prim_id, instance_id).
-ReferenceHit brute_force(const Scene& s, const Reference& ref, const Ray& ray) {
-  ReferenceHit best;
-  if (!valid_ray(ray)) return best;
-  const Rayd r{Vec3d(ray.org), double(ray.tnear), Vec3d(ray.dir), double(ray.tfar)};
-  const auto take = [&](const Intersection<double>& h, uint32_t id, uint32_t inst = kNoInstance) {
-    if (h.hit &&
-        (h.t < best.t || (h.t == best.t && (id > best.prim_id || (id == best.prim_id && inst > best.instance_id)))) &&
-        ref.plausible(ray, id, h.t, inst))
-      best = {h.t, id, h.u, h.v, inst};
-  };
-  for (size_t m = 0; m < s.meshes().size(); ++m) {
-    const MeshView& mesh = s.meshes()[m];
-    if (s.is_instanced(m)) {
-      for (uint32_t i = 0; i < s.instances().size(); ++i) {
-        const Instance& in = s.instances()[i];
-        if (in.mesh != m || !valid_ray(object_ray(ray, in.world_to_object))) continue;
-        const Rayd o = object_ray(r, *inverse(Affine3d(in.object_to_world)));
-        for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
-          take(intersect_triangle_watertight(o, Vec3d(mesh.vertex(t, 0)), Vec3d(mesh.vertex(t, 1)),
-                                             Vec3d(mesh.vertex(t, 2))),
-               s.mesh_base(m) + t, i);
-      }
-      continue;
-    }
-    for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
-      take(intersect_triangle_watertight(r, Vec3d(mesh.vertex(t, 0)), Vec3d(mesh.vertex(t, 1)), Vec3d(mesh.vertex(t, 2))),
-           s.mesh_base(m) + t);
-  }
-  for (uint32_t i = 0; i < s.spheres().size(); ++i)
-    take(intersect_sphere_algebraic(r, Vec3d(s.spheres()[i].center), double(s.spheres()[i].radius)), s.sphere_base() + i);
-  for (uint32_t i = 0; i < s.quadrics().size(); ++i)
-    take(intersect_quadric(r, test::to_d(s.quadrics()[i].quadric)), s.quadric_base() + i);
-  for (uint32_t i = 0; i < s.polygons().size(); ++i) {
-    const PolygonShape& p = s.polygons()[i];
-    std::vector<Vec3d> verts;
-    for (uint32_t k = 0; k < p.count; ++k) verts.push_back(Vec3d(s.polygon_vertices()[p.first + k]));
-    take(intersect_polygon<double>(r, verts, polygon_plane<double>(verts), p.convex), s.polygon_base() + i);
-  }
-  for (uint32_t i = 0; i < s.planes().size(); ++i)
-    take(intersect_plane(r, Vec3d(s.planes()[i].normal), double(s.planes()[i].d)), s.plane_base() + i);
-  return best;
-}
 
 /// hits equal the brute force bit for bit, and the independent oracle (tests/backends/oracle.h,
 /// which shortens tfar as it goes and keeps no phantom filter) on prim_id, or on t when the
