@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <tuple>
 #include <unordered_map>
 
 #include "base/bbox.h"
@@ -63,6 +64,18 @@ struct ClosestQuery {
     if (!plausible(h.t)) return false;                // a phantom: a later root may be genuine
     best = {h.t, id, h.u, h.v, instance};
     return true;
+  }
+};
+
+/// Every hit (Reference::all_hits), a policy of the ray walk: every plausible root, in the
+/// order of the visits.
+struct EveryQuery {
+  std::vector<ReferenceHit>& hits;
+  static constexpr double limit() { return std::numeric_limits<double>::infinity(); }
+  template <class Plausible>
+  bool offer(const Intersection<double>& h, uint32_t id, uint32_t instance, Plausible&& plausible) {
+    if (plausible(h.t)) hits.push_back({h.t, id, h.u, h.v, instance});
+    return false;
   }
 };
 
@@ -444,6 +457,37 @@ ReferenceHit Reference::intersect(const Ray& ray) const noexcept {
   ClosestQuery q;
   trace(ray, q);
   return q.best;
+}
+
+std::vector<ReferenceHit> Reference::all_hits(const Ray& ray) const {
+  std::vector<ReferenceHit> hits;
+  EveryQuery q{hits};
+  trace(ray, q);
+  std::sort(hits.begin(), hits.end(), [](const ReferenceHit& a, const ReferenceHit& b) {
+    return std::tie(a.t, a.prim_id, a.instance_id) < std::tie(b.t, b.prim_id, b.instance_id);
+  });
+  return hits;
+}
+
+ReferenceHitList Reference::all_hits(std::span<const Ray> rays, size_t max_per_ray) const {
+  std::vector<std::vector<ReferenceHit>> each(rays.size());
+  each_parallel(rays.size(), [&](size_t i) {
+    each[i] = all_hits(rays[i]);
+    if (max_per_ray && each[i].size() > max_per_ray) each[i].resize(max_per_ray);
+  });
+  ReferenceHitList list;
+  list.offsets.reserve(rays.size() + 1);
+  list.offsets.push_back(0);
+  for (const std::vector<ReferenceHit>& h : each) list.offsets.push_back(list.offsets.back() + h.size());
+  list.hits.reserve(list.offsets.back());
+  for (const std::vector<ReferenceHit>& h : each) list.hits.insert(list.hits.end(), h.begin(), h.end());
+  return list;
+}
+
+void Reference::count_hits(std::span<const Ray> rays, std::span<uint32_t> counts) const {
+  RP_CHECK(rays.size() == counts.size(), "Reference::count_hits: ", rays.size(), " rays but ", counts.size(),
+           " counts");
+  each_parallel(rays.size(), [&](size_t i) { counts[i] = uint32_t(all_hits(rays[i]).size()); });
 }
 
 bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance) const noexcept {

@@ -34,6 +34,15 @@
 /// float object-space image (rp::object_ray with Instance::world_to_object) obeys the
 /// valid-ray rule, the rule every backend follows.
 ///
+/// Every hit (Reference::all_hits, count_hits): the same tests, the same plausibility, the
+/// same instances and planes, every root. A primitive's hits are found as the backends find
+/// them (for_each_root, core/geometry/intersection.h: each next root searched from the next
+/// representable t after the last), so a sphere or quadric crossed twice counts twice, a
+/// double root (a tangent) once, a triangle, polygon or plane once; each root counts when it
+/// is plausible. The list of a ray is sorted by (t, prim_id, instance_id); each primitive is
+/// in one leaf, so no hit is listed twice. intersect(ray) is the last of the ray's hits at
+/// the smallest t (its tie rule takes the largest id).
+///
 /// How. A binary BVH over the bounded primitives (median split on the longest axis of the
 /// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
 /// bound the float geometry exactly (triangles, quadric clip boxes) or outward-rounded and
@@ -58,6 +67,7 @@
 #include "core/geometry/intersection.h"
 #include "core/geometry/polygon.h"
 #include "core/geometry/quadric.h"
+#include "core/queries.h"
 #include "core/ray.h"
 
 namespace rp {
@@ -80,6 +90,10 @@ struct ReferenceHit {
 inline Hit to_hit(const ReferenceHit& h) {
   return h.hit() ? Hit{float(h.t), h.prim_id, float(h.u), float(h.v), h.instance_id} : Hit{};
 }
+
+/// Every hit of some rays in double (Reference::all_hits): ray i's are of(i), sorted by (t,
+/// prim_id, instance_id).
+using ReferenceHitList = HitListOf<ReferenceHit>;
 
 /// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
 /// immutable and safe to query from many threads at once.
@@ -110,6 +124,17 @@ class Reference {
   /// hits[i] = intersect(rays[i]) for every i, in parallel over TBB (each ray independent,
   /// so the result does not depend on scheduling). Throws rp::Error when the sizes differ.
   void intersect(std::span<const Ray> rays, std::span<ReferenceHit> hits) const;
+
+  /// Every plausible hit of `ray` (converted exactly to double) within [tnear, tfar], both
+  /// ends closed, sorted by (t, prim_id, instance_id): each root of each primitive, on the
+  /// rules of the file comment. Empty for an invalid ray (valid_ray() false).
+  std::vector<ReferenceHit> all_hits(const Ray& ray) const;
+  /// all_hits of every ray, in parallel over TBB (ray i's hits are the list's of(i)); with
+  /// max_per_ray > 0, the first max_per_ray of each, as Backend::all_hits.
+  ReferenceHitList all_hits(std::span<const Ray> rays, size_t max_per_ray = 0) const;
+  /// counts[i] = all_hits(rays[i]).size() for every i, in parallel over TBB. Throws rp::Error
+  /// when the sizes differ.
+  void count_hits(std::span<const Ray> rays, std::span<uint32_t> counts) const;
 
   /// True when a hit of primitive prim_id (placed by instance `instance`, or by none) at t is
   /// plausible for ray: prim_id is a plane, or t lies in the ray's guarded slab interval
@@ -179,7 +204,7 @@ class Reference {
   /// skipped, w.leaf(prim) visits a leaf's primitive.
   template <class Walk>
   static void walk(const Tree& tree, Walk& w);
-  /// Runs ray query q (a policy: ClosestQuery in reference.cpp) over the world's
+  /// Runs ray query q (a policy: ClosestQuery, EveryQuery in reference.cpp) over the world's
   /// tree, the instances and the planes; nothing for an invalid ray.
   template <class Query>
   void trace(const Ray& ray, Query& q) const;

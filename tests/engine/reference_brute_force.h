@@ -1,6 +1,6 @@
 #pragma once
 // Brute force over every primitive with the double reference's documented rules
-// (analysis/reference.h): what Reference::intersect must return,
+// (analysis/reference.h): what Reference::intersect and all_hits must return,
 // found without its trees. The same core/geometry routines on the same double data, so the
 // reference must equal these bit for bit; only the order of the visits differs, and every rule
 // is independent of it.
