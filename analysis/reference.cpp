@@ -1,3 +1,7 @@
+// The reference's build, its one tree walk and every query over it (the closest hit, every
+// hit, the closest point), in one file of over 600 lines: the walks are nested types of
+// Reference that read its private tree layout, which no other file sees.
+
 #include "analysis/reference.h"
 
 #include <tbb/blocked_range.h>
@@ -13,6 +17,7 @@
 #include "base/bbox.h"
 #include "base/error.h"
 #include "core/backend.h"
+#include "core/geometry/closest_point.h"
 #include "core/geometry/intersection.h"
 #include "core/geometry/plane.h"
 #include "core/geometry/sphere.h"
@@ -207,6 +212,70 @@ struct Reference::RayWalk {
   }
 };
 
+/// The point query's walk of one tree: the world's, or an instance's mesh tree with its boxes
+/// and triangles mapped into the world; the best point and the limits are shared by the levels.
+struct Reference::PointWalk {
+  const Reference& ref;
+  Vec3d p;  ///< the query point, in the world
+  double radius;
+  double guard;  ///< g of closest_point
+  ReferencePoint& best;
+  const InstanceD* in = nullptr;  ///< the instance that places the tree, or null
+  uint32_t instance = kNoInstance;
+  double pad = 0;  ///< with an instance: a bound of its map's rounding of a box
+
+  /// Nothing farther than the best point (or the radius) can count; the guard keeps every
+  /// box that may hold a point as close (a tie) despite rounding.
+  double limit() const { return std::min(radius, best.distance) + guard; }
+  /// A box is entered when its world distance from p is within limit(); the key is that distance.
+  bool enter(const Node& n, double& distance) const {
+    Vec3d lo(n.bounds[0], n.bounds[1], n.bounds[2]), hi(n.bounds[3], n.bounds[4], n.bounds[5]);
+    if (in) {
+      // The world box of the mapped box: the centre mapped, the half extents by |L|, grown by pad.
+      const Vec3d c = (lo + hi) * 0.5, h = (hi - lo) * 0.5, wc = in->object_to_world.point(c);
+      const auto& m = in->object_to_world.m;
+      for (int k = 0; k < 3; ++k) {
+        const double wh = std::abs(m[k][0]) * h.x + std::abs(m[k][1]) * h.y + std::abs(m[k][2]) * h.z + pad;
+        lo[k] = wc[k] - wh;
+        hi[k] = wc[k] + wh;
+      }
+    }
+    Vec3d d;
+    for (int k = 0; k < 3; ++k) d[k] = std::max(std::max(lo[k] - p[k], p[k] - hi[k]), 0.0);
+    distance = length(d);
+    return distance <= limit();
+  }
+  void leaf(const LeafPrim& lp) {
+    const uint32_t id = lp.prim_id;
+    if (id >= ref.instance_base_) {
+      const uint32_t i = id - ref.instance_base_;
+      const InstanceD& placed = ref.instances_[i];
+      const Tree& tree = ref.mesh_trees_[placed.mesh];
+      const auto& m = placed.object_to_world.m;
+      // A box's centre and half extents, mapped, are rounded by a few units of 2^-53 of
+      // |L| M + |t| (M the mesh tree's largest |coordinate|): 2^-40 of it bounds that.
+      const double t = std::max(std::max(std::abs(m[0][3]), std::abs(m[1][3])), std::abs(m[2][3]));
+      const double map_pad = 0x1p-40 * (placed.object_to_world.linear_norm() * tree.scale + t);
+      PointWalk inner{ref, p, radius, guard, best, &placed, i, map_pad};
+      walk(tree, inner);
+      return;
+    }
+    if (id >= ref.sphere_base_) return take(ref.closest_on_analytic(id, p));
+    if (zero_area(lp.v[0], lp.v[1], lp.v[2])) return;  // not surface (never hit either)
+    Vec3d v[3];
+    for (int k = 0; k < 3; ++k) v[k] = in ? in->object_to_world.point(Vec3d(lp.v[k])) : Vec3d(lp.v[k]);
+    const SurfacePointT<double> c = closest_on_triangle(p, v[0], v[1], v[2]);
+    take({c.p, length(c.p - p), id, instance, c.u, c.v});
+  }
+  /// Takes candidate c when it is within the radius and closer, or as close with a lower
+  /// (prim_id, instance_id) (PointSearch::take's rule): the answer does not depend on the order.
+  void take(const ReferencePoint& c) {
+    if (c.distance <= radius &&
+        std::tie(c.distance, c.prim_id, c.instance_id) < std::tie(best.distance, best.prim_id, best.instance_id))
+      best = c;
+  }
+};
+
 Reference::Reference(const Scene& scene) {
   const auto start = std::chrono::steady_clock::now();
   sphere_base_ = scene.sphere_base();
@@ -287,7 +356,7 @@ Reference::Reference(const Scene& scene) {
     const double pad = 0x1p-24 * cond * (max_component(Vec3d(in.bounds.extent())) +
                                          std::max(max_abs(Vec3d(in.bounds.lo)), max_abs(Vec3d(in.bounds.hi))));
     const Box3f box = outward(Box3d(Vec3d(in.bounds.lo), Vec3d(in.bounds.hi)), pad);
-    instances_.push_back({in.mesh, *w, in.world_to_object, box});
+    instances_.push_back({in.mesh, m, *w, in.world_to_object, box});
     if (!in.bounds.empty()) items.emplace_back(box, instance_base_ + i);
   }
   for (const Plane& p : scene.planes()) planes_.push_back({Vec3d(p.normal), double(p.d)});
@@ -488,6 +557,54 @@ void Reference::count_hits(std::span<const Ray> rays, std::span<uint32_t> counts
   RP_CHECK(rays.size() == counts.size(), "Reference::count_hits: ", rays.size(), " rays but ", counts.size(),
            " counts");
   each_parallel(rays.size(), [&](size_t i) { counts[i] = uint32_t(all_hits(rays[i]).size()); });
+}
+
+ReferencePoint Reference::closest_on_analytic(uint32_t id, const Vec3d& p) const noexcept {
+  ReferencePoint out;
+  out.prim_id = id;
+  if (id < quadric_base_) {
+    const SphereD& s = spheres_[id - sphere_base_];
+    const Vec3d d = p - s.center;
+    const double len = length(d);
+    // The centre itself: every point of the sphere is as close; the one on +x.
+    out.point = len > 0.0 ? s.center + d * (s.radius / len) : s.center + Vec3d(s.radius, 0.0, 0.0);
+    const Vec2<double> uv = sphere_uv(s.center, s.radius, out.point);
+    out.u = uv.x;
+    out.v = uv.y;
+  } else if (id >= plane_base_) {
+    const PlaneD& pl = planes_[id - plane_base_];
+    out.point = closest_on_plane(p, pl.normal, pl.d);
+  } else {
+    RP_DCHECK(id >= polygon_base_);  // quadrics are refused before any walk
+    const PolygonD& pd = polygons_[id - polygon_base_];
+    out.point =
+        closest_on_polygon<double>(p, std::span<const Vec3d>(polygon_vertices_).subspan(pd.first, pd.count), pd.plane);
+  }
+  out.distance = length(out.point - p);
+  return out;
+}
+
+void Reference::check_no_quadrics() const {
+  RP_CHECK(quadrics_.empty(), "reference: closest points: the scene has ", quadrics_.size(), " quadric",
+           quadrics_.size() == 1 ? "" : "s", " (quadrics have no closest-point routine)");
+}
+
+ReferencePoint Reference::closest_point(const PointQuery& q) const {
+  check_no_quadrics();
+  ReferencePoint best;
+  if (!valid_point_query(q)) return best;
+  const Vec3d p(q.point);
+  PointWalk w{*this, p, double(q.radius), 0x1p-32 * (max_abs(p) + world_.scale), best};
+  walk(world_, w);
+  for (uint32_t k = 0; k < planes_.size(); ++k) w.take(closest_on_analytic(plane_base_ + k, p));
+  return best;
+}
+
+void Reference::closest_points(std::span<const PointQuery> queries, std::span<ReferencePoint> out) const {
+  RP_CHECK(queries.size() == out.size(), "Reference::closest_points: ", queries.size(), " queries but ", out.size(),
+           " answers");
+  check_no_quadrics();
+  each_parallel(queries.size(), [&](size_t i) { out[i] = closest_point(queries[i]); });
 }
 
 bool Reference::plausible(const Ray& ray, uint32_t prim_id, double t, uint32_t instance) const noexcept {

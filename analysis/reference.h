@@ -43,6 +43,26 @@
 /// in one leaf, so no hit is listed twice. intersect(ray) is the last of the ray's hits at
 /// the smallest t (its tie rule takes the largest id).
 ///
+/// Closest point (Reference::closest_point): rp::ClosestPoint's conventions (core/queries.h),
+/// computed in double by the double instantiations of core/geometry/closest_point.h on each
+/// primitive's float data converted exactly to double:
+/// - triangles: closest_on_triangle<double> (Ericson's Voronoi regions), Embree's
+///   barycentrics as (u, v); zero-area triangles (zero_area in float) are not surface;
+/// - instanced triangles: the corners mapped into the world by the double of the instance's
+///   float object_to_world (Affine3d::point of each converted corner), then as a world
+///   triangle, so the distance is the world one with no float rounding on the way ((u, v)
+///   hold in the mesh's space too: an affine map keeps barycentrics);
+/// - spheres: as Scene::closest_on_analytic, in double: the point where the ray from the
+///   centre through the query point leaves the sphere (from the centre itself, the point on
+///   +x), its sphere_uv as (u, v);
+/// - polygons: closest_on_polygon<double> with the polygon's double plane; planes:
+///   closest_on_plane<double>; (u, v) = 0 for both.
+/// The distance is |point - query point| in double. The answer is the candidate of smallest
+/// distance among those with distance <= radius; at exactly equal distance the LOWEST
+/// (prim_id, instance_id) wins (the backends' rule, unlike intersect's). An invalid query
+/// (valid_point_query false) finds nothing. A scene with quadrics is refused with rp::Error,
+/// as the backends refuse it: a clipped quadric has no closed-form closest point.
+///
 /// How. A binary BVH over the bounded primitives (median split on the longest axis of the
 /// centroid bounds, depth-first layout, leaves of up to 4 primitives), with float boxes that
 /// bound the float geometry exactly (triangles, quadric clip boxes) or outward-rounded and
@@ -51,9 +71,9 @@
 /// its mesh's box mapped into the world; each instanced mesh has a tree of its own, in its
 /// object space, built once. Unbounded planes are tested beside it. One loop walks every
 /// tree for every query (Reference::walk, madmann91/bvh's traversal with the query as a
-/// template policy): a query's key for a box is its entry t; each query says how far it
-/// still looks and what a leaf's primitive (an instance: its mesh's tree, walked with the same
-/// policy) does to it.
+/// template policy): a ray query's key for a box is its entry t, the point query's its
+/// distance from the query point; each query says how far it still looks and what a leaf's
+/// primitive (an instance: its mesh's tree, walked with the same policy) does to it.
 
 #include <cstddef>
 #include <cstdint>
@@ -95,6 +115,19 @@ inline Hit to_hit(const ReferenceHit& h) {
 /// prim_id, instance_id).
 using ReferenceHitList = HitListOf<ReferenceHit>;
 
+/// The closest point of the surface to a query point in double (Reference::closest_point),
+/// with rp::ClosestPoint's fields and meaning. Not found (no surface within the radius, an
+/// invalid query): prim_id == kInvalidId, distance == +inf, point == 0, u == v == 0.
+struct ReferencePoint {
+  Vec3d point{0.0};
+  double distance = std::numeric_limits<double>::infinity();  ///< |point - query point|
+  uint32_t prim_id = kInvalidId;
+  uint32_t instance_id = kNoInstance;  ///< the instance that places the triangle, as Hit's
+  double u = 0, v = 0;                 ///< as ClosestPoint's: barycentrics, a sphere's parameters, else 0
+
+  constexpr bool found() const { return prim_id != kInvalidId; }
+};
+
 /// Built once from a Scene (whose data it copies: the scene may go away afterwards), then
 /// immutable and safe to query from many threads at once.
 class Reference {
@@ -135,6 +168,23 @@ class Reference {
   /// counts[i] = all_hits(rays[i]).size() for every i, in parallel over TBB. Throws rp::Error
   /// when the sizes differ.
   void count_hits(std::span<const Ray> rays, std::span<uint32_t> counts) const;
+
+  /// The closest point of the surface to q.point within q.radius, on the rules of the file
+  /// comment: triangles (world and instanced), spheres, polygons, planes. Not found for an
+  /// invalid query. Throws rp::Error for a scene with quadrics.
+  ///
+  /// The walk never changes the answer: a box is entered when its distance from the query
+  /// point, computed in double, is at most the best distance so far (or the radius) plus a
+  /// guard g = 2^-32 (|p|_inf + M), M the scene's largest |coordinate|. Every candidate's
+  /// computed point lies in its primitive's box up to a few double roundings of coordinates
+  /// below M + |p|_inf, and so does a computed distance: g dwarfs them, so a candidate in a
+  /// skipped box is farther than the best, never as close (ties are never culled). An instance's mesh tree is walked
+  /// with its boxes mapped into the world (the centre by the map, the half extents by |L|),
+  /// each grown by a bound of the map's rounding.
+  ReferencePoint closest_point(const PointQuery& q) const;
+  /// out[i] = closest_point(queries[i]) for every i, in parallel over TBB. Throws rp::Error
+  /// when the sizes differ or the scene has quadrics.
+  void closest_points(std::span<const PointQuery> queries, std::span<ReferencePoint> out) const;
 
   /// True when a hit of primitive prim_id (placed by instance `instance`, or by none) at t is
   /// plausible for ray: prim_id is a plane, or t lies in the ray's guarded slab interval
@@ -188,6 +238,7 @@ class Reference {
   };
   struct InstanceD {
     uint32_t mesh;
+    Affine3d object_to_world;  ///< the instance's float object_to_world, in double (exact)
     Affine3d world_to_object;  ///< the double inverse of the instance's float object_to_world
     Affine3f float_world_to_object;  ///< Instance::world_to_object, for the valid-ray rule
     Box3f box;                       ///< the world box of the instance's tree entry
@@ -196,12 +247,13 @@ class Reference {
   struct BuildItem;
   template <class Query>
   struct RayWalk;
+  struct PointWalk;
 
   void build_tree(std::vector<BuildItem>& items, Tree& tree);
   /// The one traversal loop: near-first and depth-first over `tree`, for any walk w (a ray
-  /// query's RayWalk). w.enter(node, key) says whether a node may hold something of interest
-  /// and gives its key (the entry t), w.limit() the key beyond which a deferred node is
-  /// skipped, w.leaf(prim) visits a leaf's primitive.
+  /// query's RayWalk, the point query's PointWalk). w.enter(node, key) says whether a node may
+  /// hold something of interest and gives its key (entry t, distance), w.limit() the key
+  /// beyond which a deferred node is skipped, w.leaf(prim) visits a leaf's primitive.
   template <class Walk>
   static void walk(const Tree& tree, Walk& w);
   /// Runs ray query q (a policy: ClosestQuery, EveryQuery in reference.cpp) over the world's
@@ -210,6 +262,10 @@ class Reference {
   void trace(const Ray& ray, Query& q) const;
   /// The closest hit of sphere, quadric or polygon `id` along r (its core/geometry routine).
   Intersection<double> intersect_analytic(uint32_t id, const Rayd& r) const noexcept;
+  /// The point of sphere, polygon or plane `id` closest to p, with its distance.
+  ReferencePoint closest_on_analytic(uint32_t id, const Vec3d& p) const noexcept;
+  /// Throws rp::Error when the scene has quadrics (closest points refuse them).
+  void check_no_quadrics() const;
   /// The BVH box of bounded primitive p (its t-interval decides plausibility).
   Box3f prim_box(const LeafPrim& p) const noexcept;
 

@@ -1,7 +1,7 @@
 // The double reference's queries beyond the closest hit (analysis/reference.h): every hit along
-// a ray and counts, against brute force in double (reference_brute_force.h) bit for bit on
-// scenes of every primitive kind, world and instanced; closed-form answers; the interval, tie
-// and invalid-input rules; batches and threads.
+// a ray, counts and closest points, against brute force in double (reference_brute_force.h)
+// bit for bit on scenes of every primitive kind, world and instanced; closed-form answers; the
+// interval, radius, tie and invalid-input rules; the quadric refusal; batches and threads.
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -16,6 +16,7 @@
 
 #include "analysis/reference.h"
 #include "base/error.h"
+#include "core/geometry/sphere.h"
 #include "core/queries.h"
 #include "core/scene.h"
 #include "core/scene_transform.h"
@@ -33,6 +34,16 @@ Ray ray(Vec3f org, Vec3f dir, float tnear = 0.0f, float tfar = kInf) { return {o
 
 bool same(const ReferenceHit& a, const ReferenceHit& b) {
   return a.t == b.t && a.prim_id == b.prim_id && a.instance_id == b.instance_id && a.u == b.u && a.v == b.v;
+}
+
+bool same(const ReferencePoint& a, const ReferencePoint& b) {
+  return a.point == b.point && a.distance == b.distance && a.prim_id == b.prim_id && a.instance_id == b.instance_id &&
+         a.u == b.u && a.v == b.v;
+}
+
+Scene without_quadrics(Scene s) {
+  while (!s.quadrics().empty()) s.remove_quadric(uint32_t(s.quadrics().size() - 1));
+  return s;
 }
 
 /// test::instanced_scene (instances rotated, scaled unevenly, mirrored, beside a world mesh, a
@@ -243,6 +254,223 @@ TEST(ReferenceAllHits, BatchesAreTheSameForAnyThreadCountAndMaxPerRayKeepsTheNea
   EXPECT_TRUE(ref.all_hits(std::span<const Ray>()).hits.empty());
   std::vector<uint32_t> counts(rays.size() - 1);
   EXPECT_EQ(test::error_of([&] { ref.count_hits(rays, counts); }), "Reference::count_hits: 3000 rays but 2999 counts");
+}
+
+// ---- Closest points ----------------------------------------------------------------------
+
+/// Query points around a scene (at `offset`): random in [-3.5, 3.5]^3, points of the 0.25 grid
+/// (on the grid scenes' faces, edges and vertices: distance 0 and exact ties between
+/// duplicates), vertices of world meshes, polygons and placed instances (rounded to float); a
+/// third of them with a radius in [0, 1].
+std::vector<PointQuery> query_points(const Scene& s, uint32_t seed, int count, Vec3f offset) {
+  std::mt19937 rng(seed);
+  std::vector<Vec3f> vertices;
+  for (size_t m = 0; m < s.meshes().size(); ++m)
+    if (!s.is_instanced(m))
+      vertices.insert(vertices.end(), s.meshes()[m].positions.begin(), s.meshes()[m].positions.end());
+  vertices.insert(vertices.end(), s.polygon_vertices().begin(), s.polygon_vertices().end());
+  for (const Instance& in : s.instances())
+    for (const Vec3f& p : s.meshes()[in.mesh].positions)
+      vertices.push_back(Vec3f(Affine3d(in.object_to_world).point(Vec3d(p))));
+  std::vector<PointQuery> out;
+  for (int n = 0; n < count; ++n) {
+    PointQuery q;
+    if (n % 3 == 0) q.point = offset + test::uniform_vec(rng, -3.5f, 3.5f);
+    if (n % 3 == 1) q.point = offset + test::grid_vec(rng);
+    if (n % 3 == 2) q.point = vertices[rng() % vertices.size()];
+    if (rng() % 3 == 0) q.radius = test::uniform(rng, 0.0f, 1.0f);
+    out.push_back(q);
+  }
+  return out;
+}
+
+/// closest_points (batched and single) equals brute force bit for bit; the answers must come
+/// from the kinds in `kinds_wanted` (kind_bit), some at distance 0, some cut by the radius.
+void expect_points_match_brute_force(const Scene& s, const std::vector<PointQuery>& queries, const char* what,
+                                     uint32_t kinds_wanted) {
+  const Reference ref(s);
+  std::vector<ReferencePoint> got(queries.size());
+  ref.closest_points(queries, got);
+  int mismatches = 0;
+  size_t on_surface = 0, cut_by_radius = 0;
+  uint32_t kinds = 0;
+  for (size_t i = 0; i < queries.size() && mismatches < 10; ++i) {
+    const ReferencePoint want = test::brute_force_point(s, queries[i]);
+    const bool equal = same(got[i], want) && same(ref.closest_point(queries[i]), want);
+    mismatches += !equal;
+    EXPECT_TRUE(equal) << what << " point " << i << ": reference prim " << got[i].prim_id << " instance "
+                       << got[i].instance_id << " distance " << got[i].distance << ", brute force prim " << want.prim_id
+                       << " instance " << want.instance_id << " distance " << want.distance;
+    if (got[i].found()) kinds |= kind_bit(s, got[i].prim_id, got[i].instance_id);
+    on_surface += got[i].distance == 0.0;
+    cut_by_radius += !got[i].found() && test::brute_force_point(s, {queries[i].point}).found();
+  }
+  EXPECT_EQ(mismatches, 0) << what;
+  EXPECT_EQ(kinds & kinds_wanted, kinds_wanted) << what << ": kinds found " << kinds;
+  EXPECT_GT(on_surface, 0u) << what;
+  EXPECT_GT(cut_by_radius, 0u) << what;
+}
+
+constexpr uint32_t kPointKinds = (1u << uint32_t(PrimKind::triangle)) | (1u << uint32_t(PrimKind::sphere)) |
+                                 (1u << uint32_t(PrimKind::polygon)) | (1u << uint32_t(PrimKind::plane));
+
+TEST(ReferenceClosestPoint, EqualsBruteForceBitForBitOnRandomScenes) {
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    const Scene s = without_quadrics(test::random_scene(seed, 300, {0, 0, 0}));
+    expect_points_match_brute_force(s, query_points(s, seed + 300, 1500, {0, 0, 0}), "random_scene", kPointKinds);
+  }
+  const Vec3f offset{1024.0f, -512.0f, 2048.0f};
+  const Scene far = without_quadrics(test::random_scene(11, 300, offset));
+  expect_points_match_brute_force(far, query_points(far, 311, 1500, offset), "offset_scene", kPointKinds);
+  // A deep tree built in parallel.
+  const Scene deep = without_quadrics(test::random_scene(21, 12000, {0, 0, 0}));
+  expect_points_match_brute_force(deep, query_points(deep, 321, 300, {0, 0, 0}), "deep_bvh",
+                                  1u << uint32_t(PrimKind::triangle));
+}
+
+TEST(ReferenceClosestPoint, EqualsBruteForceBitForBitWithInstances) {
+  // Instances rotated, scaled unevenly and mirrored; then the scene far from the origin.
+  const Scene s = without_quadrics(instanced_with_polygon());
+  expect_points_match_brute_force(s, query_points(s, 331, 2000, {0, 0, 0}), "instances", kPointKinds | kInstanced);
+  const Vec3f offset{1024.0f, -512.0f, 2048.0f};
+  const Scene far = transformed(s, 1.0, Vec3d(offset));
+  expect_points_match_brute_force(far, query_points(far, 332, 2000, offset), "instances_offset",
+                                  kPointKinds | kInstanced);
+}
+
+TEST(ReferenceClosestPoint, ClosedFormPointsOfSpheresTrianglesPolygonsPlanesAndInstances) {
+  Scene s;
+  s.add_mesh(test::mesh_of({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2}, "tri"));
+  const Vec3f c{5.0f, 2.0f, 3.0f};
+  s.add_sphere({c, 0.5f, 0});
+  s.add_polygon(std::vector<Vec3f>{{-6, -1, -6}, {-4, -1, -6}, {-4, 1, -6}, {-6, 1, -6}}, 0);  // z = -6
+  s.add_plane({{0.0f, 1.0f, 0.0f}, -20.0f, 0});                                                // y = 20
+  // The triangle again, doubled and moved to z = 10 by an instance.
+  const uint32_t m = s.add_instanced_mesh(test::mesh_of({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2}, "placed"));
+  s.add_instance(m, test::placement({2, 2, 2}, {0, 0, 1}, 0.0f, {0.0f, 0.0f, 10.0f}));
+  const Reference ref(s);
+  const auto at = [&](Vec3f p, float radius = kInf) { return ref.closest_point({p, radius}); };
+
+  const ReferencePoint face = at({0.25f, 0.25f, 1.0f});  // above the face
+  EXPECT_EQ(face.prim_id, 0u);
+  EXPECT_EQ(face.point, Vec3d(0.25, 0.25, 0.0));
+  EXPECT_EQ(face.distance, 1.0);
+  EXPECT_EQ(face.u, 0.25);
+  EXPECT_EQ(face.v, 0.25);
+  const ReferencePoint corner = at({2.0f, -1.0f, 0.0f});  // beyond vertex (1, 0, 0)
+  EXPECT_EQ(corner.point, Vec3d(1.0, 0.0, 0.0));
+  EXPECT_EQ(corner.distance, std::sqrt(2.0));
+  EXPECT_EQ(corner.u, 1.0);
+  EXPECT_EQ(corner.v, 0.0);
+
+  const ReferencePoint ball = at(c + Vec3f{0.0f, 0.0f, 2.0f});
+  EXPECT_EQ(ball.prim_id, s.sphere_base());
+  EXPECT_EQ(ball.point, Vec3d(c) + Vec3d(0.0, 0.0, 0.5));
+  EXPECT_EQ(ball.distance, 1.5);
+  const Vec2<double> uv = sphere_uv(Vec3d(c), 0.5, ball.point);
+  EXPECT_EQ(ball.u, uv.x);
+  EXPECT_EQ(ball.v, uv.y);
+  const ReferencePoint centre = at(c);  // every point is as close: the one on +x
+  EXPECT_EQ(centre.point, Vec3d(c) + Vec3d(0.5, 0.0, 0.0));
+  EXPECT_EQ(centre.distance, 0.5);
+
+  const ReferencePoint square = at({-5.0f, 0.5f, -3.0f});
+  EXPECT_EQ(square.prim_id, s.polygon_base());
+  EXPECT_EQ(square.point, Vec3d(-5.0, 0.5, -6.0));
+  EXPECT_EQ(square.distance, 3.0);
+
+  const ReferencePoint plane = at({0.5f, 17.0f, 0.25f});
+  EXPECT_EQ(plane.prim_id, s.plane_base());
+  EXPECT_EQ(plane.point, Vec3d(0.5, 20.0, 0.25));
+  EXPECT_EQ(plane.distance, 3.0);
+
+  // The instance's triangle is (0,0,10), (2,0,10), (0,2,10) in the world: the world distance,
+  // the barycentrics of the mesh's own triangle.
+  const ReferencePoint placed = at({0.5f, 1.0f, 13.0f});
+  EXPECT_EQ(placed.prim_id, s.mesh_base(m));
+  EXPECT_EQ(placed.instance_id, 0u);
+  EXPECT_EQ(placed.point, Vec3d(0.5, 1.0, 10.0));
+  EXPECT_EQ(placed.distance, 3.0);
+  EXPECT_EQ(placed.u, 0.25);
+  EXPECT_EQ(placed.v, 0.5);
+}
+
+TEST(ReferenceClosestPoint, TheRadiusIsClosedAndInvalidQueriesFindNothing) {
+  Scene s;
+  s.add_plane({{0.0f, 0.0f, 1.0f}, 0.0f, 0});  // z = 0
+  s.add_sphere({{0.0f, 0.0f, -5.0f}, 1.0f, 0});
+  const Reference ref(s);
+  EXPECT_EQ(ref.closest_point({{0.0f, 0.0f, 0.5f}, 0.5f}).distance, 0.5);
+  EXPECT_FALSE(ref.closest_point({{0.0f, 0.0f, 0.5f}, std::nextafter(0.5f, 0.0f)}).found());
+  EXPECT_EQ(ref.closest_point({{0.25f, 1.0f, 0.0f}, 0.0f}).distance, 0.0);  // on the plane, radius 0
+  EXPECT_EQ(ref.closest_point({{0.0f, 0.0f, -3.5f}, 1.0f}).prim_id, s.sphere_base());
+  EXPECT_FALSE(ref.closest_point({{0.0f, 0.0f, -2.0f}, 1.0f}).found());  // both at 2
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<PointQuery> bad{{{nan, 0.0f, 0.0f}},
+                                    {{0.0f, kInf, 0.0f}},
+                                    {{0.0f, 0.0f, -kInf}},
+                                    {{0.0f, 0.0f, 1.0f}, -1.0f},
+                                    {{0.0f, 0.0f, 1.0f}, nan}};
+  std::vector<ReferencePoint> out(bad.size(), ReferencePoint{Vec3d(1.0), 1.0, 3, 0, 0.5, 0.5});
+  ref.closest_points(bad, out);
+  for (size_t i = 0; i < bad.size(); ++i)
+    for (const ReferencePoint& p : {out[i], ref.closest_point(bad[i])}) {
+      EXPECT_FALSE(p.found()) << i;
+      EXPECT_TRUE(same(p, ReferencePoint{})) << i;
+    }
+  std::vector<ReferencePoint> short_out(1);
+  EXPECT_EQ(test::error_of([&] { ref.closest_points(bad, short_out); }),
+            "Reference::closest_points: 5 queries but 1 answers");
+}
+
+TEST(ReferenceClosestPoint, AtEqualDistanceTheLowestPrimIdThenInstanceWins) {
+  Scene s;
+  const std::vector<Vec3f> tri{{-1, -1, 0}, {2, -1, 0}, {-1, 2, 0}};
+  s.add_plane({{0.0f, 0.0f, 1.0f}, 0.0f, 0});  // z = 0 too, the largest prim_id
+  s.add_mesh(test::mesh_of(tri, {0, 1, 2}, "a"));
+  s.add_mesh(test::mesh_of(tri, {0, 1, 2}, "b"));
+  const uint32_t m = s.add_instanced_mesh(test::mesh_of(tri, {0, 1, 2}, "c"));
+  const Affine3f down = test::placement({1, 1, 1}, {0, 0, 1}, 0.0f, {0.0f, 0.0f, -2.0f});
+  s.add_instance(m, down);
+  s.add_instance(m, down);
+  const Reference ref(s);
+  const ReferencePoint above = ref.closest_point({{0.25f, 0.125f, 3.0f}});
+  EXPECT_EQ(above.prim_id, 0u);  // triangles 0, 1 and the plane, all at 3
+  EXPECT_EQ(above.distance, 3.0);
+  EXPECT_EQ(ref.intersect(ray({0.25f, 0.125f, 3.0f}, {0.0f, 0.0f, -1.0f})).prim_id, s.plane_base());  // rays: largest
+  const ReferencePoint below = ref.closest_point({{0.25f, 0.125f, -2.5f}});
+  EXPECT_EQ(below.prim_id, s.mesh_base(m));  // both instances at 0.5
+  EXPECT_EQ(below.instance_id, 0u);
+  EXPECT_EQ(below.distance, 0.5);
+}
+
+TEST(ReferenceClosestPoint, QuadricsAreRefusedAsTheBackendsRefuseThem) {
+  Scene s = test::instanced_scene();
+  const std::vector<PointQuery> q{{{0.0f, 0.0f, 0.0f}}};
+  std::vector<ReferencePoint> out(1);
+  {
+    const Reference ref(s);
+    const std::string one =
+        "reference: closest points: the scene has 1 quadric (quadrics have no closest-point routine)";
+    EXPECT_EQ(test::error_of([&] { ref.closest_point(q[0]); }), one);
+    EXPECT_EQ(test::error_of([&] { ref.closest_points(q, out); }), one);
+  }
+  s.add_quadric({Quadric<float>::ellipsoid({3.0f, 0.0f, 0.0f}, {0.5f, 0.3f, 0.4f}), 0});
+  EXPECT_EQ(test::error_of([&] { Reference(s).closest_point(q[0]); }),
+            "reference: closest points: the scene has 2 quadrics (quadrics have no closest-point routine)");
+  EXPECT_TRUE(Reference(without_quadrics(s)).closest_point(q[0]).found());
+}
+
+TEST(ReferenceClosestPoint, BatchesAreTheSameForAnyThreadCount) {
+  const Scene s = without_quadrics(test::random_scene(31, 9000, {0, 0, 0}));
+  const std::vector<PointQuery> q = query_points(s, 341, 2000, {0, 0, 0});
+  std::vector<ReferencePoint> one(q.size()), two(q.size());
+  {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    Reference(s).closest_points(q, one);
+  }
+  Reference(s).closest_points(q, two);
+  for (size_t i = 0; i < q.size(); ++i) ASSERT_TRUE(same(one[i], two[i])) << i;
 }
 
 }  // namespace
