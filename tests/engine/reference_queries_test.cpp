@@ -41,24 +41,6 @@ bool same(const ReferencePoint& a, const ReferencePoint& b) {
          a.u == b.u && a.v == b.v;
 }
 
-Scene without_quadrics(Scene s) {
-  while (!s.quadrics().empty()) s.remove_quadric(uint32_t(s.quadrics().size() - 1));
-  return s;
-}
-
-/// test::instanced_scene (instances rotated, scaled unevenly, mirrored, beside a world mesh, a
-/// sphere, a quadric and a plane) with a tilted pentagon: every kind beside the instances.
-Scene instanced_with_polygon() {
-  Scene s = test::instanced_scene();
-  std::vector<Vec3f> pentagon;
-  for (int k = 0; k < 5; ++k) {
-    const float a = 2.0f * float(kPi) * float(k) / 5.0f;
-    pentagon.push_back({-0.9f + 0.4f * std::cos(a), 1.0f + 0.2f * std::cos(a), 0.9f + 0.4f * std::sin(a)});
-  }
-  s.add_polygon(pentagon, 0);
-  return s;
-}
-
 /// The kinds of primitive an answer came from: bit k for PrimKind k, bit 7 for an instance's
 /// triangle.
 uint32_t kind_bit(const Scene& s, uint32_t prim_id, uint32_t instance_id) {
@@ -125,7 +107,7 @@ TEST(ReferenceAllHits, EqualBruteForceBitForBitOnRandomScenes) {
 }
 
 TEST(ReferenceAllHits, EqualBruteForceBitForBitWithInstances) {
-  const Scene s = instanced_with_polygon();
+  const Scene s = test::instanced_scene_with_polygon();
   expect_hits_match_brute_force(s, test::grid_and_random_rays(231, 3000, {0, 0, 0}), "instances",
                                 kEveryKind | kInstanced);
   const Vec3f offset{1024.0f, -512.0f, 2048.0f};
@@ -316,21 +298,21 @@ constexpr uint32_t kPointKinds = (1u << uint32_t(PrimKind::triangle)) | (1u << u
 
 TEST(ReferenceClosestPoint, EqualsBruteForceBitForBitOnRandomScenes) {
   for (uint32_t seed : {1u, 2u, 3u}) {
-    const Scene s = without_quadrics(test::random_scene(seed, 300, {0, 0, 0}));
+    const Scene s = test::without_quadrics(test::random_scene(seed, 300, {0, 0, 0}));
     expect_points_match_brute_force(s, query_points(s, seed + 300, 1500, {0, 0, 0}), "random_scene", kPointKinds);
   }
   const Vec3f offset{1024.0f, -512.0f, 2048.0f};
-  const Scene far = without_quadrics(test::random_scene(11, 300, offset));
+  const Scene far = test::without_quadrics(test::random_scene(11, 300, offset));
   expect_points_match_brute_force(far, query_points(far, 311, 1500, offset), "offset_scene", kPointKinds);
   // A deep tree built in parallel.
-  const Scene deep = without_quadrics(test::random_scene(21, 12000, {0, 0, 0}));
+  const Scene deep = test::without_quadrics(test::random_scene(21, 12000, {0, 0, 0}));
   expect_points_match_brute_force(deep, query_points(deep, 321, 300, {0, 0, 0}), "deep_bvh",
                                   1u << uint32_t(PrimKind::triangle));
 }
 
 TEST(ReferenceClosestPoint, EqualsBruteForceBitForBitWithInstances) {
   // Instances rotated, scaled unevenly and mirrored; then the scene far from the origin.
-  const Scene s = without_quadrics(instanced_with_polygon());
+  const Scene s = test::without_quadrics(test::instanced_scene_with_polygon());
   expect_points_match_brute_force(s, query_points(s, 331, 2000, {0, 0, 0}), "instances", kPointKinds | kInstanced);
   const Vec3f offset{1024.0f, -512.0f, 2048.0f};
   const Scene far = transformed(s, 1.0, Vec3d(offset));
@@ -458,11 +440,11 @@ TEST(ReferenceClosestPoint, QuadricsAreRefusedAsTheBackendsRefuseThem) {
   s.add_quadric({Quadric<float>::ellipsoid({3.0f, 0.0f, 0.0f}, {0.5f, 0.3f, 0.4f}), 0});
   EXPECT_EQ(test::error_of([&] { Reference(s).closest_point(q[0]); }),
             "reference: closest points: the scene has 2 quadrics (quadrics have no closest-point routine)");
-  EXPECT_TRUE(Reference(without_quadrics(s)).closest_point(q[0]).found());
+  EXPECT_TRUE(Reference(test::without_quadrics(s)).closest_point(q[0]).found());
 }
 
 TEST(ReferenceClosestPoint, BatchesAreTheSameForAnyThreadCount) {
-  const Scene s = without_quadrics(test::random_scene(31, 9000, {0, 0, 0}));
+  const Scene s = test::without_quadrics(test::random_scene(31, 9000, {0, 0, 0}));
   const std::vector<PointQuery> q = query_points(s, 341, 2000, {0, 0, 0});
   std::vector<ReferencePoint> one(q.size()), two(q.size());
   {

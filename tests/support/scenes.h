@@ -212,6 +212,25 @@ inline Scene instanced_scene() {
   return s;
 }
 
+/// instanced_scene with a tilted pentagon beside the rest: every primitive kind next to the
+/// instances.
+inline Scene instanced_scene_with_polygon() {
+  Scene s = instanced_scene();
+  std::vector<Vec3f> pentagon;
+  for (int k = 0; k < 5; ++k) {
+    const float a = 2.0f * float(kPi) * float(k) / 5.0f;
+    pentagon.push_back({-0.9f + 0.4f * std::cos(a), 1.0f + 0.2f * std::cos(a), 0.9f + 0.4f * std::sin(a)});
+  }
+  s.add_polygon(pentagon, 0);
+  return s;
+}
+
+/// `s` without its quadrics (what closest points refuse).
+inline Scene without_quadrics(Scene s) {
+  while (!s.quadrics().empty()) s.remove_quadric(uint32_t(s.quadrics().size() - 1));
+  return s;
+}
+
 /// `scene` with every instance baked into a world mesh (its mesh's positions mapped by the
 /// instance's transform in double, normals dropped), instanced meshes left out: the same
 /// triangles, flat, with the same materials, lights and camera. Prim ids differ (the baked
