@@ -109,6 +109,32 @@ std::string read_file(const std::string& path, bool allow_stdin) {
   return text;
 }
 
+InputFile::InputFile(const std::string& path) : path_(path) {
+  if (path == "-") {
+    memory_ = read_file(path, /*allow_stdin=*/true);
+    f_ = ::fmemopen(memory_.data(), memory_.size(), "rb");
+    if (!f_) throw Error(cat("standard input: cannot read: ", std::strerror(errno)));
+    size_ = memory_.size();
+    return;
+  }
+  const int fd = open_regular_file(path, size_);
+  f_ = ::fdopen(fd, "rb");
+  if (!f_) {
+    const int e = errno;
+    ::close(fd);
+    throw Error(cat(path, ": cannot open: ", std::strerror(e)));
+  }
+}
+
+InputFile::~InputFile() {
+  if (f_) std::fclose(f_);
+}
+
+void InputFile::fail_read(uint64_t offset) const {
+  if (std::ferror(f_)) throw Error(cat(path_, ": read error at byte ", offset, ": ", std::strerror(errno)));
+  throw Error(cat(path_, ": truncated at byte ", offset, " (the file shrank while it was read)"));
+}
+
 MappedFile::MappedFile(const std::string& path) {
   uint64_t size = 0;
   const int fd = open_regular_file(path, size);

@@ -11,6 +11,7 @@
 /// input instead, up to kMaxStandardInputBytes.
 
 #include <cstdint>
+#include <cstdio>
 #include <streambuf>
 #include <string>
 
@@ -26,6 +27,35 @@ int open_regular_file(const std::string& path, uint64_t& size);
 /// The whole of `path` (a regular file, or standard input for "-" when `allow_stdin`).
 /// Throws rp::Error naming the path and, when memory runs out, the bytes asked for.
 std::string read_file(const std::string& path, bool allow_stdin = false);
+
+/// An input opened for reading by the rule above as a stdio stream: a regular file, or standard
+/// input for "-" (read whole into memory first, up to kMaxStandardInputBytes); closed when
+/// destroyed. What the record files (io/rayfile.h, io/pointfile.h) read through.
+class InputFile {
+ public:
+  /// Throws rp::Error "<path>: cannot open: <reason>" (or cannot read) as open_regular_file.
+  explicit InputFile(const std::string& path);
+  ~InputFile();
+  InputFile(const InputFile&) = delete;
+  InputFile& operator=(const InputFile&) = delete;
+
+  std::FILE* get() const { return f_; }
+  const std::string& path() const { return path_; }
+  /// Bytes in the file (or read from standard input).
+  uint64_t size() const { return size_; }
+  /// The bytes of standard input ("-"); empty for a file.
+  const std::string& memory() const { return memory_; }
+
+  /// Throws for a stream error after a short read at byte `offset`: "<path>: read error at
+  /// byte N: <reason>", or "<path>: truncated at byte N" when the file shrank.
+  [[noreturn]] void fail_read(uint64_t offset) const;
+
+ private:
+  std::string path_;
+  std::string memory_;
+  std::FILE* f_ = nullptr;
+  uint64_t size_ = 0;
+};
 
 /// A regular file mapped read-only (empty files map to no bytes). Throws rp::Error naming the
 /// path, and the bytes when the mapping fails.

@@ -5,18 +5,15 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cerrno>
 #include <charconv>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string_view>
-#include <system_error>
 
 #include "base/error.h"
 #include "base/text.h"
+#include "io/csv.h"
 #include "io/input_file.h"
 #include "io/output_file.h"
 
@@ -47,20 +44,14 @@ constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 1, 32, 0, 0};
 /// Version 2 added instance_id to each record; version 1's 28-byte records are still read.
 constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 2, 32, 1, 28};
 
-/// The columns of a CSV file of one kind, in the order the writer writes them (line 1 of a
-/// written file is these names joined by commas); the first `required` must be in every file,
-/// the others default to `defaults` (text parsed like a value; null for required columns).
-struct CsvColumns {
-  std::array<const char*, 8> names;
-  size_t count, required;
-  std::array<const char*, 8> defaults;
-};
-constexpr CsvColumns kRayColumns{{"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"}, 8, 6,
-                                 {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "0", "inf"}};
-constexpr CsvColumns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z", "instance_id"}, 8, 7,
-                                 {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "-1"}};
-
-std::string errno_message(int e) { return std::generic_category().message(e); }
+constexpr csv::Columns kRayColumns{{"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"},
+                                   8,
+                                   6,
+                                   {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "0", "inf"}};
+constexpr csv::Columns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z", "instance_id"},
+                                   8,
+                                   7,
+                                   {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "-1"}};
 
 /// The format `path` names for a file of `fmt`'s kind: .csv (any case) CSV; .bin, .rays /
 /// .hits or no extension (devices such as /dev/stdout) binary; any other extension an error.
@@ -71,72 +62,6 @@ bool is_csv(const std::string& path, const BinaryFormat& fmt) {
   if (ext.empty() || ext == ".bin" || ext == std::string(".") + fmt.many) return false;
   throw Error(cat(path, ": unknown ", fmt.kind, " file extension '", printable(ext), "' (.csv for text; .bin, .", fmt.many,
                   " or none for binary)"));
-}
-
-/// `text` without blanks (spaces, tabs) at either end.
-std::string_view trim(std::string_view text) {
-  const size_t first = text.find_first_not_of(" \t");
-  if (first == std::string_view::npos) return {};
-  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
-}
-
-/// The fields of one CSV line, blanks around each value dropped.
-std::vector<std::string_view> split_csv(std::string_view line) {
-  std::vector<std::string_view> out;
-  for (size_t start = 0;;) {
-    const size_t comma = line.find(',', start);
-    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? comma : comma - start)));
-    if (comma == std::string_view::npos) return out;
-    start = comma + 1;
-  }
-}
-
-/// Line 1 of a CSV file of `columns`: for each column of the file, the field it holds. The
-/// line may start with a UTF-8 byte order mark (spreadsheets) and '#' (numpy.savetxt's
-/// header), and names may have blanks around them. Returns an empty vector with `why` set when
-/// the line is no such header.
-std::vector<size_t> parse_header(std::string_view line, const CsvColumns& columns, std::string& why) {
-  const std::string expected = [&] {
-    std::string all;
-    for (size_t f = 0; f < columns.count; ++f) all += cat(f ? "," : "", columns.names[f]);
-    return all;
-  }();
-  if (line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
-  line = trim(line);
-  if (line.starts_with('#')) line = trim(line.substr(1));
-  std::vector<size_t> field;
-  std::array<bool, 8> seen{};
-  for (const std::string_view name : split_csv(line)) {
-    size_t f = 0;
-    while (f < columns.count && name != columns.names[f]) ++f;
-    if (f == columns.count) {
-      why = field.empty() ? cat("expected a header naming the columns (", expected, ")")
-                                          : cat("unknown column '", printable(name), "' (columns: ", expected, ")");
-      return {};
-    }
-    if (seen[f]) {
-      why = cat("column '", name, "' appears twice");
-      return {};
-    }
-    seen[f] = true;
-    field.push_back(f);
-  }
-  for (size_t f = 0; f < columns.required; ++f)
-    if (!seen[f]) {
-      why = columns.required == columns.count
-                ? cat("no column '", columns.names[f], "' (columns: ", expected, ")")
-                : cat("no column '", columns.names[f], "' (columns: ", expected, "; all but ",
-                      columns.names[columns.required], columns.count - columns.required > 1 ? " and the ones after it" : "",
-                      " are needed)");
-      return {};
-    }
-  return field;
-}
-
-/// floor(n * i / parts) without overflow (i <= parts).
-uint64_t share_of(uint64_t n, int i, int parts) {
-  const uint64_t p = uint64_t(parts), k = uint64_t(i);
-  return n / p * k + n % p * k / p;
 }
 
 /// count * k in decimal, exact even when the product does not fit in 64 bits.
@@ -153,58 +78,13 @@ std::string times(uint64_t count, uint64_t k) {
   return digits;
 }
 
-/// An input opened for reading by the rule of io/input_file.h (a regular file), or standard
-/// input for "-", read whole into memory first; closed on scope exit.
-class InputFile {
- public:
-  explicit InputFile(const std::string& path) : path_(path) {
-    if (path == "-") {
-      memory_ = read_file(path, /*allow_stdin=*/true);
-      f_ = ::fmemopen(memory_.data(), memory_.size(), "rb");
-      if (!f_) throw Error(cat("standard input: cannot read: ", errno_message(errno)));
-      size_ = memory_.size();
-      return;
-    }
-    const int fd = open_regular_file(path, size_);
-    f_ = ::fdopen(fd, "rb");
-    if (!f_) {
-      const int e = errno;
-      ::close(fd);
-      throw Error(cat(path, ": cannot open: ", errno_message(e)));
-    }
-  }
-  ~InputFile() {
-    if (f_) std::fclose(f_);
-  }
-  InputFile(const InputFile&) = delete;
-  InputFile& operator=(const InputFile&) = delete;
-
-  std::FILE* get() const { return f_; }
-  const std::string& path() const { return path_; }
-  uint64_t size() const { return size_; }
-  /// The bytes of standard input ("-"); empty for a file.
-  const std::string& memory() const { return memory_; }
-
-  /// Throws for a stream error after a short read at byte `offset`.
-  [[noreturn]] void fail_read(uint64_t offset) const {
-    if (std::ferror(f_)) throw Error(cat(path_, ": read error at byte ", offset, ": ", errno_message(errno)));
-    throw Error(cat(path_, ": truncated at byte ", offset, " (the file shrank while it was read)"));
-  }
-
- private:
-  std::string path_;
-  std::string memory_;
-  std::FILE* f_ = nullptr;
-  uint64_t size_ = 0;
-};
-
 /// True when `in` is CSV: by the extension of its path, or for standard input ("-") by its
 /// first line being a header of `columns`.
-bool is_csv(const InputFile& in, const BinaryFormat& fmt, const CsvColumns& columns) {
+bool is_csv(const InputFile& in, const BinaryFormat& fmt, const csv::Columns& columns) {
   if (in.path() != "-") return is_csv(in.path(), fmt);
   const std::string_view text = in.memory();
   std::string why;
-  return !parse_header(text.substr(0, text.find('\n')), columns, why).empty();
+  return !csv::parse_header(text.substr(0, text.find('\n')), columns, why).empty();
 }
 
 /// The bytes of a binary file, read in order; their total is known up front.
@@ -356,60 +236,9 @@ void write_records(const std::string& path, const std::string& head, std::span<c
   out.commit();
 }
 
-/// Lines of a text file without their "\n" or "\r\n", numbered from 1.
-class LineReader {
- public:
-  explicit LineReader(InputFile& in) : in_(in) {}
-  ~LineReader() { std::free(buf_); }
-  LineReader(const LineReader&) = delete;
-  LineReader& operator=(const LineReader&) = delete;
-
-  /// The next line, or false at the end of the file.
-  bool next(std::string_view& line) {
-    start_ = offset_;
-    const ssize_t n = ::getline(&buf_, &cap_, in_.get());
-    if (n < 0) {
-      if (std::ferror(in_.get())) in_.fail_read(offset_);
-      return false;
-    }
-    offset_ += uint64_t(n);
-    ++number_;
-    line = std::string_view(buf_, size_t(n));
-    if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    return true;
-  }
-  uint64_t number() const { return number_; }
-  /// The byte offset of the last line read, and of the next.
-  uint64_t start() const { return start_; }
-  uint64_t offset() const { return offset_; }
-
- private:
-  InputFile& in_;
-  char* buf_ = nullptr;
-  size_t cap_ = 0;
-  uint64_t number_ = 0, start_ = 0, offset_ = 0;
-};
-
-/// Where a CSV value came from, for messages.
-struct CsvPlace {
-  const std::string& path;
-  uint64_t line;
-};
-
-float parse_float(const CsvPlace& at, std::string_view s) {
-  float v = 0;
-  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (s.empty() || end != s.data() + s.size() || ec == std::errc::invalid_argument)
-    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is not a number"));
-  if (ec == std::errc::result_out_of_range)
-    throw Error(cat(at.path, ": line ", at.line, ": '", printable(s), "' is out of the float32 range"));
-  return v;
-}
-
 /// A prim_id or instance_id (`what`): a decimal integer in [-1, 0xfffffffe], -1 for
 /// 0xffffffff (kInvalidId, kNoInstance).
-uint32_t parse_id(const CsvPlace& at, std::string_view s, const char* what) {
+uint32_t parse_id(const csv::Place& at, std::string_view s, const char* what) {
   int64_t v = 0;
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || end != s.data() + s.size() || ec != std::errc() || v < -1 || v >= int64_t(kInvalidId))
@@ -417,59 +246,14 @@ uint32_t parse_id(const CsvPlace& at, std::string_view s, const char* what) {
   return v == -1 ? kInvalidId : uint32_t(v);
 }
 
-/// Reads `part` of a CSV file of `columns` (line 1 names them, see parse_header; every other
-/// line holds one value per column), each line turned into a Record by make(place, values), the
-/// values in the order of `columns` with the defaults for absent ones. The part's lines are
-/// those that start in its share of the bytes after line 1; the lines before them are read
-/// but not parsed, so that line numbers and the blank-line rule are the whole file's.
+/// The records of `part` of a CSV file of `columns` (csv::read_rows), each line made into one
+/// by make(place, values).
 template <typename Record, typename Make>
-std::vector<Record> read_csv(InputFile& in, const CsvColumns& columns, Make make, FilePart part) {
-  const std::string& path = in.path();
-  LineReader lines(in);
-  std::string_view line;
-  std::string why = "empty file: expected a header naming the columns";
-  const std::vector<size_t> field = lines.next(line) ? parse_header(line, columns, why) : std::vector<size_t>();
-  if (field.empty()) throw Error(cat(path, ": line 1: ", why));
-  const uint64_t body = lines.offset(), share = in.size() - std::min(in.size(), body);
-  const uint64_t begin = body + share_of(share, part.index, part.count);
-  const uint64_t end = part.index + 1 == part.count ? UINT64_MAX : body + share_of(share, part.index + 1, part.count);
+std::vector<Record> read_csv(InputFile& in, const csv::Columns& columns, Make make, FilePart part) {
   std::vector<Record> out;
-  uint64_t blank = 0;  // first blank line seen; fine only if nothing follows it
-  std::string_view values[8];
-  for (size_t f = columns.required; f < columns.count; ++f) values[f] = columns.defaults[f];
-  while (lines.next(line) && lines.start() < end) {
-    if (trim(line).empty()) {
-      if (blank == 0) blank = lines.number();
-      continue;
-    }
-    if (blank != 0) throw Error(cat(path, ": line ", blank, ": blank line before the end of the data"));
-    if (lines.start() < begin) continue;
-    const std::vector<std::string_view> v = split_csv(line);
-    if (v.size() != field.size())
-      throw Error(cat(path, ": line ", lines.number(), ": ", v.size(), v.size() == 1 ? " value" : " values", ", expected ",
-                      field.size()));
-    for (size_t c = 0; c < v.size(); ++c) values[field[c]] = v[c];
-    out.push_back(make(CsvPlace{path, lines.number()}, values));
-  }
+  csv::read_rows(in, columns, part.index, part.count,
+                 [&](const csv::Place& at, const std::string_view* values) { out.push_back(make(at, values)); });
   return out;
-}
-
-/// printf("%.9g") in the C locale whatever the global locale; every NaN is "nan".
-void append_float(std::string& s, float x) {
-  if (std::isnan(x)) {
-    s += "nan";
-    return;
-  }
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, 9);
-  s.append(buf, r.ptr);
-}
-
-/// Line 1 of a CSV file of `columns`: their names.
-std::string csv_head(const CsvColumns& columns) {
-  std::string text;
-  for (size_t f = 0; f < columns.count; ++f) text += cat(f ? "," : "", columns.names[f]);
-  return text + '\n';
 }
 
 /// Appends `records` to `out` as CSV lines, each formed by line(record, text).
@@ -485,17 +269,17 @@ void ray_line(const Ray& r, std::string& s) {
   const float v[8] = {r.org.x, r.org.y, r.org.z, r.dir.x, r.dir.y, r.dir.z, r.tnear, r.tfar};
   for (int i = 0; i < 8; ++i) {
     if (i) s += ',';
-    append_float(s, v[i]);
+    csv::append_float(s, v[i]);
   }
 }
 
 void hit_line(const HitRecord& h, std::string& s) {
   const auto id = [](uint32_t v) { return v == kInvalidId ? std::string("-1") : std::to_string(v); };
-  append_float(s, h.t);
+  csv::append_float(s, h.t);
   s += ',' + id(h.prim_id);
   for (float x : {h.u, h.v, h.ng.x, h.ng.y, h.ng.z}) {
     s += ',';
-    append_float(s, x);
+    csv::append_float(s, x);
   }
   s += ',' + id(h.instance_id);
 }
@@ -512,7 +296,7 @@ void check_hit_file_name(const std::string& path) {
 
 RecordRange part_records(uint64_t n, FilePart part) {
   RP_CHECK(part.count >= 1 && part.index >= 0 && part.index < part.count, "file part ", part.index, " of ", part.count);
-  const auto bound = [&](int i) { return i == part.count ? n : share_of(n, i, part.count) / 8 * 8; };
+  const auto bound = [&](int i) { return i == part.count ? n : csv::share_of(n, i, part.count) / 8 * 8; };
   return {bound(part.index), bound(part.index + 1)};
 }
 
@@ -524,12 +308,12 @@ std::vector<Ray> read_rays(const std::string& path, FilePart part) {
   if (!is_csv(in, kRayFormat, kRayColumns)) return read_binary<Ray>(in, kRayFormat, decode_ray, part);
   return read_csv<Ray>(
       in, kRayColumns,
-      [](const CsvPlace& at, const std::string_view* s) {
+      [](const csv::Place& at, const std::string_view* s) {
         Ray r;
-        r.org = {parse_float(at, s[0]), parse_float(at, s[1]), parse_float(at, s[2])};
-        r.dir = {parse_float(at, s[3]), parse_float(at, s[4]), parse_float(at, s[5])};
-        r.tnear = parse_float(at, s[6]);
-        r.tfar = parse_float(at, s[7]);
+        r.org = {csv::parse_float(at, s[0]), csv::parse_float(at, s[1]), csv::parse_float(at, s[2])};
+        r.dir = {csv::parse_float(at, s[3]), csv::parse_float(at, s[4]), csv::parse_float(at, s[5])};
+        r.tnear = csv::parse_float(at, s[6]);
+        r.tfar = csv::parse_float(at, s[7]);
         return r;
       },
       part);
@@ -540,7 +324,7 @@ void write_rays(const std::string& path, std::span<const Ray> rays) {
     return write_records(path, binary_head(kRayFormat, rays.size()), rays, [](std::span<const Ray> chunk, std::string& out) {
       append_binary(chunk, kRayFormat, encode_ray, out);
     });
-  write_records(path, csv_head(kRayColumns), rays,
+  write_records(path, csv::head(kRayColumns), rays,
                 [](std::span<const Ray> chunk, std::string& out) { append_csv(chunk, ray_line, out); });
 }
 
@@ -549,13 +333,13 @@ std::vector<HitRecord> read_hits(const std::string& path) {
   if (!is_csv(in, kHitFormat, kHitColumns)) return read_binary<HitRecord>(in, kHitFormat, decode_hit, FilePart{});
   return read_csv<HitRecord>(
       in, kHitColumns,
-      [](const CsvPlace& at, const std::string_view* s) {
+      [](const csv::Place& at, const std::string_view* s) {
         HitRecord h;
-        h.t = parse_float(at, s[0]);
+        h.t = csv::parse_float(at, s[0]);
         h.prim_id = parse_id(at, s[1], "a primitive id");
-        h.u = parse_float(at, s[2]);
-        h.v = parse_float(at, s[3]);
-        h.ng = {parse_float(at, s[4]), parse_float(at, s[5]), parse_float(at, s[6])};
+        h.u = csv::parse_float(at, s[2]);
+        h.v = csv::parse_float(at, s[3]);
+        h.ng = {csv::parse_float(at, s[4]), csv::parse_float(at, s[5]), csv::parse_float(at, s[6])};
         h.instance_id = parse_id(at, s[7], "an instance id");
         return h;
       },
@@ -563,7 +347,7 @@ std::vector<HitRecord> read_hits(const std::string& path) {
 }
 
 std::string hit_file_head(const std::string& path, uint64_t count) {
-  return is_csv(path, kHitFormat) ? csv_head(kHitColumns) : binary_head(kHitFormat, count);
+  return is_csv(path, kHitFormat) ? csv::head(kHitColumns) : binary_head(kHitFormat, count);
 }
 
 void append_hit_records(const std::string& path, std::span<const HitRecord> hits, std::string& out) {
