@@ -44,6 +44,12 @@ constexpr BinaryFormat kRayFormat{"RPRY", "ray", "ray", "rays", 1, 32, 0, 0};
 /// Version 2 added instance_id to each record; version 1's 28-byte records are still read.
 constexpr BinaryFormat kHitFormat{"RPHT", "hit", "hit", "hits", 2, 32, 1, 28};
 
+/// The files of the other queries of raypack trace; written, never read back here.
+constexpr BinaryFormat kOccludedFormat{"RPOC", "occluded", "ray", "rays", 1, 1, 0, 0};
+constexpr BinaryFormat kCountFormat{"RPCN", "count", "ray", "rays", 1, 4, 0, 0};
+constexpr BinaryFormat kAllHitsFormat{"RPHA", "all-hits", "hit", "hits", 1, 40, 0, 0};
+static_assert(sizeof(RayHitRecord) == 40, "RayHitRecord is 40 bytes");
+
 constexpr csv::Columns kRayColumns{{"ox", "oy", "oz", "dx", "dy", "dz", "tnear", "tfar"},
                                    8,
                                    6,
@@ -52,6 +58,10 @@ constexpr csv::Columns kHitColumns{{"t", "prim_id", "u", "v", "ng_x", "ng_y", "n
                                    8,
                                    7,
                                    {nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, "-1"}};
+constexpr csv::Columns kOccludedColumns{{"occluded"}, 1, 1, {}};
+constexpr csv::Columns kCountColumns{{"count"}, 1, 1, {}};
+constexpr csv::Columns kAllHitsColumns{
+    {"ray", "t", "prim_id", "u", "v", "ng_x", "ng_y", "ng_z", "instance_id"}, 9, 9, {}};
 
 /// The format `path` names for a file of `fmt`'s kind: .csv (any case) CSV; .bin, .rays /
 /// .hits or no extension (devices such as /dev/stdout) binary; any other extension an error.
@@ -202,6 +212,12 @@ void encode_hit(const HitRecord& h, unsigned char* p) {
   std::memcpy(p + 24, &h.ng.z, 4);
   std::memcpy(p + 28, &h.instance_id, 4);
 }
+void encode_occluded(uint8_t occluded, unsigned char* p) { *p = occluded ? 1 : 0; }
+void encode_count(uint32_t count, unsigned char* p) { std::memcpy(p, &count, 4); }
+void encode_ray_hit(const RayHitRecord& h, unsigned char* p) {
+  std::memcpy(p, &h.ray, 8);
+  encode_hit(h.hit, p + 8);
+}
 
 /// The 16-byte header of a binary file of `fmt` with `count` records.
 std::string binary_head(const BinaryFormat& fmt, uint64_t count) {
@@ -284,6 +300,13 @@ void hit_line(const HitRecord& h, std::string& s) {
   s += ',' + id(h.instance_id);
 }
 
+void occluded_line(uint8_t occluded, std::string& s) { s += occluded ? '1' : '0'; }
+void count_line(uint32_t count, std::string& s) { s += std::to_string(count); }
+void ray_hit_line(const RayHitRecord& h, std::string& s) {
+  s += std::to_string(h.ray) + ',';
+  hit_line(h.hit, s);
+}
+
 }  // namespace
 
 void check_ray_file_name(const std::string& path) {
@@ -358,6 +381,28 @@ void append_hit_records(const std::string& path, std::span<const HitRecord> hits
 void write_hits(const std::string& path, std::span<const HitRecord> hits) {
   write_records(path, hit_file_head(path, hits.size()), hits,
                 [&](std::span<const HitRecord> chunk, std::string& out) { append_hit_records(path, chunk, out); });
+}
+
+std::string query_file_head(QueryFile kind, const std::string& path, uint64_t count) {
+  static constexpr const BinaryFormat* kFormats[] = {&kOccludedFormat, &kCountFormat, &kAllHitsFormat};
+  static constexpr const csv::Columns* kColumns[] = {&kOccludedColumns, &kCountColumns, &kAllHitsColumns};
+  const auto k = size_t(kind);
+  return is_csv(path, kHitFormat) ? csv::head(*kColumns[k]) : binary_head(*kFormats[k], count);
+}
+
+void append_occluded_records(const std::string& path, std::span<const uint8_t> occluded, std::string& out) {
+  if (is_csv(path, kHitFormat)) return append_csv(occluded, occluded_line, out);
+  append_binary(occluded, kOccludedFormat, encode_occluded, out);
+}
+
+void append_count_records(const std::string& path, std::span<const uint32_t> counts, std::string& out) {
+  if (is_csv(path, kHitFormat)) return append_csv(counts, count_line, out);
+  append_binary(counts, kCountFormat, encode_count, out);
+}
+
+void append_all_hits_records(const std::string& path, std::span<const RayHitRecord> hits, std::string& out) {
+  if (is_csv(path, kHitFormat)) return append_csv(hits, ray_hit_line, out);
+  append_binary(hits, kAllHitsFormat, encode_ray_hit, out);
 }
 
 }  // namespace rp

@@ -57,6 +57,22 @@
 /// (a miss) and kNoInstance (no instance), so a default HitRecord (a miss) is written
 /// `inf,-1,0,0,0,0,0,-1`.
 ///
+/// Query files: what `raypack trace --query` writes for the queries beyond the closest hit
+/// (core/queries.h), by the extension rule of hit files (check_hit_file_name). Written, not
+/// read back by raypack; each binary one has the 16-byte header above with its own magic,
+/// version 1:
+/// ```
+///   occluded  'RPOC'  count = rays, 1-byte records: 1 occluded, 0 not
+///   count     'RPCN'  count = rays, 4-byte records: uint32, the hits within [tnear, tfar]
+///   all hits  'RPHA'  count = hits, 40-byte records, record i at 16 + 40*i:
+///                       +0 ray: uint64, the ray's index in the ray file (from 0)
+///                       +8 the 32 bytes of a hit record (version 2 above)
+/// ```
+/// Their CSV files have the columns `occluded`, `count` and
+/// `ray,t,prim_id,u,v,ng_x,ng_y,ng_z,instance_id` (the hit file's after `ray`). An all-hits
+/// file lists the hits of ray 0, then ray 1, ..., each ray's sorted by t (then prim_id,
+/// instance_id), as Backend::all_hits; a ray without hits has no record.
+///
 /// Every failure throws rp::Error with a one-line message that starts with the path and
 /// names the line (CSV) or the counts and byte sizes (binary), e.g.
 /// `rays.bin: the header declares 4000000000 rays (128000000000 bytes) but 64 bytes follow it`
@@ -85,6 +101,15 @@ struct HitRecord {
   Vec3f ng{};                                         ///< unit geometric normal, world space; (0,0,0) on a miss
   uint32_t instance_id = kNoInstance;                 ///< as in Hit
 };
+
+/// One hit of an all-hits file: the index of its ray and the hit. 40 bytes.
+struct RayHitRecord {
+  uint64_t ray = 0;  ///< the ray's index in the ray file, from 0
+  HitRecord hit;
+};
+
+/// The query files (see the top of this header).
+enum class QueryFile { occluded, count, all_hits };
 
 /// One of `count` consecutive shares of a file's rays, for processes that read one file
 /// together (raypack trace and diff across MPI ranks); the shares hold every ray once, in file
@@ -144,5 +169,19 @@ std::string hit_file_head(const std::string& path, uint64_t count);
 /// one line each. Records of consecutive batches follow each other, so processes can write
 /// their batches' records at offsets that add up (raypack trace across MPI ranks).
 void append_hit_records(const std::string& path, std::span<const HitRecord> hits, std::string& out);
+
+/// The bytes of a query file of `kind` at `path` (its format by the extension, as hit files)
+/// before its records: the 16-byte header declaring `count` records, or the CSV column line.
+std::string query_file_head(QueryFile kind, const std::string& path, uint64_t count);
+
+/// Appends records of an occluded file at `path` to `out`: one per ray, 1 when occluded[i] is
+/// not 0. Records of consecutive batches follow each other, as append_hit_records'.
+void append_occluded_records(const std::string& path, std::span<const uint8_t> occluded, std::string& out);
+
+/// Appends records of a count file: one per ray.
+void append_count_records(const std::string& path, std::span<const uint32_t> counts, std::string& out);
+
+/// Appends records of an all-hits file: one per hit.
+void append_all_hits_records(const std::string& path, std::span<const RayHitRecord> hits, std::string& out);
 
 }  // namespace rp
