@@ -143,4 +143,24 @@ void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::s
   });
 }
 
+void count_hits_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint32_t> counts) {
+  for_each_chunk(rays.size(),
+                 [&](size_t begin, size_t n) { backend.count_hits(rays.subspan(begin, n), counts.subspan(begin, n)); });
+}
+
+HitList all_hits_parallel(const Backend& backend, std::span<const Ray> rays) {
+  std::vector<HitList> chunks((rays.size() + kParallelChunk - 1) / kParallelChunk);
+  for_each_chunk(rays.size(), [&](size_t begin, size_t n) {
+    chunks[begin / kParallelChunk] = backend.all_hits(rays.subspan(begin, n));
+  });
+  HitList all;
+  all.offsets.reserve(rays.size() + 1);
+  all.offsets.push_back(0);
+  for (const HitList& c : chunks) {
+    for (size_t i = 1; i < c.offsets.size(); ++i) all.offsets.push_back(all.hits.size() + c.offsets[i]);
+    all.hits.insert(all.hits.end(), c.hits.begin(), c.hits.end());
+  }
+  return all;
+}
+
 }  // namespace rp

@@ -241,4 +241,11 @@ void intersect_parallel(const Backend& backend, std::span<const Ray> rays, std::
 void occluded_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint8_t> occluded,
                        Coherence coherence);
 
+/// Backend::count_hits over all threads, in chunks as intersect_parallel.
+void count_hits_parallel(const Backend& backend, std::span<const Ray> rays, std::span<uint32_t> counts);
+
+/// Backend::all_hits over all threads, in chunks as intersect_parallel: every hit of each ray
+/// within [tnear, tfar], the same list as one call makes.
+HitList all_hits_parallel(const Backend& backend, std::span<const Ray> rays);
+
 }  // namespace rp
