@@ -54,20 +54,25 @@ std::vector<Ray> read_rays_across(const Comm& comm, const std::string& path) {
 }
 
 void write_hits_across(const Comm& comm, const std::string& path, std::span<const HitRecord> hits) {
-  uint64_t total[] = {hits.size()};
-  comm.sum(total);
   const std::string records = together(comm, [&] {
     std::string bytes;
     append_hit_records(path, hits, bytes);
     return bytes;
   });
+  write_records_across(comm, path, hits.size(), records, [&](uint64_t n) { return hit_file_head(path, n); });
+}
+
+void write_records_across(const Comm& comm, const std::string& path, uint64_t count, std::string_view records,
+                          const std::function<std::string(uint64_t total)>& head_of) {
+  uint64_t total[] = {count};
+  comm.sum(total);
+  const std::string head = together(comm, [&] { return head_of(total[0]); });
   // Rank 0 opens the output and writes the head; the others learn where their records go:
   // the temporary file's absolute path, or nothing for a device.
   std::optional<OutputFile> out;
   std::string temp;
   together(comm, [&] {
     if (!comm.root()) return;
-    const std::string head = hit_file_head(path, total[0]);
     out.emplace(path);
     out->write(head.data(), head.size());
     if (!out->into_device()) temp = std::filesystem::absolute(out->temp_path()).string();
@@ -82,7 +87,7 @@ void write_hits_across(const Comm& comm, const std::string& path, std::span<cons
     });
     return;
   }
-  const uint64_t offset = hit_file_head(path, total[0]).size() + comm.sum_before(records.size());
+  const uint64_t offset = head.size() + comm.sum_before(records.size());
   together(comm, [&] { write_at(temp, offset, records); });
   together(comm, [&] {
     if (comm.root()) out->commit();

@@ -3,8 +3,10 @@
 /// share of the rays, and the hits of all shares are written into one file in the input order,
 /// the bytes one process writes.
 
+#include <functional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/rayfile.h"
@@ -31,5 +33,12 @@ std::vector<Ray> read_rays_across(const Comm& comm, const std::string& path);
 /// (/dev/stdout) is written by rank 0, which receives every rank's records. Collective; a
 /// failure on any rank throws on every rank, and leaves nothing at `path`.
 void write_hits_across(const Comm& comm, const std::string& path, std::span<const HitRecord> hits);
+
+/// The same for any file of records: head(n) declares the n records of every rank (a binary
+/// header, or a CSV column line), and each rank's `count` records are the bytes `records`,
+/// written after those of the ranks before it (raypack trace --query: occluded, count and
+/// all-hits files). Collective; fails as write_hits_across.
+void write_records_across(const Comm& comm, const std::string& path, uint64_t count, std::string_view records,
+                          const std::function<std::string(uint64_t total)>& head);
 
 }  // namespace rp::dist
