@@ -215,6 +215,30 @@ TEST(Mpi, TraceWritesTheOneProcessHitFileInEveryFormat) {
   EXPECT_TRUE(no_temporaries(tmp));
 }
 
+TEST(Mpi, TraceQueriesWriteTheOneProcessFiles) {
+  TempDir tmp;
+  const std::vector<rp::Ray> rays = test_rays(3001);  // shares of 1000 and 1001 rays
+  rp::write_rays(tmp / "rays.bin", rays);
+  struct Case {
+    std::string query, out;
+    int ranks;
+  };
+  // The all-hits file's ray indices count the rays of the ranks before; its CSV lines differ
+  // in length, its binary records are 40 bytes.
+  for (const Case& c :
+       {Case{"occluded", "q.bin", 2}, Case{"count", "q.csv", 3}, Case{"all", "q.csv", 2}, Case{"all", "q.bin", 3}}) {
+    const std::string args = "trace -q --backend simd --query " + c.query + " --rays " + tmp / "rays.bin" + " -o ";
+    const Result want = one(args + tmp / ("one-" + c.out));
+    ASSERT_EQ(want.status, 0) << want.output;
+    const Result got = ranks(c.ranks, args + tmp / c.out);
+    ASSERT_EQ(got.status, 0) << c.query << ", " << c.ranks << " ranks: " << got.output;
+    EXPECT_EQ(got.output, "");
+    EXPECT_GT(bytes(tmp / c.out).size(), 3001u) << c.query;
+    EXPECT_EQ(bytes(tmp / c.out), bytes(tmp / ("one-" + c.out))) << c.query << " -> " << c.out << ", " << c.ranks;
+  }
+  EXPECT_TRUE(no_temporaries(tmp));
+}
+
 TEST(Mpi, ABadRayFileGetsTheOneProcessMessageAndNoOutput) {
   TempDir tmp;
   std::string text = "ox,oy,oz,dx,dy,dz\n";
