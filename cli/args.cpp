@@ -82,8 +82,8 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& erro
   return cat(one_line(what), " (see ", help, ")");
 }
 
-void add_scene_option(CLI::App* app, std::string& scene) {
-  app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .gltf, .glb, .json)")
+CLI::Option* add_scene_option(CLI::App* app, std::string& scene) {
+  return app->add_option("--scene", scene, "Scene: 'default' or a scene file (.obj, .ply, .gltf, .glb, .json)")
       ->capture_default_str();
 }
 

@@ -41,8 +41,9 @@ std::string nearest(const std::string& word, const std::vector<std::string>& can
 /// the subcommand given (`raypack render --help`) or of raypack.
 std::string parse_error_message(const CLI::App& app, const CLI::ParseError& error, int argc, char** argv);
 
-/// --scene: 'default' or a scene file, bound to `scene`.
-void add_scene_option(CLI::App* app, std::string& scene);
+/// --scene: 'default' or a scene file, bound to `scene`. Returns the option (a command may
+/// require it).
+CLI::Option* add_scene_option(CLI::App* app, std::string& scene);
 
 /// --up-axis: x, y or z, the axis that points up in a scene file, where a scene without a
 /// camera is framed from and lit (Scene::set_up_axis); empty: what the file says (Y unless a

@@ -17,6 +17,7 @@
 #include "cli/diff_cmd.h"
 #include "cli/domains_cmd.h"
 #include "cli/info_cmd.h"
+#include "cli/points_cmd.h"
 #include "cli/ranks.h"
 #include "cli/render_cmd.h"
 #include "cli/stability_cmd.h"
@@ -43,6 +44,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
 
   RenderArgs render_args;
   TraceArgs trace_args;
+  PointsArgs points_args;
   DiffArgs diff_args;
   BenchArgs bench_args;
   ChartArgs chart_args;
@@ -51,6 +53,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
   DomainsArgs domains_args;
   CLI::App* render = render_args.add_to(app);
   CLI::App* trace = trace_args.add_to(app);
+  CLI::App* points = points_args.add_to(app);
   CLI::App* diff = diff_args.add_to(app);
   CLI::App* bench = bench_args.add_to(app);
   CLI::App* chart = chart_args.add_to(app);
@@ -83,6 +86,7 @@ int run(const rp::dist::Comm& comm, int argc, char** argv) {
       throw UsageError(rp::cat(app.get_subcommands().front()->get_name(), " runs in one process: start it without "
                                "mpirun (render, trace and diff run across ranks)"));
     if (*info) return run_info(info_args);
+    if (*points) return run_points(points_args);
     if (*bench) return run_bench(bench_args);
     if (*stability) return run_stability(stability_args);
     if (*chart) return run_chart(chart_args);

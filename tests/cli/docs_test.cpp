@@ -137,7 +137,7 @@ TEST(Docs, TheCliReferenceNamesEveryFlagOfEveryCommand) {
   ASSERT_FALSE(reference.empty()) << "docs/cli.md";
   static const std::regex flag(R"re((--[a-z][a-z0-9-]+))re");
   for (const std::string command :
-       {"", "render", "info", "backends", "trace", "diff", "bench", "chart", "stability", "domains"}) {
+       {"", "render", "info", "backends", "trace", "points", "diff", "bench", "chart", "stability", "domains"}) {
     const rp::test::ShellResult r = rp::test::run_shell(std::string(rp::test::kRaypackExe) + " " + command + " --help");
     ASSERT_EQ(r.status, 0) << command << ": " << r.output;
     std::set<std::string> flags;

@@ -364,4 +364,197 @@ TEST_F(CliQueries, TraceSaysWhatEachQueryFoundAndRefusesBadQueriesBeforeAnyWork)
   EXPECT_FALSE(fs::exists(dir_ / "all.txt"));
 }
 
+/// A point of a point file, in double.
+struct PointText {
+  double p[3], radius = kInf;
+};
+
+void write_points(const fs::path& path, const std::vector<PointText>& points) {
+  std::ofstream out(path);
+  out.precision(9);
+  out << "x,y,z,radius\n";
+  for (const PointText& q : points)
+    out << float(q.p[0]) << ',' << float(q.p[1]) << ',' << float(q.p[2]) << ','
+        << (std::isinf(q.radius) ? "inf" : std::to_string(q.radius)) << '\n';
+}
+
+/// The closest point of kBallScene to `p` (its float values) worked out in double.
+struct Nearest {
+  double distance, point[3];
+  int prim;
+};
+
+Nearest nearest_on_ball_scene(const PointText& q) {
+  double p[3], to[3], r = 0;
+  for (int k = 0; k < 3; ++k) p[k] = float(q.p[k]), to[k] = p[k] - kCenter[k], r += to[k] * to[k];
+  r = std::sqrt(r);
+  Nearest sphere{std::abs(r - kRadius), {}, 0}, plane{std::abs(p[1] - kFloor), {p[0], kFloor, p[2]}, 1};
+  for (int k = 0; k < 3; ++k) sphere.point[k] = kCenter[k] + kRadius * to[k] / r;
+  return sphere.distance <= plane.distance ? sphere : plane;
+}
+
+TEST_F(CliQueries, PointsAreAtTheirClosedFormDistancesFromASphereAndAPlane) {
+  std::ofstream(dir_ / "ball.json") << kBallScene;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<PointText> points;
+  while (points.size() < 400) {
+    PointText q{{kCenter[0] + 4 * u(rng), 4 * u(rng), kCenter[2] + 4 * u(rng)}};
+    double r = 0;
+    for (int k = 0; k < 3; ++k) r += (q.p[k] - kCenter[k]) * (q.p[k] - kCenter[k]);
+    const double to_sphere = std::abs(std::sqrt(r) - kRadius), to_plane = std::abs(q.p[1] - kFloor);
+    if (std::sqrt(r) < 0.1 || std::abs(to_sphere - to_plane) < 1e-3) continue;  // the centre; a tie
+    // Every third point's radius stops short of the surface, every third reaches past it.
+    const double d = std::min(to_sphere, to_plane);
+    if (points.size() % 3 == 1) q.radius = 0.5 * d;
+    if (points.size() % 3 == 2) q.radius = 2 * d;
+    points.push_back(q);
+  }
+  write_points(dir_ / "points.csv", points);
+  std::string first;
+  for (const std::string backend : {"simd", "embree"}) {
+    SCOPED_TRACE(backend);
+    run("points --scene " + path("ball.json") + " --points " + path("points.csv") + " --backend " + backend + " -o " +
+        path("closest.csv"));
+    const Table c = read_table(dir_ / "closest.csv");
+    ASSERT_EQ(c.names,
+              (std::vector<std::string>{"distance", "x", "y", "z", "prim_id", "geometry_id", "instance_id", "u", "v"}));
+    ASSERT_EQ(c.rows.size(), points.size());
+    size_t on_sphere = 0, on_plane = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Nearest want = nearest_on_ball_scene(points[i]);
+      if (i % 3 == 1) {  // nothing within the radius
+        EXPECT_EQ(c.rows[i], (std::vector<std::string>{"inf", "nan", "nan", "nan", "-1", "-1", "-1", "0", "0"})) << i;
+        continue;
+      }
+      EXPECT_NEAR(c.number(i, "distance"), want.distance, 1e-5 * (1 + want.distance)) << "point " << i;
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(c.number(i, std::string(1, "xyz"[k])), want.point[k], 1e-5 * (1 + std::abs(want.point[k]))) << i;
+      EXPECT_EQ(c.integer(i, "prim_id"), want.prim) << i;
+      EXPECT_EQ(c.integer(i, "geometry_id"), want.prim) << i;  // one primitive per geometry here
+      EXPECT_EQ(c.integer(i, "instance_id"), -1) << i;
+      (want.prim == 0 ? on_sphere : on_plane)++;
+    }
+    EXPECT_GT(on_sphere, 50u);
+    EXPECT_GT(on_plane, 50u);
+    const std::string bytes = file_bytes(dir_ / "closest.csv");
+    if (first.empty())
+      first = bytes;
+    else
+      EXPECT_TRUE(bytes == first) << "the backends' closest points differ";
+  }
+  // The same points from standard input.
+  const Result r =
+      rp::test::run_shell("cat " + path("points.csv") + " | " + rp::test::kRaypackExe + " points --scene " +
+                          path("ball.json") + " --points - -q -o " + path("stdin.csv"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(file_bytes(dir_ / "stdin.csv") == first);
+}
+
+TEST_F(CliQueries, SignedDistancesAreNegativeInsideASphereAndAClosedMesh) {
+  // A sphere alone, and the closed cube [-1, 1]^3 as an OBJ of six quads.
+  std::ofstream(dir_ / "sphere.json")
+      << R"({"objects": [{"type": "sphere", "center": [0.25, 0.5, -0.5], "radius": 1.5}]})";
+  std::ofstream(dir_ / "cube.obj")
+      << "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  const auto sphere_sdf = [](const double* p) {
+    double r = 0;
+    for (int k = 0; k < 3; ++k) r += (p[k] - kCenter[k]) * (p[k] - kCenter[k]);
+    return std::sqrt(r) - kRadius;
+  };
+  const auto cube_sdf = [](const double* p) {  // the box's exact signed distance
+    double out = 0, in = -kInf;
+    for (int k = 0; k < 3; ++k) {
+      const double q = std::abs(p[k]) - 1;
+      out += std::max(q, 0.0) * std::max(q, 0.0), in = std::max(in, q);
+    }
+    return in > 0 ? std::sqrt(out) : in;
+  };
+  const std::pair<std::string, double (*)(const double*)> scenes[] = {{"sphere.json", +sphere_sdf},
+                                                                      {"cube.obj", +cube_sdf}};
+  for (const auto& [scene, sdf] : scenes) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-3, 3);
+    std::vector<PointText> points;
+    while (points.size() < 300) {
+      PointText q{{u(rng), u(rng), u(rng)}};
+      for (double& x : q.p) x = float(x);
+      if (std::abs(sdf(q.p)) > 1e-2) points.push_back(q);  // not on the surface
+    }
+    write_points(dir_ / "points.csv", points);
+    for (const std::string backend : {"simd", "embree"}) {
+      SCOPED_TRACE(scene + ", " + backend);
+      run("points --signed --scene " + path(scene) + " --points " + path("points.csv") + " --backend " + backend +
+          " -o " + path("signed.csv"));
+      const Table c = read_table(dir_ / "signed.csv");
+      ASSERT_EQ(c.names.size(), 11u);
+      EXPECT_EQ(c.names[9], "signed_distance");
+      EXPECT_EQ(c.names[10], "inside");
+      ASSERT_EQ(c.rows.size(), points.size());
+      size_t inside = 0;
+      for (size_t i = 0; i < points.size(); ++i) {
+        const double want = sdf(points[i].p);
+        EXPECT_NEAR(c.number(i, "signed_distance"), want, 1e-5 * (1 + std::abs(want))) << "point " << i;
+        EXPECT_EQ(c.integer(i, "inside"), want < 0 ? 1 : 0) << "point " << i;
+        EXPECT_EQ(c.number(i, "distance"), std::abs(c.number(i, "signed_distance"))) << i;
+        inside += want < 0;
+      }
+      EXPECT_GT(inside, 10u);
+    }
+  }
+}
+
+TEST_F(CliQueries, BadPointFilesAreOneLineErrorsNamingTheFileTheLineAndTheValue) {
+  std::ofstream(dir_ / "ball.json") << kBallScene;
+  const std::string scene = " --scene " + path("ball.json"), out = path("out.csv"), bad = path("bad.csv");
+  const std::pair<std::string, std::string> files[] = {
+      {"x,y,z\n1,2,3\n1,2,abc\n", "line 3: 'abc' is not a number"},
+      {"x,y,z\n1,2,3\n4,5\n", "line 3: 2 values, expected 3"},
+      {"x,y,z,radius\n1,2,3,1,0\n", "line 2: 5 values, expected 4"},
+      {"x,y,z\n1,nan,3\n", "line 2: y 'nan' is not a finite number"},
+      {"x,y,z\n-inf,2,3\n", "line 2: x '-inf' is not a finite number"},
+      {"x,y,z\n0,0,0\n1,2,2e9\n", "line 3: z '2e9' is outside the supported coordinate range |x| <= 1073741824 (2^30)"},
+      {"radius,x,y,z\n-0.5,1,2,3\n", "line 2: radius '-0.5' is not a distance (a number >= 0, or inf)"},
+      {"x,y,z,radius\n1,2,3,nan\n", "line 2: radius 'nan' is not a distance (a number >= 0, or inf)"},
+      {"x,y\n1,2\n", "line 1: no column 'z' (columns: x,y,z,radius; all but radius are needed)"},
+      {"x,y,z\n\n1,2,3\n", "line 2: blank line before the end of the data"}};
+  for (const auto& [text, message] : files) {
+    std::ofstream(bad) << text;
+    const Result r = run_raypack("points" + scene + " --points " + bad + " -o " + out);
+    EXPECT_EQ(r.status, 1) << text;
+    EXPECT_EQ(r.output, "raypack: " + bad + ": " + message + "\n") << text;
+    EXPECT_FALSE(fs::exists(out)) << text;
+  }
+  // Flags: exit status 2 before any work.
+  std::ofstream(dir_ / "ok.csv") << "x,y,z\n0,3,0\n";
+  const std::string ok = " --points " + path("ok.csv");
+  const std::pair<std::string, std::string> flags[] = {
+      {"points" + ok + " -o " + out, "raypack: --scene is required (see raypack points --help)\n"},
+      {"points" + scene + " --points " + path("p.txt") + " -o " + out,
+       "raypack: --points: " + path("p.txt") + ": unknown point file extension '.txt' (.csv: point files are text)\n"},
+      {"points" + scene + ok + " -o " + path("out.bin"),
+       "raypack: -o: " + path("out.bin") + ": unknown point file extension '.bin' (.csv: point files are text)\n"},
+      {"points" + scene + ok + " -o " + path("ok.csv"),
+       "raypack: -o " + path("ok.csv") + ": is the same file as the input --points " + path("ok.csv") + "\n"},
+      {"points" + scene + ok + " -o " + out + " --backend simd --variant fast",
+       "raypack: --variant: 'fast' is not a variant of simd (default, median, watertight, spatial)\n"}};
+  for (const auto& [args, message] : flags) {
+    const Result r = run_raypack(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_EQ(r.output, message) << args;
+  }
+  // A scene with quadrics: the backend's refusal, even for a file without points.
+  std::ofstream(dir_ / "none.csv") << "x,y,z\n";
+  for (const std::string backend : {"simd", "embree"}) {
+    const Result r =
+        run_raypack("points --scene default --points " + path("none.csv") + " --backend " + backend + " -o " + out);
+    EXPECT_EQ(r.status, 1) << backend;
+    EXPECT_EQ(r.output, "raypack: " + backend +
+                            ": closest points: the scene has 6 quadrics (quadrics have no closest-point "
+                            "routine)\n");
+  }
+  EXPECT_FALSE(fs::exists(out));
+}
+
 }  // namespace
