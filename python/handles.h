@@ -19,6 +19,7 @@
 #include <mutex>
 #include <shared_mutex>
 #include <string>
+#include <vector>
 
 #include "core/backend.h"
 #include "core/scene.h"
@@ -27,10 +28,30 @@ namespace rp::python {
 
 /// raypack.Scene: a scene, the name it is known by in messages and diff summaries (the path it
 /// was loaded from, "default", or "arrays"), and its lock (above).
+/// The numpy arrays a scene's shared meshes view (Scene.add_triangles(copy=False)), kept alive
+/// as long as the scene handle and every Backend over it; released under the GIL from whichever
+/// thread lets go last.
+struct KeptArrays {
+  std::vector<pybind11::object> arrays;
+  KeptArrays() = default;
+  KeptArrays(const KeptArrays&) = delete;
+  KeptArrays& operator=(const KeptArrays&) = delete;
+  ~KeptArrays() {
+    if (!Py_IsInitialized()) {  // the interpreter is gone: nothing to release them to
+      for (pybind11::object& a : arrays) a.release();
+      return;
+    }
+    if (arrays.empty()) return;
+    const pybind11::gil_scoped_acquire gil;
+    arrays.clear();
+  }
+};
+
 struct SceneHandle {
   std::shared_ptr<Scene> scene;
   std::string name;
   std::shared_ptr<std::shared_mutex> guard = std::make_shared<std::shared_mutex>();
+  std::shared_ptr<KeptArrays> kept = std::make_shared<KeptArrays>();
 };
 
 /// The scene's lock held shared: for calls that read the scene.

@@ -101,10 +101,41 @@ Vec3f vec3_of(const char* what, const py::handle& object) {
   return {a.data()[0], a.data()[1], a.data()[2]};
 }
 
-/// Scene.add_triangles(vertices, triangles): a new world mesh; its geometry id.
-uint32_t add_triangles(const SceneHandle& s, const py::handle& vertices, const py::handle& triangles) {
-  TriangleMesh mesh = mesh_of("arrays", vertices, "triangles", triangles);
-  return changing(s, [&](Scene& scene) { return scene.mesh_geometry(scene.add_mesh(std::move(mesh))); });
+/// `object` as a numpy array of `rows` x 3 items of 4 bytes of `kinds` (dtype kinds), each row's
+/// three items adjacent and rows any multiple of 4 bytes apart (a C-order (N, 3) array, or
+/// the first three columns of a wider one): what the scene can view in place. Throws
+/// rp::Error naming `what` and what is wrong.
+py::array in_place(const char* what, const py::handle& object, const char* kinds, const char* dtypes) {
+  RP_CHECK(py::isinstance<py::array>(object), what, ": copy=False needs a numpy array, not ",
+           std::string(py::str(py::type::handle_of(object).attr("__name__"))));
+  py::array a = py::reinterpret_borrow<py::array>(object);
+  const char kind = a.dtype().kind();
+  RP_CHECK(std::string(kinds).find(kind) != std::string::npos && a.itemsize() == 4, what, ": copy=False needs ", dtypes,
+           ", not ", std::string(py::str(a.dtype())));
+  RP_CHECK(a.ndim() == 2 && a.shape(1) == 3, what, ": shape ", shape_text(a), " is not (N, 3)");
+  RP_CHECK(a.strides(1) == 4 && a.strides(0) >= 12 && a.strides(0) % 4 == 0, what, ": copy=False needs each row's 3 ",
+           "values adjacent and rows a multiple of 4 bytes apart; strides (", a.strides(0), ", ", a.strides(1),
+           ") are not (use copy=True, or np.ascontiguousarray)");
+  return a;
+}
+
+/// Scene.add_triangles(vertices, triangles, copy): a new world mesh; its geometry id. With
+/// copy=False the scene views the arrays in place (Scene::add_shared_mesh) and keeps them.
+uint32_t add_triangles(const SceneHandle& s, const py::handle& vertices, const py::handle& triangles, bool copy) {
+  if (copy) {
+    TriangleMesh mesh = mesh_of("arrays", vertices, "triangles", triangles);
+    return changing(s, [&](Scene& scene) { return scene.mesh_geometry(scene.add_mesh(std::move(mesh))); });
+  }
+  const py::array v = in_place("vertices", vertices, "f", "float32");
+  const py::array t = in_place("triangles", triangles, "iu", "int32 or uint32");
+  MeshView mesh;
+  mesh.name = "arrays";
+  mesh.positions = {static_cast<const Vec3f*>(v.data()), size_t(v.shape(0)), size_t(v.strides(0))};
+  mesh.triangles = {static_cast<const TriangleIndices*>(t.data()), size_t(t.shape(0)), size_t(t.strides(0))};
+  const uint32_t g = changing(s, [&](Scene& scene) { return scene.mesh_geometry(scene.add_shared_mesh(mesh)); });
+  s.kept->arrays.push_back(v);
+  s.kept->arrays.push_back(t);
+  return g;
 }
 
 uint32_t add_sphere(const SceneHandle& s, const py::handle& center, float radius) {
@@ -213,9 +244,12 @@ void define_scene(py::module_& m) {
              return SceneHandle{std::make_shared<Scene>(), "arrays"};
            }),
            "An empty scene, to fill with add_triangles, add_sphere, add_plane, add_polygon and add_quadric.")
-      .def("add_triangles", &add_triangles, "vertices"_a, "triangles"_a,
+      .def("add_triangles", &add_triangles, "vertices"_a, "triangles"_a, py::kw_only(), "copy"_a = true,
            "Adds a triangle mesh: vertices (V, 3) floats, triangles (T, 3) integers (vertex numbers).\n"
-           "Returns its geometry id. The data is copied; Backends over the scene need update().")
+           "Returns its geometry id. Backends over the scene need update(). The data is copied, or with\n"
+           "copy=False read in place: vertices float32 and triangles int32 or uint32, each row's 3 values\n"
+           "adjacent (C order, or the first columns of a wider array); the scene keeps the arrays alive.\n"
+           "After writing new vertices into them, call vertices_changed(mesh), then each Backend's update().")
       .def("add_sphere", &add_sphere, "center"_a, "radius"_a,
            "Adds a sphere (centre (3,), radius > 0); returns its geometry id.")
       .def("add_plane", &add_plane, "normal"_a, "d"_a,
@@ -283,6 +317,13 @@ void define_scene(py::module_& m) {
            "New positions (V, 3) for mesh `mesh`'s vertices, as many as it has (its triangles stay).\n"
            "Raises raypack.Error, changing nothing, for another count or a coordinate that is not finite\n"
            "or outside the supported range. Backends over the scene need update() before tracing again.")
+      .def(
+          "vertices_changed",
+          [](const SceneHandle& s, uint32_t mesh) { changing(s, [&](Scene& scene) { scene.vertices_changed(mesh); }); },
+          "mesh"_a,
+          "Mesh `mesh` (added with copy=False) has new vertex positions, written into its array in place:\n"
+          "checks them as set_vertices does (raypack.Error naming the vertex, the scene unchanged) and\n"
+          "raises the version, so that Backends over the scene need update() before tracing again.")
       .def("transform", &transform, "instance"_a, "Instance `instance`'s object-to-world matrix, (4, 4) float32")
       .def("set_transform", &set_transform, "instance"_a, "matrix"_a,
            "A new object-to-world matrix, (4, 4) with last row 0 0 0 1 or (3, 4), for instance `instance`.\n"
