@@ -230,9 +230,9 @@ class Scene {
   /// place, as set_vertices gives new ones to a mesh the scene owns: checks them as
   /// set_vertices does and raises the version, so that backends update (Backend::update).
   /// The triangles, uvs and face materials must not change (remove the mesh and add it again).
-  /// On bad data it throws rp::Error naming the mesh and vertex, and the scene keeps its
-  /// version: backends refuse to update until the buffers are mended and this is called again.
-  /// Throws for a mesh the scene owns.
+  /// On bad data it throws rp::Error naming the mesh and vertex and changes nothing (the
+  /// version stays): the buffers then hold what the scene refused, and tracing is undefined
+  /// until they are mended and this is called again. Throws for a mesh the scene owns.
   void vertices_changed(uint32_t mesh);
   /// True when mesh i's arrays are the caller's (add_shared_mesh, add_shared_instanced_mesh).
   bool is_shared(size_t i) const { return meshes_.shared[i] != 0; }
